@@ -1,0 +1,140 @@
+/* app_render: `softgi render` (see pf_cli.h for the options).
+ *
+ * load scene -> apply --camera/--light overrides -> build the Embree scene ->
+ * render the frame (gi_frame_render_raytraced) -> write PNG + PFM, printing
+ * the time of every step. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "app.h"
+#include "gi_frame.h"
+#include "pf_gltf.h"
+#include "pf_imageio.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
+
+extern const unsigned char softgi_default_scene[];
+extern const unsigned long softgi_default_scene_size;
+
+static int app__fail(const pf_error *err)
+{
+    fprintf(stderr, "softgi: %s\n", err->message);
+    return pf_result_exit_code(err->code);
+}
+
+/* "dir/name.gltf" -> "name" into buf. */
+static void app__stem(const char *path, char *buf, size_t size)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    snprintf(buf, size, "%s", base);
+    char *dot = strrchr(buf, '.');
+    if (dot && dot != buf) *dot = 0;
+}
+
+int app_render(const pf_options *o)
+{
+    pf_error err;
+    pf_stage_times t;
+    memset(&t, 0, sizeof t);
+    uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
+    uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
+    pf_isa isa;
+    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app__fail(&err);
+
+    /* Scene */
+    double t0 = pf_time_now();
+    pf_scene scene;
+    pf_result r;
+    char stem[256];
+    if (o->scene_path) {
+        r = pf_gltf_load(&scene, o->scene_path, NULL, &err);
+        app__stem(o->scene_path, stem, sizeof stem);
+    } else {
+        r = pf_gltf_load_memory(&scene, softgi_default_scene, softgi_default_scene_size, NULL,
+                                "embedded scenes/cornell-box", NULL, &err);
+        snprintf(stem, sizeof stem, "cornell-box");
+    }
+    if (r != PF_OK) return app__fail(&err);
+    if (scene.warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", scene.warnings);
+
+    pf_camera camera;
+    if (o->has_camera) {
+        r = pf_camera_look_at(&camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), &err);
+    } else if (scene.camera_count > 0) {
+        camera = scene.cameras[0];
+    } else {
+        r = pf_error_set(&err, PF_ERR_NO_CAMERA,
+                         "%s has no camera; give one with --camera ex,ey,ez:tx,ty,tz:fovy_deg",
+                         o->scene_path ? o->scene_path : "the scene");
+    }
+    if (r == PF_OK && o->light_count > 0) {
+        scene.light_count = 0; /* given lights replace the file's */
+        for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(&scene, &o->lights[i], &err);
+    }
+    if (r == PF_OK) r = pf_scene_validate(&scene, &err);
+    if (r != PF_OK) {
+        pf_scene_free(&scene);
+        return app__fail(&err);
+    }
+    if (scene.light_count == 0 && !o->quiet)
+        fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    pf_stage_add(&t, "load scene", (pf_time_now() - t0) * 1e3);
+
+    /* Embree + jobs */
+    t0 = pf_time_now();
+    pf_rt *rt;
+    if ((r = pf_rt_create(&rt, &scene, isa, threads, &err)) != PF_OK) {
+        pf_scene_free(&scene);
+        return app__fail(&err);
+    }
+    pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
+    pf_jobs *jobs = pf_jobs_create(threads);
+    gi_frame frame;
+    if (!jobs || (r = gi_frame_init(&frame, &scene, rt, jobs, &camera, width, height, &err)) != PF_OK) {
+        if (!jobs) pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+        pf_jobs_destroy(jobs);
+        pf_rt_destroy(rt);
+        pf_scene_free(&scene);
+        return app__fail(&err);
+    }
+
+    /* Frame */
+    gi_frame_render_raytraced(&frame);
+    for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
+
+    /* Output */
+    t0 = pf_time_now();
+    char png[4096], pfm[4096];
+    if (o->out_path) snprintf(png, sizeof png, "%s", o->out_path);
+    else snprintf(png, sizeof png, "out/%s.png", stem);
+    if (o->hdr_path) snprintf(pfm, sizeof pfm, "%s", o->hdr_path);
+    else {
+        snprintf(pfm, sizeof pfm, "%s", png);
+        char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
+        if (dot && (!slash || dot > slash)) *dot = 0;
+        strncat(pfm, ".pfm", sizeof pfm - strlen(pfm) - 1);
+    }
+    r = pf_imageio_write_png(png, frame.final, width, height, o->exposure, &err);
+    if (r == PF_OK) r = pf_imageio_write_pfm(pfm, frame.final, width, height, &err);
+    pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
+    int status = 0;
+    if (r != PF_OK) status = app__fail(&err);
+    else {
+        if (!o->quiet) {
+            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s\n", stem, scene.tri_count,
+                   scene.light_count, width, height, threads, pf_isa_name(isa));
+            pf_stage_print(&t, stdout);
+            printf("wrote %s and %s\n", png, pfm);
+        }
+        if (o->print_hash)
+            printf("hash %016llx\n",
+                   (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3));
+    }
+    gi_frame_free(&frame);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&scene);
+    return status;
+}

@@ -1,0 +1,28 @@
+/* softgi: the command-line entry point. Parses options (pf_cli) and runs the
+ * command; every failure is one line on stderr and a non-zero exit status
+ * (2 for bad usage, 1 for bad input or a failed write). */
+#include <stdio.h>
+
+#include "app.h"
+#include "pf_fpenv.h"
+
+int main(int argc, char **argv)
+{
+    pf_fpenv_set();
+    pf_options opts;
+    pf_error err;
+    pf_result r = pf_cli_parse(&opts, argc, argv, &err);
+    if (r != PF_OK) {
+        fprintf(stderr, "softgi: %s\n", err.message);
+        return pf_result_exit_code(r);
+    }
+    if (opts.help) {
+        pf_cli_usage(stdout);
+        return 0;
+    }
+    if (opts.version) {
+        printf("softgi %s\n", SOFTGI_VERSION);
+        return 0;
+    }
+    return app_render(&opts);
+}

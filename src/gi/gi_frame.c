@@ -1,0 +1,113 @@
+/* gi_frame: frame buffers, the camera model, the compose stage and the frame
+ * outline (see gi_frame.h). */
+#include "gi_frame.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const gi__buffer_names[GI_BUF_COUNT] = {
+    "depth", "position", "normal", "albedo", "prim", "direct", "final",
+};
+static const char *const gi__buffer_captions[GI_BUF_COUNT] = {
+    "G-buffer depth: view-space distance of the visible surface (Laine 2007 Sec. 3, step 1)",
+    "G-buffer world position of the visible surface",
+    "G-buffer shading normal, turned to face the camera",
+    "G-buffer albedo: filtered baseColor, linear RGB",
+    "G-buffer primitive id: which triangle each pixel sees",
+    "Direct light: every light with its shadow test, albedo E / pi",
+    "Final: emission + direct (+ indirect once the VPL stages land), linear RGB",
+};
+
+const char *gi_buffer_name(gi_buffer_id id) { return (unsigned)id < GI_BUF_COUNT ? gi__buffer_names[id] : "?"; }
+const char *gi_buffer_caption(gi_buffer_id id)
+{
+    return (unsigned)id < GI_BUF_COUNT ? gi__buffer_captions[id] : "?";
+}
+
+pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs, const pf_camera *camera,
+                        uint32_t width, uint32_t height, pf_error *err)
+{
+    memset(f, 0, sizeof *f);
+    f->scene = scene;
+    f->rt = rt;
+    f->jobs = jobs;
+    f->camera = *camera;
+    f->width = width;
+    f->height = height;
+    pf_result r = rs_gbuffer_init(&f->gbuf, width, height, err);
+    if (r != PF_OK) return r;
+    size_t n = (size_t)width * height * 3;
+    f->direct = calloc(n, sizeof(float));
+    f->final = calloc(n, sizeof(float));
+    if (!f->direct || !f->final) {
+        gi_frame_free(f);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width, height);
+    }
+    return PF_OK;
+}
+
+void gi_frame_free(gi_frame *f)
+{
+    rs_gbuffer_free(&f->gbuf);
+    free(f->direct);
+    free(f->final);
+    memset(f, 0, sizeof *f);
+}
+
+pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y)
+{
+    /* Pinhole camera: the image plane at distance 1 spans
+     * [-tan(yfov/2) * aspect, +] horizontally and [-tan(yfov/2), +]
+     * vertically; pixel centres at (x + 0.5, y + 0.5), y down. The aspect is
+     * always the image's (a glTF aspectRatio would distort a differently
+     * sized image). */
+    float th = tanf(0.5f * cam->yfov);
+    float aspect = (float)width / (float)height;
+    float sx = (2.0f * ((float)x + 0.5f) / (float)width - 1.0f) * th * aspect;
+    float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)height) * th;
+    pf_ray r;
+    r.org = cam->eye;
+    r.dir = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
+    r.tnear = cam->znear;
+    r.tfar = cam->zfar > 0.0f ? cam->zfar : INFINITY;
+    return r;
+}
+
+/* Compose: emission of the visible surface + direct light. Misses are black. */
+typedef struct gi__compose_ctx {
+    gi_frame *f;
+} gi__compose_ctx;
+
+static void gi__compose_rows(void *ctx, uint32_t row, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ((gi__compose_ctx *)ctx)->f;
+    for (uint32_t x = 0; x < f->width; x++) {
+        size_t i = (size_t)row * f->width + x;
+        uint32_t prim = f->gbuf.prim[i];
+        float e[3] = {0, 0, 0};
+        if (prim != RS_GBUFFER_EMPTY) memcpy(e, f->scene->materials[f->scene->tri_material[prim]].emission, sizeof e);
+        for (int c = 0; c < 3; c++) f->final[3 * i + c] = e[c] + f->direct[3 * i + c];
+    }
+}
+
+void gi_stage_compose(gi_frame *f)
+{
+    gi__compose_ctx ctx = {f};
+    pf_jobs_parallel_for(f->jobs, gi__compose_rows, &ctx, f->height, 8);
+}
+
+static void gi__timed(gi_frame *f, const char *name, void (*stage)(gi_frame *))
+{
+    double t0 = pf_time_now();
+    stage(f);
+    pf_stage_add(&f->times, name, (pf_time_now() - t0) * 1e3);
+}
+
+void gi_frame_render_raytraced(gi_frame *f)
+{
+    memset(&f->times, 0, sizeof f->times);
+    gi__timed(f, "gbuffer (embree)", gi_stage_gbuffer_raytrace);
+    gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    gi__timed(f, "compose", gi_stage_compose);
+}

@@ -1,0 +1,35 @@
+/* gi_light: punctual-light irradiance (see gi_light.h). */
+#include "gi_light.h"
+
+float gi_light_spot_factor(const pf_light *light, float cos_angle)
+{
+    float cos_outer = cosf(light->outer_cone), cos_inner = cosf(light->inner_cone);
+    float scale = 1.0f / fmaxf(0.001f, cos_inner - cos_outer);
+    float t = pf_clampf((cos_angle - cos_outer) * scale, 0.0f, 1.0f);
+    return t * t;
+}
+
+int gi_light_irradiance(const pf_light *light, pf_vec3 p, pf_vec3 n, gi_light_sample *out)
+{
+    float e0 = light->intensity;
+    if (light->type == PF_LIGHT_DIRECTIONAL) {
+        out->wi = pf_v3_scale(light->direction, -1.0f);
+        out->distance = INFINITY;
+    } else {
+        pf_vec3 d = pf_v3_sub(light->position, p);
+        float r2 = pf_v3_dot(d, d);
+        if (!(r2 > 0.0f)) goto none;
+        float r = sqrtf(r2);
+        out->wi = pf_v3_scale(d, 1.0f / r);
+        out->distance = r;
+        e0 /= r2;
+        if (light->type == PF_LIGHT_SPOT) e0 *= gi_light_spot_factor(light, -pf_v3_dot(out->wi, light->direction));
+    }
+    float cos_theta = pf_v3_dot(n, out->wi);
+    if (!(cos_theta > 0.0f) || !(e0 > 0.0f)) goto none;
+    out->irradiance = pf_v3_scale(light->color, e0 * cos_theta);
+    return 1;
+none:
+    out->irradiance = pf_v3(0.0f, 0.0f, 0.0f);
+    return 0;
+}

@@ -1,0 +1,32 @@
+/* gi_light: irradiance from punctual lights (KHR_lights_punctual), the
+ * direct-light term every frame and the reference share.
+ *
+ * Units (README "Light units"): point and spot lights have radiant
+ * intensity I (W/sr), so the irradiance at a surface point at distance r is
+ * E = I cos(theta) / r^2, theta between the surface normal and the direction
+ * to the light. Spot lights multiply that by the extension's cone
+ * attenuation (KHR_lights_punctual, "Inner and Outer Cone Angles"):
+ *   t = clamp((cos(a) - cos(outer)) / max(0.001, cos(inner) - cos(outer)), 0, 1)
+ *   factor = t * t
+ * with a the angle between the spot direction and the direction to the
+ * point. Directional lights give E = E0 cos(theta). A Lambertian surface
+ * then reflects radiance L = albedo E / pi. */
+#ifndef GI_LIGHT_H
+#define GI_LIGHT_H
+
+#include "pf_scene.h"
+
+typedef struct gi_light_sample {
+    pf_vec3 irradiance; /* RGB W/m^2 on the surface, without visibility */
+    pf_vec3 wi;         /* unit direction from the point towards the light */
+    float distance;     /* to the light; INFINITY for directional */
+} gi_light_sample;
+
+/* Spot cone attenuation for cos(angle to the spot axis), as above. */
+float gi_light_spot_factor(const pf_light *light, float cos_angle);
+
+/* Unshadowed irradiance at point p with unit normal n. Returns 0 (and zero
+ * irradiance) when the light cannot reach the point's front side. */
+int gi_light_irradiance(const pf_light *light, pf_vec3 p, pf_vec3 n, gi_light_sample *out);
+
+#endif

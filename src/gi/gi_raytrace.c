@@ -1,0 +1,114 @@
+/* gi_raytrace: the ray-traced reference stages of a frame: the G-buffer from
+ * Embree primary rays and direct light with Embree shadow rays. This is the
+ * `--raytrace` path: the reference the rasterized G-buffer and the shadow
+ * maps are tested against.
+ *
+ * Parallel structure: one job item per image row; every item writes only its
+ * row of every buffer, and rays go to Embree in 8-pixel packets (the fixed
+ * query width of pf_rt), so the output is the same for any thread count. */
+#include <string.h>
+
+#include "gi_frame.h"
+#include "gi_light.h"
+
+static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ctx;
+    rs_gbuffer *g = &f->gbuf;
+    for (uint32_t x0 = 0; x0 < f->width; x0 += PF_RT_WIDTH) {
+        uint32_t n = f->width - x0 < PF_RT_WIDTH ? f->width - x0 : PF_RT_WIDTH;
+        pf_ray rays[PF_RT_WIDTH];
+        pf_hit hits[PF_RT_WIDTH];
+        for (uint32_t i = 0; i < n; i++) rays[i] = gi_camera_ray(&f->camera, f->width, f->height, x0 + i, y);
+        pf_rt_intersect(f->rt, rays, hits, n);
+        for (uint32_t i = 0; i < n; i++) {
+            size_t p = (size_t)y * f->width + x0 + i;
+            if (hits[i].prim == PF_RT_MISS) {
+                g->depth[p] = INFINITY;
+                g->prim[p] = RS_GBUFFER_EMPTY;
+                g->pos_x[p] = g->pos_y[p] = g->pos_z[p] = 0.0f;
+                g->nrm_x[p] = g->nrm_y[p] = g->nrm_z[p] = 0.0f;
+                g->alb_r[p] = g->alb_g[p] = g->alb_b[p] = 0.0f;
+                continue;
+            }
+            pf_surface s;
+            pf_rt_surface(f->rt, &hits[i], 0.0f, &s);
+            /* Two-sided shading: turn the normal to face the camera. */
+            pf_vec3 ns = s.ns;
+            if (pf_v3_dot(s.ng, rays[i].dir) > 0.0f) ns = pf_v3_scale(ns, -1.0f);
+            g->depth[p] = hits[i].t; /* |forward| = 1, so t is view depth */
+            g->prim[p] = hits[i].prim;
+            g->pos_x[p] = s.p.x;
+            g->pos_y[p] = s.p.y;
+            g->pos_z[p] = s.p.z;
+            g->nrm_x[p] = ns.x;
+            g->nrm_y[p] = ns.y;
+            g->nrm_z[p] = ns.z;
+            g->alb_r[p] = s.albedo[0];
+            g->alb_g[p] = s.albedo[1];
+            g->alb_b[p] = s.albedo[2];
+        }
+    }
+}
+
+void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__gbuffer_row, f, f->height, 1); }
+
+/* Direct light of one row: for each light, an 8-wide packet of shadow rays
+ * from the visible points towards the light; radiance = albedo/pi * sum E. */
+static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ctx;
+    const rs_gbuffer *g = &f->gbuf;
+    const pf_scene *s = f->scene;
+    float *out = f->direct + (size_t)y * f->width * 3;
+    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    for (uint32_t x0 = 0; x0 < f->width; x0 += PF_RT_WIDTH) {
+        uint32_t n = f->width - x0 < PF_RT_WIDTH ? f->width - x0 : PF_RT_WIDTH;
+        for (uint32_t l = 0; l < s->light_count; l++) {
+            pf_ray rays[PF_RT_WIDTH];
+            gi_light_sample ls[PF_RT_WIDTH];
+            uint32_t pix[PF_RT_WIDTH], m = 0;
+            for (uint32_t i = 0; i < n; i++) {
+                size_t p = (size_t)y * f->width + x0 + i;
+                if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
+                pf_vec3 pos = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
+                pf_vec3 nrm = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
+                if (!gi_light_irradiance(&s->lights[l], pos, nrm, &ls[m])) continue;
+                const uint32_t *tri = &s->indices[3 * g->prim[p]];
+                pf_vec3 p0 = s->positions[tri[0]];
+                pf_vec3 ng = pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0));
+                ng = pf_v3_normalize(ng);
+                pf_ray r;
+                r.org = pf_rt_offset_origin(pos, ng, ls[m].wi);
+                r.dir = ls[m].wi;
+                r.tnear = 0.0f;
+                /* stop just short of the light: a light on a surface does not shadow itself */
+                r.tfar = isinf(ls[m].distance) ? INFINITY : ls[m].distance * (1.0f - 1.0e-4f);
+                rays[m] = r;
+                pix[m] = x0 + i;
+                m++;
+            }
+            if (m == 0) continue;
+            uint8_t occ[PF_RT_WIDTH];
+            pf_rt_occluded(f->rt, rays, occ, m);
+            for (uint32_t k = 0; k < m; k++) {
+                if (occ[k]) continue;
+                float *o = out + 3 * pix[k];
+                o[0] += ls[k].irradiance.x;
+                o[1] += ls[k].irradiance.y;
+                o[2] += ls[k].irradiance.z;
+            }
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            size_t p = (size_t)y * f->width + x0 + i;
+            float *o = out + 3 * (x0 + i);
+            o[0] *= g->alb_r[p] * PF_INV_PI;
+            o[1] *= g->alb_g[p] * PF_INV_PI;
+            o[2] *= g->alb_b[p] * PF_INV_PI;
+        }
+    }
+}
+
+void gi_stage_direct_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__direct_row, f, f->height, 1); }

@@ -1,0 +1,237 @@
+/* pf_cli: strict command-line parsing (see pf_cli.h). */
+#include "pf_cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void pf_cli_usage(FILE *out)
+{
+    fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
+          "\n"
+          "Renders SCENE (default: the embedded Cornell box) to a PNG and a linear\n"
+          "HDR .pfm, printing per-stage timings.\n"
+          "\n"
+          "options:\n"
+          "  -o, --output FILE.png   PNG output (default out/<scene>.png)\n"
+          "  --hdr FILE.pfm          linear HDR output (default: the PNG path, .pfm)\n"
+          "  --size WxH              image size (default 640x480)\n"
+          "  --threads N             worker threads incl. the main one (default: cores)\n"
+          "  --isa auto|sse2|sse4.2|avx2|avx512\n"
+          "                          pin Embree's and softgi's SIMD ISA (default auto)\n"
+          "  --exposure STOPS        PNG exposure, 2^STOPS before Reinhard (default 0)\n"
+          "  --camera ex,ey,ez:tx,ty,tz:fovy_deg\n"
+          "  --light point:x,y,z:r,g,b:I           (I: W/sr)\n"
+          "  --light spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I\n"
+          "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
+          "                          lights given replace the scene's lights\n"
+          "  --raytrace              Embree primary rays for visibility (the reference\n"
+          "                          path; the only one until the rasterizer lands)\n"
+          "  --hash                  print a 64-bit hash of the linear output\n"
+          "  -q, --quiet             no timing table\n"
+          "  -h, --help, --version\n",
+          out);
+}
+
+/* Parses exactly one finite float from [s, s+len). */
+static int pf__float(const char *s, size_t len, float *out)
+{
+    char buf[64];
+    if (len == 0 || len >= sizeof buf) return 0;
+    memcpy(buf, s, len);
+    buf[len] = 0;
+    char *end;
+    errno = 0;
+    float v = strtof(buf, &end);
+    if (*end != 0 || errno == ERANGE || !isfinite(v)) return 0;
+    *out = v;
+    return 1;
+}
+
+/* Splits `s` at `sep` into up to `max` fields; returns the field count. */
+static int pf__split(const char *s, char sep, const char **start, size_t *len, int max)
+{
+    int n = 0;
+    const char *p = s;
+    for (;;) {
+        const char *q = strchr(p, sep);
+        if (n == max) return max + 1;
+        start[n] = p;
+        len[n] = q ? (size_t)(q - p) : strlen(p);
+        n++;
+        if (!q) return n;
+        p = q + 1;
+    }
+}
+
+/* Parses "a,b,c" (exactly `count` floats) from a field. */
+static int pf__floats(const char *s, size_t len, float *out, int count)
+{
+    char buf[256];
+    if (len >= sizeof buf) return 0;
+    memcpy(buf, s, len);
+    buf[len] = 0;
+    const char *st[8];
+    size_t ln[8];
+    if (pf__split(buf, ',', st, ln, 8) != count) return 0;
+    for (int i = 0; i < count; i++)
+        if (!pf__float(st[i], ln[i], &out[i])) return 0;
+    return 1;
+}
+
+pf_result pf_cli_parse_camera(const char *spec, pf_vec3 *eye, pf_vec3 *target, float *fovy, pf_error *err)
+{
+    const char *st[4];
+    size_t ln[4];
+    float e[3], t[3];
+    if (pf__split(spec, ':', st, ln, 3) != 3 || !pf__floats(st[0], ln[0], e, 3) ||
+        !pf__floats(st[1], ln[1], t, 3) || !pf__float(st[2], ln[2], fovy))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': expected ex,ey,ez:tx,ty,tz:fovy_deg", spec);
+    *eye = pf_v3(e[0], e[1], e[2]);
+    *target = pf_v3(t[0], t[1], t[2]);
+    if (!(*fovy > 0.0f && *fovy < 180.0f))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': fovy must be in (0, 180) degrees", spec);
+    if (e[0] == t[0] && e[1] == t[1] && e[2] == t[2])
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': eye and target must differ", spec);
+    return PF_OK;
+}
+
+static pf_result pf__colour_intensity(const char *spec, const char *cs, size_t cl, const char *is, size_t il,
+                                      pf_light *out, pf_error *err)
+{
+    float c[3];
+    if (!pf__floats(cs, cl, c, 3) || !pf__float(is, il, &out->intensity))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': bad colour r,g,b or intensity", spec);
+    if (c[0] < 0 || c[1] < 0 || c[2] < 0 || out->intensity < 0)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': colour and intensity must be >= 0", spec);
+    out->color = pf_v3(c[0], c[1], c[2]);
+    return PF_OK;
+}
+
+static pf_result pf__direction(const char *spec, const char *s, size_t l, pf_vec3 *out, pf_error *err)
+{
+    float d[3];
+    if (!pf__floats(s, l, d, 3))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': bad direction dx,dy,dz", spec);
+    *out = pf_v3_normalize(pf_v3(d[0], d[1], d[2]));
+    if (out->x == 0.0f && out->y == 0.0f && out->z == 0.0f)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': direction must not be zero", spec);
+    return PF_OK;
+}
+
+pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const char *st[8];
+    size_t ln[8];
+    int n = pf__split(spec, ':', st, ln, 7);
+    float v[3];
+    pf_result r;
+    if (n >= 1 && ln[0] == 5 && strncmp(st[0], "point", 5) == 0) {
+        if (n != 4 || !pf__floats(st[1], ln[1], v, 3))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': expected point:x,y,z:r,g,b:I", spec);
+        out->type = PF_LIGHT_POINT;
+        out->position = pf_v3(v[0], v[1], v[2]);
+        snprintf(out->name, sizeof out->name, "cli-point");
+        return pf__colour_intensity(spec, st[2], ln[2], st[3], ln[3], out, err);
+    }
+    if (n >= 1 && ln[0] == 4 && strncmp(st[0], "spot", 4) == 0) {
+        float cone[2];
+        if (n != 6 || !pf__floats(st[1], ln[1], v, 3) || !pf__floats(st[3], ln[3], cone, 2))
+            return pf_error_set(err, PF_ERR_ARGUMENT,
+                                "--light '%s': expected spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I", spec);
+        out->type = PF_LIGHT_SPOT;
+        out->position = pf_v3(v[0], v[1], v[2]);
+        if ((r = pf__direction(spec, st[2], ln[2], &out->direction, err)) != PF_OK) return r;
+        if (!(cone[0] >= 0.0f && cone[0] < cone[1] && cone[1] <= 90.0f))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': need 0 <= inner < outer <= 90 degrees", spec);
+        out->inner_cone = pf_radians(cone[0]);
+        out->outer_cone = pf_radians(cone[1]);
+        snprintf(out->name, sizeof out->name, "cli-spot");
+        return pf__colour_intensity(spec, st[4], ln[4], st[5], ln[5], out, err);
+    }
+    if (n >= 1 && ln[0] == 3 && strncmp(st[0], "dir", 3) == 0) {
+        if (n != 4) return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': expected dir:dx,dy,dz:r,g,b:E", spec);
+        out->type = PF_LIGHT_DIRECTIONAL;
+        if ((r = pf__direction(spec, st[1], ln[1], &out->direction, err)) != PF_OK) return r;
+        snprintf(out->name, sizeof out->name, "cli-dir");
+        return pf__colour_intensity(spec, st[2], ln[2], st[3], ln[3], out, err);
+    }
+    return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': type must be point, spot or dir", spec);
+}
+
+static pf_result pf__uint(const char *opt, const char *s, uint32_t lo, uint32_t hi, uint32_t *out, pf_error *err)
+{
+    char *end;
+    errno = 0;
+    unsigned long v = strtoul(s, &end, 10);
+    if (*s < '0' || *s > '9' || *end != 0 || errno == ERANGE || v < lo || v > hi)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s': expected an integer in %u..%u", opt, s, lo, hi);
+    *out = (uint32_t)v;
+    return PF_OK;
+}
+
+pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
+{
+    memset(o, 0, sizeof *o);
+    pf_result r = PF_OK;
+    for (int i = 1; i < argc && r == PF_OK; i++) {
+        const char *a = argv[i];
+        /* options that take a value */
+        const char *val = NULL;
+        static const char *const with_value[] = {"-o",      "--output", "--hdr",    "--size",  "--threads",
+                                                 "--isa",   "--camera", "--light",  "--exposure"};
+        for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
+            if (strcmp(a, with_value[k]) == 0) {
+                if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
+                val = argv[++i];
+            }
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) o->help = 1;
+        else if (!strcmp(a, "--version")) o->version = 1;
+        else if (!strcmp(a, "--hash")) o->print_hash = 1;
+        else if (!strcmp(a, "--raytrace")) o->raytrace = 1;
+        else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
+        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
+        else if (!strcmp(a, "--hdr")) o->hdr_path = val;
+        else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
+        else if (!strcmp(a, "--isa")) r = pf_isa_parse(val, &o->isa, err);
+        else if (!strcmp(a, "--exposure")) {
+            if (!pf__float(val, strlen(val), &o->exposure) || fabsf(o->exposure) > 64.0f)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--exposure '%s': expected a number of stops in -64..64", val);
+        } else if (!strcmp(a, "--size")) {
+            const char *x = strchr(val, 'x');
+            char wbuf[16];
+            if (!x || (size_t)(x - val) >= sizeof wbuf)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--size '%s': expected WxH, e.g. 640x480", val);
+            else {
+                memcpy(wbuf, val, (size_t)(x - val));
+                wbuf[x - val] = 0;
+                r = pf__uint("--size width", wbuf, 1, 16384, &o->width, err);
+                if (r == PF_OK) r = pf__uint("--size height", x + 1, 1, 16384, &o->height, err);
+            }
+        } else if (!strcmp(a, "--camera")) {
+            r = pf_cli_parse_camera(val, &o->camera_eye, &o->camera_target, &o->camera_fovy_deg, err);
+            o->has_camera = 1;
+        } else if (!strcmp(a, "--light")) {
+            if (o->light_count == PF_CLI_MAX_LIGHTS)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "at most %d --light options", PF_CLI_MAX_LIGHTS);
+            else
+                r = pf_cli_parse_light(val, &o->lights[o->light_count++], err);
+        } else if (a[0] == '-' && a[1] != 0)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "unknown option '%s' (see softgi --help)", a);
+        else if (!o->command)
+            o->command = a;
+        else if (!o->scene_path)
+            o->scene_path = a;
+        else
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "unexpected argument '%s'", a);
+    }
+    if (r != PF_OK) return r;
+    if (!o->help && !o->version) {
+        if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
+        if (strcmp(o->command, "render") != 0)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "unknown command '%s' (softgi knows: render)", o->command);
+    }
+    return PF_OK;
+}

@@ -1,0 +1,973 @@
+/* pf_gltf: the tinygltf shim (see pf_gltf.h). The only C++ in softgi.
+ *
+ * tinygltf parses JSON/GLB and decodes images; everything it hands back is
+ * treated as untrusted: every accessor, bufferView, buffer, index and object
+ * reference is range-checked here before a byte is read, because tinygltf
+ * 2.7 checks few of them. The result is flattened into pf_scene (plain C).
+ *
+ * Order of work: pick the scene, walk its node forest (explicit stack, cycle
+ * and depth checks), and for every mesh primitive read positions, normals,
+ * uvs and indices, expand strips/fans to lists, transform to world space,
+ * fix winding under mirroring transforms, drop zero-area triangles, generate
+ * flat normals where NORMAL is missing. Then materials, the textures they
+ * use (mips built here), cameras and KHR_lights_punctual lights. */
+#include "pf_gltf.h"
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <stb_image.h>
+#include <tiny_gltf.h>
+
+namespace {
+
+/* Limits that keep a hostile file from asking for absurd memory or time. */
+const size_t kMaxAccessorCount = size_t(1) << 28;  /* elements per accessor */
+const size_t kMaxSceneTriangles = size_t(1) << 28; /* after instancing */
+const int kMaxNodeDepth = 256;
+const size_t kMaxFileBytes = size_t(1) << 32;
+
+struct LoadError {
+    pf_result code;
+    std::string message;
+};
+
+[[noreturn]] void fail(pf_result code, const std::string &msg) { throw LoadError{code, msg}; }
+
+std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char *f, ...)
+{
+    char buf[512];
+    va_list ap;
+    va_start(ap, f);
+    vsnprintf(buf, sizeof buf, f, ap);
+    va_end(ap);
+    return buf;
+}
+
+/* ---------------------------------------------------------------- file system
+ * Our own callbacks: tinygltf's default ExpandFilePath runs wordexp(), which
+ * we do not want anywhere near file names from untrusted files. */
+/* External files are looked up only beside the glTF file: tinygltf also
+ * searches the working directory, which would make a scene's meaning depend
+ * on where softgi runs. user = the base directory (NULL: no files at all). */
+bool fs_allowed(const std::string &path, void *user)
+{
+    if (!user) return false;
+    std::string base = static_cast<const char *>(user);
+    if (!base.empty() && base.back() != '/') base += '/';
+    return path.compare(0, base.size(), base) == 0;
+}
+bool fs_exists(const std::string &path, void *user)
+{
+    struct stat st;
+    return fs_allowed(path, user) && stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+std::string fs_expand(const std::string &path, void *) { return path; }
+bool read_file(std::vector<unsigned char> *out, std::string *err, const std::string &path)
+{
+    FILE *f = fopen(path.c_str(), "rb");
+    if (!f) {
+        if (err) *err += "cannot open '" + path + "'\n";
+        return false;
+    }
+    bool ok = fseek(f, 0, SEEK_END) == 0;
+    long size = ok ? ftell(f) : -1;
+    ok = ok && size >= 0 && size_t(size) <= kMaxFileBytes && fseek(f, 0, SEEK_SET) == 0;
+    if (ok) {
+        out->resize(size_t(size));
+        ok = size == 0 || fread(out->data(), 1, size_t(size), f) == size_t(size);
+    }
+    fclose(f);
+    if (!ok && err) *err += "cannot read '" + path + "'\n";
+    return ok;
+}
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
+{
+    if (!fs_allowed(path, user)) {
+        if (err) *err += "external file '" + path + "' is not beside the glTF file (or loading from memory)\n";
+        return false;
+    }
+    return read_file(out, err, path);
+}
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    if (err) *err += "softgi never writes glTF files\n";
+    return false;
+}
+
+/* With ignore_textures, images are not kept at all. */
+bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int, const unsigned char *, int,
+                void *)
+{
+    return true;
+}
+
+/* tinygltf calls its image loader for every image while parsing. For
+ * bufferView images the byte range it hands over is unchecked (tinygltf 2.7
+ * does not check the view against its buffer: reading it would overrun), so
+ * they are not touched here; decode_image validates the view first. For uri
+ * and data-uri images the bytes come from a vector of the right size: they
+ * are kept encoded, and only images a material uses are decoded. */
+bool defer_image(tinygltf::Image *img, const int, std::string *, std::string *, int, int, const unsigned char *bytes,
+                 int size, void *)
+{
+    if (img->bufferView >= 0) return true;
+    if (bytes && size > 0) img->image.assign(bytes, bytes + size);
+    img->width = img->height = img->component = img->bits = 0;
+    return true;
+}
+
+/* ---------------------------------------------------------------- accessors */
+
+size_t component_size(int type)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_INT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+    }
+}
+
+int type_components(int type)
+{
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    default: return 0;
+    }
+}
+
+/* Reads one component as float, applying the glTF normalisation rules. */
+float read_component(const unsigned char *p, int type, bool normalized)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+        float f;
+        memcpy(&f, p, 4);
+        return f;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? float(p[0]) / 255.0f : float(p[0]);
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        float v = float(int8_t(p[0]));
+        return normalized ? fmaxf(v / 127.0f, -1.0f) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        memcpy(&v, p, 2);
+        return normalized ? float(v) / 65535.0f : float(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t v;
+        memcpy(&v, p, 2);
+        return normalized ? fmaxf(float(v) / 32767.0f, -1.0f) : float(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t v;
+        memcpy(&v, p, 4);
+        return float(v);
+    }
+    default: return 0.0f;
+    }
+}
+
+uint32_t read_index(const unsigned char *p, int type)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return p[0];
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        memcpy(&v, p, 2);
+        return v;
+    }
+    default: {
+        uint32_t v;
+        memcpy(&v, p, 4);
+        return v;
+    }
+    }
+}
+
+/* A checked window onto bufferView bytes: base points at element 0. */
+struct View {
+    const unsigned char *base = nullptr;
+    size_t stride = 0;
+};
+
+/* Checks that `count` elements of `elem` bytes at `offset` with `stride`
+ * (0 = tight) fit inside bufferView `bv_index`, and returns the window. */
+View checked_view(const tinygltf::Model &m, int bv_index, size_t offset, size_t count, size_t elem,
+                  const std::string &what)
+{
+    if (bv_index < 0 || size_t(bv_index) >= m.bufferViews.size())
+        fail(PF_ERR_INDEX_RANGE, fmt("%s refers to bufferView %d, but the file has %zu", what.c_str(), bv_index,
+                                     m.bufferViews.size()));
+    const tinygltf::BufferView &bv = m.bufferViews[size_t(bv_index)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= m.buffers.size())
+        fail(PF_ERR_INDEX_RANGE,
+             fmt("bufferView %d refers to buffer %d, but the file has %zu", bv_index, bv.buffer, m.buffers.size()));
+    const tinygltf::Buffer &buf = m.buffers[size_t(bv.buffer)];
+    if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset)
+        fail(PF_ERR_ACCESSOR, fmt("bufferView %d (offset %zu, length %zu) lies past the end of buffer %d (%zu bytes)",
+                                  bv_index, bv.byteOffset, bv.byteLength, bv.buffer, buf.data.size()));
+    size_t stride = bv.byteStride ? bv.byteStride : elem;
+    if (stride < elem)
+        fail(PF_ERR_ACCESSOR, fmt("%s: byteStride %zu of bufferView %d is smaller than its element (%zu bytes)",
+                                  what.c_str(), stride, bv_index, elem));
+    if (count > 0) {
+        /* offset + stride*(count-1) + elem <= byteLength, without overflow
+         * (count <= 2^28 and stride <= 2^8 by the checks above and tinygltf). */
+        size_t need_hi = (count - 1) * stride;
+        if (offset > bv.byteLength || elem > bv.byteLength - offset || need_hi > bv.byteLength - offset - elem)
+            fail(PF_ERR_ACCESSOR, fmt("%s reads past the end of bufferView %d (needs %zu bytes, has %zu)",
+                                      what.c_str(), bv_index, offset + need_hi + elem, bv.byteLength));
+    }
+    View v;
+    v.base = buf.data.data() + bv.byteOffset + offset;
+    v.stride = stride;
+    return v;
+}
+
+const tinygltf::Accessor &get_accessor(const tinygltf::Model &m, int index, const std::string &what)
+{
+    if (index < 0 || size_t(index) >= m.accessors.size())
+        fail(PF_ERR_INDEX_RANGE,
+             fmt("%s refers to accessor %d, but the file has %zu", what.c_str(), index, m.accessors.size()));
+    const tinygltf::Accessor &a = m.accessors[size_t(index)];
+    if (a.count > kMaxAccessorCount)
+        fail(PF_ERR_ACCESSOR, fmt("accessor %d has count %zu, more than softgi's limit of %zu", index, a.count,
+                                  kMaxAccessorCount));
+    return a;
+}
+
+/* Reads a float-valued accessor (positions, normals, uvs) with `ncomp`
+ * components, honouring byteStride, normalisation and sparse substitution. */
+std::vector<float> read_floats(const tinygltf::Model &m, int index, int ncomp, bool allow_normalized_ints,
+                               const std::string &what)
+{
+    const tinygltf::Accessor &a = get_accessor(m, index, what);
+    std::string where = fmt("accessor %d (%s)", index, what.c_str());
+    if (type_components(a.type) != ncomp)
+        fail(PF_ERR_ACCESSOR, fmt("%s must have %d components per element", where.c_str(), ncomp));
+    size_t csize = component_size(a.componentType);
+    bool ok_type = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                   (allow_normalized_ints && a.normalized &&
+                    (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                     a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                     a.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+                     a.componentType == TINYGLTF_COMPONENT_TYPE_SHORT));
+    if (!ok_type || csize == 0)
+        fail(PF_ERR_ACCESSOR, fmt("%s has component type %d, which is not allowed here", where.c_str(),
+                                  a.componentType));
+    size_t elem = csize * size_t(ncomp);
+    std::vector<float> out(a.count * size_t(ncomp), 0.0f);
+    if (a.bufferView >= 0) {
+        View v = checked_view(m, a.bufferView, a.byteOffset, a.count, elem, where);
+        for (size_t i = 0; i < a.count; i++)
+            for (int c = 0; c < ncomp; c++)
+                out[i * size_t(ncomp) + size_t(c)] =
+                    read_component(v.base + i * v.stride + size_t(c) * csize, a.componentType, a.normalized);
+    }
+    if (a.sparse.isSparse) {
+        if (a.sparse.count < 0 || size_t(a.sparse.count) > a.count)
+            fail(PF_ERR_ACCESSOR, fmt("%s: sparse count %d exceeds the accessor count %zu", where.c_str(),
+                                      a.sparse.count, a.count));
+        size_t n = size_t(a.sparse.count);
+        int itype = a.sparse.indices.componentType;
+        size_t isize = component_size(itype);
+        if (itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(PF_ERR_ACCESSOR, fmt("%s: sparse indices must be unsigned integers", where.c_str()));
+        if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+            fail(PF_ERR_ACCESSOR, fmt("%s: negative sparse byteOffset", where.c_str()));
+        View iv = checked_view(m, a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset), n, isize,
+                               where + " sparse indices");
+        iv.stride = isize; /* sparse data is always tightly packed */
+        View vv = checked_view(m, a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n, elem,
+                               where + " sparse values");
+        vv.stride = elem;
+        for (size_t i = 0; i < n; i++) {
+            uint32_t target = read_index(iv.base + i * isize, itype);
+            if (target >= a.count)
+                fail(PF_ERR_INDEX_RANGE, fmt("%s: sparse index %u is past the accessor count %zu", where.c_str(),
+                                             target, a.count));
+            for (int c = 0; c < ncomp; c++)
+                out[size_t(target) * size_t(ncomp) + size_t(c)] =
+                    read_component(vv.base + i * elem + size_t(c) * csize, a.componentType, a.normalized);
+        }
+    }
+    return out;
+}
+
+/* Reads an index accessor (u8/u16/u32 scalars). */
+std::vector<uint32_t> read_indices(const tinygltf::Model &m, int index, const std::string &what)
+{
+    const tinygltf::Accessor &a = get_accessor(m, index, what);
+    std::string where = fmt("accessor %d (%s)", index, what.c_str());
+    if (a.type != TINYGLTF_TYPE_SCALAR)
+        fail(PF_ERR_ACCESSOR, fmt("%s must be SCALAR", where.c_str()));
+    if (a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        fail(PF_ERR_ACCESSOR, fmt("%s must be unsigned byte, short or int", where.c_str()));
+    if (a.sparse.isSparse)
+        fail(PF_ERR_UNSUPPORTED, fmt("%s: sparse index accessors are not supported", where.c_str()));
+    if (a.bufferView < 0) fail(PF_ERR_ACCESSOR, fmt("%s has no bufferView", where.c_str()));
+    size_t csize = component_size(a.componentType);
+    View v = checked_view(m, a.bufferView, a.byteOffset, a.count, csize, where);
+    std::vector<uint32_t> out(a.count);
+    for (size_t i = 0; i < a.count; i++) out[i] = read_index(v.base + i * v.stride, a.componentType);
+    return out;
+}
+
+/* ---------------------------------------------------------------- nodes */
+
+pf_mat4 node_local(const tinygltf::Node &n, int index)
+{
+    pf_mat4 r = pf_mat4_identity();
+    if (!n.matrix.empty()) {
+        if (n.matrix.size() != 16) fail(PF_ERR_PARSE, fmt("node %d: matrix must have 16 numbers", index));
+        for (int i = 0; i < 16; i++) r.m[i] = n.matrix[size_t(i)];
+    } else {
+        double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
+        if (!n.translation.empty()) {
+            if (n.translation.size() != 3) fail(PF_ERR_PARSE, fmt("node %d: translation must have 3 numbers", index));
+            for (int i = 0; i < 3; i++) t[i] = n.translation[size_t(i)];
+        }
+        if (!n.rotation.empty()) {
+            if (n.rotation.size() != 4) fail(PF_ERR_PARSE, fmt("node %d: rotation must have 4 numbers", index));
+            for (int i = 0; i < 4; i++) q[i] = n.rotation[size_t(i)];
+            double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+            if (!(len > 0.0) || !std::isfinite(len))
+                fail(PF_ERR_NONFINITE, fmt("node %d: rotation quaternion is zero or non-finite", index));
+            for (double &c : q) c /= len;
+        }
+        if (!n.scale.empty()) {
+            if (n.scale.size() != 3) fail(PF_ERR_PARSE, fmt("node %d: scale must have 3 numbers", index));
+            for (int i = 0; i < 3; i++) s[i] = n.scale[size_t(i)];
+        }
+        double x = q[0], y = q[1], z = q[2], w = q[3];
+        double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+        for (int c = 0; c < 3; c++)
+            for (int rr = 0; rr < 3; rr++) r.m[c * 4 + rr] = rot[c * 3 + rr] * s[c];
+        r.m[12] = t[0];
+        r.m[13] = t[1];
+        r.m[14] = t[2];
+    }
+    for (double v : r.m)
+        if (!std::isfinite(v)) fail(PF_ERR_NONFINITE, fmt("node %d has a non-finite transform", index));
+    return r;
+}
+
+/* ---------------------------------------------------------------- builder */
+
+struct Builder {
+    const tinygltf::Model &m;
+    const pf_gltf_options &opts;
+    std::string name;
+    std::vector<pf_vec3> pos, nrm;
+    std::vector<pf_vec2> uv;
+    std::vector<uint32_t> idx, tri_mat;
+    std::vector<pf_camera> cameras;
+    std::vector<pf_light> lights;
+    std::string warnings;
+    uint32_t dropped = 0;
+    int default_material = -1; /* index of the glTF default material, made on demand */
+    size_t skipped_prims = 0;
+
+    void warn(const std::string &w)
+    {
+        if (warnings.size() < 900) warnings += w + "\n";
+    }
+
+    uint32_t material_for(int mat)
+    {
+        if (mat < 0) {
+            if (default_material < 0) default_material = int(m.materials.size());
+            return uint32_t(default_material);
+        }
+        if (size_t(mat) >= m.materials.size())
+            fail(PF_ERR_INDEX_RANGE,
+                 fmt("a mesh primitive uses material %d, but the file has %zu", mat, m.materials.size()));
+        return uint32_t(mat);
+    }
+
+    void add_primitive(const tinygltf::Primitive &p, const pf_mat4 &world, int mesh_index, size_t prim_index)
+    {
+        std::string what = fmt("mesh %d primitive %zu", mesh_index, prim_index);
+        int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+            if (mode >= 0 && mode <= 3) {
+                skipped_prims++;
+                warn(what + ": points/lines primitive skipped");
+                return;
+            }
+            fail(PF_ERR_PARSE, what + fmt(": unknown primitive mode %d", mode));
+        }
+        auto pit = p.attributes.find("POSITION");
+        if (pit == p.attributes.end()) {
+            skipped_prims++;
+            warn(what + ": no POSITION, skipped");
+            return;
+        }
+        uint32_t material = material_for(p.material);
+        std::vector<float> P = read_floats(m, pit->second, 3, false, what + " POSITION");
+        size_t nv = P.size() / 3;
+        std::vector<float> N, T;
+        auto nit = p.attributes.find("NORMAL");
+        if (nit != p.attributes.end()) {
+            N = read_floats(m, nit->second, 3, false, what + " NORMAL");
+            if (N.size() != P.size()) fail(PF_ERR_ACCESSOR, what + ": NORMAL count differs from POSITION count");
+        }
+        auto tit = p.attributes.find("TEXCOORD_0");
+        if (tit != p.attributes.end()) {
+            T = read_floats(m, tit->second, 2, true, what + " TEXCOORD_0");
+            if (T.size() / 2 != nv) fail(PF_ERR_ACCESSOR, what + ": TEXCOORD_0 count differs from POSITION count");
+        }
+        std::vector<uint32_t> I;
+        if (p.indices >= 0) {
+            I = read_indices(m, p.indices, what + " indices");
+            for (size_t i = 0; i < I.size(); i++)
+                if (I[i] >= nv)
+                    fail(PF_ERR_INDEX_RANGE, what + fmt(": index %u at position %zu is out of range (%zu vertices)",
+                                                        I[i], i, nv));
+        } else {
+            I.resize(nv);
+            for (size_t i = 0; i < nv; i++) I[i] = uint32_t(i);
+        }
+        /* Expand to a triangle list (glTF 2.0 Sec. 3.7.2.1 primitive modes). */
+        std::vector<uint32_t> L;
+        if (mode == TINYGLTF_MODE_TRIANGLES) {
+            if (I.size() % 3) warn(what + ": index count is not a multiple of 3; the remainder is ignored");
+            L.assign(I.begin(), I.begin() + ptrdiff_t(I.size() - I.size() % 3));
+        } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            for (size_t i = 2; i < I.size(); i++) {
+                bool odd = (i & 1) != 0; /* keep every triangle counter-clockwise */
+                L.push_back(I[i - 2]);
+                L.push_back(odd ? I[i] : I[i - 1]);
+                L.push_back(odd ? I[i - 1] : I[i]);
+            }
+        } else {
+            for (size_t i = 2; i < I.size(); i++) {
+                L.push_back(I[0]);
+                L.push_back(I[i - 1]);
+                L.push_back(I[i]);
+            }
+        }
+        if (idx.size() / 3 + L.size() / 3 > kMaxSceneTriangles)
+            fail(PF_ERR_UNSUPPORTED, fmt("the scene instances more than %zu triangles", kMaxSceneTriangles));
+
+        bool mirror = pf_mat4_det3(&world) < 0.0;
+        /* World-space positions of this primitive. */
+        std::vector<pf_vec3> WP(nv);
+        for (size_t v = 0; v < nv; v++) {
+            pf_vec3 lp = pf_v3(P[3 * v], P[3 * v + 1], P[3 * v + 2]);
+            if (!pf_v3_is_finite(lp))
+                fail(PF_ERR_NONFINITE, what + fmt(": POSITION %zu is not finite", v));
+            WP[v] = pf_mat4_point(&world, lp);
+            if (!pf_v3_is_finite(WP[v]) || fabsf(WP[v].x) > PF_SCENE_MAX_COORD ||
+                fabsf(WP[v].y) > PF_SCENE_MAX_COORD || fabsf(WP[v].z) > PF_SCENE_MAX_COORD)
+                fail(PF_ERR_NONFINITE, what + fmt(": POSITION %zu lands at (%g, %g, %g), beyond the supported "
+                                                  "range |x| <= %g",
+                                                  v, double(WP[v].x), double(WP[v].y), double(WP[v].z),
+                                                  double(PF_SCENE_MAX_COORD)));
+        }
+        for (size_t v = 0; v < N.size() / 3; v++)
+            if (!std::isfinite(N[3 * v]) || !std::isfinite(N[3 * v + 1]) || !std::isfinite(N[3 * v + 2]))
+                fail(PF_ERR_NONFINITE, what + fmt(": NORMAL %zu is not finite", v));
+        for (size_t v = 0; v < T.size(); v++)
+            if (!std::isfinite(T[v])) fail(PF_ERR_NONFINITE, what + fmt(": TEXCOORD_0 %zu is not finite", v / 2));
+
+        const bool flat = N.empty();
+        /* Vertex ids of this primitive in the scene arrays (welded case). */
+        uint32_t base = uint32_t(pos.size());
+        if (!flat) {
+            for (size_t v = 0; v < nv; v++) {
+                pos.push_back(WP[v]);
+                pf_vec3 n = pf_mat4_normal(&world, pf_v3(N[3 * v], N[3 * v + 1], N[3 * v + 2]));
+                n = pf_v3_normalize_safe(n);
+                if (mirror) n = pf_v3_scale(n, -1.0f); /* cofactor = det * M^-T */
+                nrm.push_back(n);                      /* zero normals fixed below */
+                uv.push_back(T.empty() ? pf_vec2{0, 0} : pf_vec2{T[2 * v], T[2 * v + 1]});
+            }
+        }
+        for (size_t t = 0; t + 2 < L.size(); t += 3) {
+            uint32_t a = L[t], b = L[t + 1], c = L[t + 2];
+            if (mirror) std::swap(b, c);
+            pf_vec3 fn = pf_v3_cross(pf_v3_sub(WP[b], WP[a]), pf_v3_sub(WP[c], WP[a]));
+            if (a == b || b == c || a == c || (fn.x == 0.0f && fn.y == 0.0f && fn.z == 0.0f)) {
+                dropped++;
+                continue;
+            }
+            fn = pf_v3_normalize_safe(fn);
+            if (flat) {
+                const uint32_t abc[3] = {a, b, c};
+                for (uint32_t k : abc) {
+                    idx.push_back(uint32_t(pos.size()));
+                    pos.push_back(WP[k]);
+                    nrm.push_back(fn);
+                    uv.push_back(T.empty() ? pf_vec2{0, 0} : pf_vec2{T[2 * k], T[2 * k + 1]});
+                }
+            } else {
+                const uint32_t abc[3] = {a, b, c};
+                for (uint32_t k : abc) {
+                    pf_vec3 &n = nrm[base + k];
+                    if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) n = fn; /* zero-length NORMAL in the file */
+                    idx.push_back(base + k);
+                }
+            }
+            tri_mat.push_back(material);
+        }
+        /* Zero normals on vertices no kept triangle uses: any unit vector. */
+        if (!flat)
+            for (size_t v = base; v < nrm.size(); v++)
+                if (nrm[v].x == 0.0f && nrm[v].y == 0.0f && nrm[v].z == 0.0f) nrm[v] = pf_v3(0, 1, 0);
+    }
+
+    void add_camera(int cam_index, const pf_mat4 &world, int node_index)
+    {
+        if (cam_index < 0) return;
+        if (size_t(cam_index) >= m.cameras.size())
+            fail(PF_ERR_INDEX_RANGE,
+                 fmt("node %d uses camera %d, but the file has %zu", node_index, cam_index, m.cameras.size()));
+        const tinygltf::Camera &c = m.cameras[size_t(cam_index)];
+        if (c.type != "perspective") {
+            warn(fmt("camera %d is '%s'; only perspective cameras are used", cam_index, c.type.c_str()));
+            return;
+        }
+        pf_camera cam;
+        memset(&cam, 0, sizeof cam);
+        snprintf(cam.name, sizeof cam.name, "%s", c.name.empty() ? "camera" : c.name.c_str());
+        cam.eye = pf_mat4_point(&world, pf_v3(0, 0, 0));
+        cam.forward = pf_v3_normalize_safe(pf_mat4_dir(&world, pf_v3(0, 0, -1)));
+        pf_vec3 up = pf_mat4_dir(&world, pf_v3(0, 1, 0));
+        cam.right = pf_v3_normalize_safe(pf_v3_cross(cam.forward, up));
+        cam.up = pf_v3_cross(cam.right, cam.forward);
+        if (pf_v3_length(cam.forward) == 0.0f || pf_v3_length(cam.right) == 0.0f)
+            fail(PF_ERR_NONFINITE, fmt("camera %d: its node transform is degenerate", cam_index));
+        cam.yfov = float(c.perspective.yfov);
+        cam.znear = float(c.perspective.znear);
+        cam.zfar = float(c.perspective.zfar);
+        cam.aspect = float(c.perspective.aspectRatio);
+        if (!(cam.yfov > 0.0f && cam.yfov < PF_PI))
+            fail(PF_ERR_PARSE, fmt("camera %d: yfov %g is outside (0, pi)", cam_index, c.perspective.yfov));
+        if (!(cam.znear > 0.0f) || !std::isfinite(cam.znear)) cam.znear = 0.01f;
+        if (!(cam.zfar > cam.znear) || !std::isfinite(cam.zfar)) cam.zfar = 0.0f;
+        if (!(cam.aspect > 0.0f) || !std::isfinite(cam.aspect)) cam.aspect = 0.0f;
+        cameras.push_back(cam);
+    }
+
+    void add_light(const tinygltf::Node &n, const pf_mat4 &world, int node_index)
+    {
+        auto it = n.extensions.find("KHR_lights_punctual");
+        if (it == n.extensions.end()) return;
+        const tinygltf::Value &v = it->second;
+        if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber())
+            fail(PF_ERR_PARSE, fmt("node %d: KHR_lights_punctual needs a 'light' index", node_index));
+        double lid = v.Get("light").GetNumberAsDouble(); /* checked as double: no int overflow */
+        if (!(lid >= 0.0) || lid >= double(m.lights.size()) || lid != std::floor(lid))
+            fail(PF_ERR_INDEX_RANGE,
+                 fmt("node %d uses light %g, but the file has %zu", node_index, lid, m.lights.size()));
+        int li = int(lid);
+        const tinygltf::Light &L = m.lights[size_t(li)];
+        pf_light out;
+        memset(&out, 0, sizeof out);
+        snprintf(out.name, sizeof out.name, "%s", L.name.empty() ? "light" : L.name.c_str());
+        if (L.type == "point") out.type = PF_LIGHT_POINT;
+        else if (L.type == "spot") out.type = PF_LIGHT_SPOT;
+        else if (L.type == "directional") out.type = PF_LIGHT_DIRECTIONAL;
+        else fail(PF_ERR_PARSE, fmt("light %d has unknown type '%s'", li, L.type.c_str()));
+        out.position = pf_mat4_point(&world, pf_v3(0, 0, 0));
+        out.direction = pf_v3_normalize_safe(pf_mat4_dir(&world, pf_v3(0, 0, -1)));
+        if (out.type != PF_LIGHT_POINT && pf_v3_length(out.direction) == 0.0f)
+            fail(PF_ERR_NONFINITE, fmt("light %d: its node transform has no direction", li));
+        out.color = pf_v3(1, 1, 1);
+        if (!L.color.empty()) {
+            if (L.color.size() != 3) fail(PF_ERR_PARSE, fmt("light %d: color must have 3 numbers", li));
+            out.color = pf_v3(float(L.color[0]), float(L.color[1]), float(L.color[2]));
+        }
+        out.intensity = float(L.intensity);
+        out.range = float(L.range);
+        if (out.type == PF_LIGHT_SPOT) {
+            out.inner_cone = float(L.spot.innerConeAngle);
+            out.outer_cone = float(L.spot.outerConeAngle);
+        }
+        if (out.range > 0.0f) warn(fmt("light %d: range is ignored (softgi uses pure 1/r^2 falloff)", li));
+        lights.push_back(out);
+    }
+
+    void walk(const std::vector<int> &roots)
+    {
+        struct Item {
+            int node;
+            int depth;
+            pf_mat4 parent;
+        };
+        std::vector<Item> stack;
+        /* Roots are pushed in reverse so nodes are visited in file order. */
+        for (size_t i = roots.size(); i-- > 0;) stack.push_back({roots[i], 0, pf_mat4_identity()});
+        std::vector<int> path_depth(m.nodes.size(), -1); /* depth at which a node is on the current path */
+        std::vector<char> seen(m.nodes.size(), 0);       /* glTF nodes form disjoint trees */
+        std::vector<int> path;                           /* nodes on the path, by depth */
+        while (!stack.empty()) {
+            Item it = stack.back();
+            stack.pop_back();
+            if (it.node < 0 || size_t(it.node) >= m.nodes.size())
+                fail(PF_ERR_INDEX_RANGE, fmt("a scene or node refers to node %d, but the file has %zu", it.node,
+                                             m.nodes.size()));
+            if (it.depth > kMaxNodeDepth)
+                fail(PF_ERR_PARSE, fmt("the node hierarchy is deeper than %d", kMaxNodeDepth));
+            while (int(path.size()) > it.depth) {
+                path_depth[size_t(path.back())] = -1;
+                path.pop_back();
+            }
+            if (path_depth[size_t(it.node)] >= 0)
+                fail(PF_ERR_PARSE, fmt("node %d is its own ancestor (a cycle in the node hierarchy)", it.node));
+            if (seen[size_t(it.node)])
+                fail(PF_ERR_PARSE, fmt("node %d has more than one parent or is listed twice (glTF nodes form trees)",
+                                       it.node));
+            seen[size_t(it.node)] = 1;
+            path_depth[size_t(it.node)] = it.depth;
+            path.push_back(it.node);
+
+            const tinygltf::Node &n = m.nodes[size_t(it.node)];
+            pf_mat4 local = node_local(n, it.node);
+            pf_mat4 world = pf_mat4_mul(&it.parent, &local);
+            if (n.mesh >= 0) {
+                if (size_t(n.mesh) >= m.meshes.size())
+                    fail(PF_ERR_INDEX_RANGE,
+                         fmt("node %d uses mesh %d, but the file has %zu", it.node, n.mesh, m.meshes.size()));
+                const tinygltf::Mesh &mesh = m.meshes[size_t(n.mesh)];
+                for (size_t p = 0; p < mesh.primitives.size(); p++) add_primitive(mesh.primitives[p], world, n.mesh, p);
+            }
+            add_camera(n.camera, world, it.node);
+            add_light(n, world, it.node);
+            for (size_t c = n.children.size(); c-- > 0;) stack.push_back({n.children[c], it.depth + 1, world});
+        }
+    }
+};
+
+pf_wrap wrap_mode(int gl)
+{
+    if (gl == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return PF_WRAP_CLAMP;
+    if (gl == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return PF_WRAP_MIRROR;
+    return PF_WRAP_REPEAT;
+}
+
+/* Decodes image `index` (PNG/JPEG/... through stb_image) to RGBA8. */
+std::vector<uint8_t> decode_image(const tinygltf::Model &m, int index, uint32_t *w, uint32_t *h)
+{
+    const tinygltf::Image &img = m.images[size_t(index)];
+    const char *label = img.uri.empty() ? img.name.c_str() : img.uri.c_str();
+    const unsigned char *bytes;
+    size_t size;
+    if (img.bufferView >= 0) {
+        if (size_t(img.bufferView) >= m.bufferViews.size())
+            fail(PF_ERR_INDEX_RANGE, fmt("image %d refers to bufferView %d, but the file has %zu", index,
+                                         img.bufferView, m.bufferViews.size()));
+        size = m.bufferViews[size_t(img.bufferView)].byteLength;
+        if (size == 0) fail(PF_ERR_TEXTURE, fmt("image %d: bufferView %d is empty", index, img.bufferView));
+        bytes = checked_view(m, img.bufferView, 0, 1, size, fmt("image %d", index)).base;
+    } else {
+        if (img.image.empty())
+            fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be loaded: file missing or empty", index, label));
+        bytes = img.image.data();
+        size = img.image.size();
+    }
+    if (size > size_t(INT32_MAX)) fail(PF_ERR_TEXTURE, fmt("image %d is larger than 2 GiB", index));
+    int iw = 0, ih = 0, comp = 0;
+    if (!stbi_info_from_memory(bytes, int(size), &iw, &ih, &comp))
+        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be decoded: %s", index, label, stbi_failure_reason()));
+    if (iw <= 0 || ih <= 0 || iw > 32768 || ih > 32768 || size_t(iw) * size_t(ih) > (size_t(1) << 26))
+        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') is %dx%d, larger than softgi's limit (32768 a side, 64 Mpixels)",
+                                 index, label, iw, ih));
+    unsigned char *px = stbi_load_from_memory(bytes, int(size), &iw, &ih, &comp, 4);
+    if (!px)
+        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be decoded: %s", index, label, stbi_failure_reason()));
+    std::vector<uint8_t> out(px, px + size_t(iw) * size_t(ih) * 4);
+    stbi_image_free(px);
+    *w = uint32_t(iw);
+    *h = uint32_t(ih);
+    return out;
+}
+
+template <typename T> T *copy_out(const std::vector<T> &v, size_t extra = 0)
+{
+    size_t n = v.size() + extra;
+    T *p = static_cast<T *>(calloc(n ? n : 1, sizeof(T)));
+    if (!p) throw std::bad_alloc();
+    if (!v.empty()) memcpy(p, v.data(), v.size() * sizeof(T));
+    return p;
+}
+
+void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options &opts, const std::string &name,
+                 std::string warnings_in)
+{
+    Builder b{m, opts, name, {}, {}, {}, {}, {}, {}, {}, {}, 0, -1, 0};
+    b.warnings = warnings_in.size() > 400 ? warnings_in.substr(0, 400) : warnings_in;
+
+    std::vector<int> roots;
+    if (m.defaultScene >= 0 || !m.scenes.empty()) {
+        int si = m.defaultScene >= 0 ? m.defaultScene : 0;
+        if (size_t(si) >= m.scenes.size())
+            fail(PF_ERR_INDEX_RANGE, fmt("default scene %d does not exist (the file has %zu)", si, m.scenes.size()));
+        roots = m.scenes[size_t(si)].nodes;
+    } else {
+        std::vector<char> is_child(m.nodes.size(), 0);
+        for (const tinygltf::Node &n : m.nodes)
+            for (int c : n.children)
+                if (c >= 0 && size_t(c) < m.nodes.size()) is_child[size_t(c)] = 1;
+        for (size_t i = 0; i < m.nodes.size(); i++)
+            if (!is_child[i]) roots.push_back(int(i));
+    }
+    b.walk(roots);
+
+    /* Materials: the file's, plus the glTF default material if used. */
+    size_t nmat = m.materials.size() + (b.default_material >= 0 ? 1 : 0);
+    std::vector<pf_material> mats(nmat);
+    std::vector<int> tex_used(m.textures.size(), -1); /* glTF texture -> pf texture */
+    std::vector<pf_texture> textures;
+    std::vector<int> img_used(m.images.size(), -1);
+    std::vector<int> img_order;
+    for (size_t i = 0; i < nmat; i++) {
+        pf_material &pm = mats[i];
+        memset(&pm, 0, sizeof pm);
+        pm.base_color[0] = pm.base_color[1] = pm.base_color[2] = pm.base_color[3] = 1.0f;
+        pm.base_color_texture = -1;
+        pm.alpha_cutoff = 0.5f;
+        if (i == m.materials.size()) {
+            snprintf(pm.name, sizeof pm.name, "gltf-default");
+            continue;
+        }
+        const tinygltf::Material &gm = m.materials[i];
+        snprintf(pm.name, sizeof pm.name, "%s", gm.name.c_str());
+        const std::vector<double> &bc = gm.pbrMetallicRoughness.baseColorFactor;
+        if (bc.size() == 4)
+            for (int k = 0; k < 4; k++) pm.base_color[k] = float(bc[size_t(k)]);
+        else if (!bc.empty())
+            fail(PF_ERR_PARSE, fmt("material %zu: baseColorFactor must have 4 numbers", i));
+        if (gm.emissiveFactor.size() == 3) {
+            float strength = 1.0f;
+            auto ext = gm.extensions.find("KHR_materials_emissive_strength");
+            if (ext != gm.extensions.end() && ext->second.Has("emissiveStrength") &&
+                ext->second.Get("emissiveStrength").IsNumber())
+                strength = float(ext->second.Get("emissiveStrength").GetNumberAsDouble());
+            for (int k = 0; k < 3; k++) pm.emission[k] = float(gm.emissiveFactor[size_t(k)]) * strength;
+        }
+        if (gm.alphaMode == "MASK") pm.alpha_mode = PF_ALPHA_MASK;
+        else if (gm.alphaMode == "BLEND") {
+            pm.alpha_mode = PF_ALPHA_BLEND;
+            b.warn(fmt("material %zu: alphaMode BLEND is rendered as OPAQUE", i));
+        }
+        pm.alpha_cutoff = float(gm.alphaCutoff);
+        pm.double_sided = gm.doubleSided ? 1 : 0;
+        int ti = gm.pbrMetallicRoughness.baseColorTexture.index;
+        if (ti >= 0 && !opts.ignore_textures) {
+            if (size_t(ti) >= m.textures.size())
+                fail(PF_ERR_INDEX_RANGE, fmt("material %zu uses texture %d, but the file has %zu", i, ti,
+                                             m.textures.size()));
+            if (gm.pbrMetallicRoughness.baseColorTexture.texCoord != 0)
+                b.warn(fmt("material %zu: baseColorTexture uses TEXCOORD_%d; softgi reads TEXCOORD_0", i,
+                           gm.pbrMetallicRoughness.baseColorTexture.texCoord));
+            if (tex_used[size_t(ti)] < 0) {
+                const tinygltf::Texture &gt = m.textures[size_t(ti)];
+                if (gt.source < 0 || size_t(gt.source) >= m.images.size())
+                    fail(PF_ERR_TEXTURE, fmt("texture %d has image source %d, but the file has %zu images", ti,
+                                             gt.source, m.images.size()));
+                pf_texture t;
+                memset(&t, 0, sizeof t);
+                t.mag_linear = 1;
+                t.min_linear = 1;
+                t.min_mipmap = 1;
+                t.mip_linear = 1;
+                if (gt.sampler >= 0) {
+                    if (size_t(gt.sampler) >= m.samplers.size())
+                        fail(PF_ERR_INDEX_RANGE, fmt("texture %d uses sampler %d, but the file has %zu", ti,
+                                                     gt.sampler, m.samplers.size()));
+                    const tinygltf::Sampler &s = m.samplers[size_t(gt.sampler)];
+                    t.wrap_s = wrap_mode(s.wrapS);
+                    t.wrap_t = wrap_mode(s.wrapT);
+                    t.mag_linear = s.magFilter != TINYGLTF_TEXTURE_FILTER_NEAREST;
+                    switch (s.minFilter) {
+                    case TINYGLTF_TEXTURE_FILTER_NEAREST: t.min_linear = 0; t.min_mipmap = 0; break;
+                    case TINYGLTF_TEXTURE_FILTER_LINEAR: t.min_linear = 1; t.min_mipmap = 0; break;
+                    case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST: t.min_linear = 0; t.mip_linear = 0; break;
+                    case TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_NEAREST: t.min_linear = 1; t.mip_linear = 0; break;
+                    case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_LINEAR: t.min_linear = 0; t.mip_linear = 1; break;
+                    default: break; /* LINEAR_MIPMAP_LINEAR or unset */
+                    }
+                }
+                if (img_used[size_t(gt.source)] < 0) {
+                    img_used[size_t(gt.source)] = int(img_order.size());
+                    img_order.push_back(gt.source);
+                }
+                t.image = uint32_t(img_used[size_t(gt.source)]);
+                tex_used[size_t(ti)] = int(textures.size());
+                textures.push_back(t);
+            }
+            pm.base_color_texture = tex_used[size_t(ti)];
+        }
+    }
+
+    /* Decode and mip-map the images the materials use. */
+    std::vector<pf_image> images(img_order.size());
+    for (pf_image &im : images) memset(&im, 0, sizeof im);
+    struct ImageGuard {
+        std::vector<pf_image> &v;
+        bool keep = false;
+        ~ImageGuard()
+        {
+            if (!keep)
+                for (pf_image &im : v) free(im.texels);
+        }
+    } guard{images};
+    for (size_t i = 0; i < img_order.size(); i++) {
+        uint32_t w, h;
+        std::vector<uint8_t> rgba = decode_image(m, img_order[i], &w, &h);
+        pf_error e;
+        if (pf_image_build_mips(&images[i], rgba.data(), w, h, &e) != PF_OK)
+            fail(e.code, e.message);
+    }
+
+    if (b.idx.empty()) {
+        if (b.dropped)
+            fail(PF_ERR_NO_TRIANGLES, fmt("all %u triangles are degenerate (zero area)", b.dropped));
+        fail(PF_ERR_NO_TRIANGLES, "the scene has no triangles to render");
+    }
+
+    /* Hand everything to C. */
+    pf_scene s;
+    memset(&s, 0, sizeof s);
+    try {
+        s.vertex_count = uint32_t(b.pos.size());
+        s.positions = copy_out(b.pos, 1);
+        s.normals = copy_out(b.nrm);
+        s.uvs = copy_out(b.uv);
+        s.tri_count = uint32_t(b.idx.size() / 3);
+        s.indices = copy_out(b.idx);
+        s.tri_material = copy_out(b.tri_mat);
+        s.material_count = uint32_t(mats.size());
+        s.materials = copy_out(mats);
+        s.texture_count = uint32_t(textures.size());
+        s.textures = copy_out(textures);
+        s.image_count = uint32_t(images.size());
+        s.images = copy_out(images);
+        s.camera_count = uint32_t(b.cameras.size());
+        s.cameras = copy_out(b.cameras);
+        s.light_count = uint32_t(b.lights.size());
+        s.lights = copy_out(b.lights);
+    } catch (...) {
+        s.image_count = 0; /* texels still owned by the guard */
+        pf_scene_free(&s);
+        throw;
+    }
+    guard.keep = true;
+    s.dropped_degenerate = b.dropped;
+    if (b.dropped) b.warn(fmt("%u zero-area triangles dropped", b.dropped));
+    snprintf(s.warnings, sizeof s.warnings, "%s", b.warnings.c_str());
+    pf_error e;
+    if (pf_scene_validate(&s, &e) != PF_OK) {
+        pf_scene_free(&s);
+        fail(e.code, e.message);
+    }
+    *out = s;
+}
+
+std::string first_line(const std::string &s)
+{
+    std::string t = s.substr(0, s.find('\n'));
+    return t.size() > 300 ? t.substr(0, 300) : t;
+}
+
+pf_result load(pf_scene *out, const unsigned char *data, size_t size, const char *base_dir, const char *name,
+               const pf_gltf_options *opts_in, pf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    pf_gltf_options opts;
+    memset(&opts, 0, sizeof opts);
+    if (opts_in) opts = *opts_in;
+    const char *nm = name ? name : "(memory)";
+    if (size > 0xffffffffu) return pf_error_set(err, PF_ERR_UNSUPPORTED, "%s: files over 4 GiB are not supported", nm);
+    if (size == 0) return pf_error_set(err, PF_ERR_PARSE, "%s: the file is empty", nm);
+    try {
+        tinygltf::TinyGLTF loader;
+        tinygltf::FsCallbacks fs;
+        fs.FileExists = fs_exists;
+        fs.ExpandFilePath = fs_expand;
+        fs.ReadWholeFile = fs_read;
+        fs.WriteWholeFile = fs_write;
+        fs.user_data = base_dir ? const_cast<char *>(base_dir) : nullptr;
+        loader.SetFsCallbacks(fs);
+        loader.SetImageLoader(opts.ignore_textures ? skip_image : defer_image, nullptr);
+        tinygltf::Model model;
+        std::string terr, twarn;
+        bool is_glb = size >= 4 && memcmp(data, "glTF", 4) == 0;
+        bool ok;
+        std::string dir = base_dir ? base_dir : "";
+        if (is_glb)
+            ok = loader.LoadBinaryFromMemory(&model, &terr, &twarn, data, unsigned(size), dir);
+        else
+            ok = loader.LoadASCIIFromString(&model, &terr, &twarn, reinterpret_cast<const char *>(data),
+                                            unsigned(size), dir);
+        if (!ok) {
+            std::string msg = first_line(terr.empty() ? twarn : terr);
+            pf_result code = PF_ERR_PARSE;
+            if (msg.find("File not found") != std::string::npos || msg.find("cannot open") != std::string::npos ||
+                msg.find("Failed to load external") != std::string::npos)
+                code = PF_ERR_IO;
+            return pf_error_set(err, code, "%s: %s is not a loadable glTF 2.0 file: %s", nm, is_glb ? "binary" : "text",
+                                msg.empty() ? "unknown tinygltf error" : msg.c_str());
+        }
+        build_scene(out, model, opts, nm, twarn);
+        return PF_OK;
+    } catch (const LoadError &e) {
+        return pf_error_set(err, e.code, "%s: %s", nm, e.message.c_str());
+    } catch (const std::bad_alloc &) {
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "%s: out of memory while loading", nm);
+    } catch (const std::exception &e) {
+        return pf_error_set(err, PF_ERR_PARSE, "%s: %s", nm, e.what());
+    }
+}
+
+} // namespace
+
+extern "C" pf_result pf_gltf_load_memory(pf_scene *out, const void *data, size_t size, const char *base_dir,
+                                         const char *name, const pf_gltf_options *opts, pf_error *err)
+{
+    return load(out, static_cast<const unsigned char *>(data), size, base_dir, name, opts, err);
+}
+
+extern "C" pf_result pf_gltf_load(pf_scene *out, const char *path, const pf_gltf_options *opts, pf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    struct stat st;
+    if (stat(path, &st) != 0) return pf_error_set(err, PF_ERR_IO, "%s: no such file", path);
+    if (!S_ISREG(st.st_mode)) return pf_error_set(err, PF_ERR_IO, "%s: not a regular file", path);
+    std::vector<unsigned char> bytes;
+    std::string ferr;
+    if (!read_file(&bytes, &ferr, path))
+        return pf_error_set(err, PF_ERR_IO, "%s: %s", path, first_line(ferr).c_str());
+    std::string p(path);
+    size_t slash = p.find_last_of('/');
+    std::string dir = slash == std::string::npos ? std::string(".") : p.substr(0, slash == 0 ? 1 : slash);
+    return load(out, bytes.data(), bytes.size(), dir.c_str(), path, opts, err);
+}

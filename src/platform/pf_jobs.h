@@ -1,0 +1,68 @@
+/* pf_jobs: the job system. A fixed pool of worker threads runs a small task
+ * graph per frame: each job is a parallel-for over `count` items (count 1 for
+ * a plain task) that may start only once the jobs it depends on have
+ * finished.
+ *
+ * Determinism contract (what keeps softgi's output bit-exact for any thread
+ * count): items are claimed dynamically, so *which* worker runs an item is
+ * not fixed, but every item must write only its own disjoint outputs and may
+ * use per-worker scratch only as scratch. Reductions are done by the caller
+ * afterwards, in item order. Nothing in this module gives results that
+ * depend on scheduling.
+ *
+ * Threads: `thread_count` counts the calling thread. pf_jobs_create(1)
+ * starts no worker threads and runs everything on the caller inside
+ * pf_jobs_wait. The waiting thread always helps run ready jobs, so waiting
+ * never idles a core. Every worker sets FTZ/DAZ the same way (pf_fpenv.h).
+ *
+ * Lifetimes: a job id is valid until the next pf_jobs_wait_all (ids are
+ * frame-lifetime). */
+#ifndef PF_JOBS_H
+#define PF_JOBS_H
+
+#include <stdint.h>
+
+typedef struct pf_jobs pf_jobs;
+
+/* A job's body, called once per item. `worker` is in [0, thread_count) and
+ * names the per-worker scratch the item may use: worker threads are
+ * 0 .. thread_count-2, the external thread that waits (the frame loop) is
+ * thread_count-1. So only one external thread may call the wait functions
+ * (and pf_jobs_parallel_for) at a time; jobs may wait from any worker. */
+typedef void (*pf_job_fn)(void *ctx, uint32_t item, uint32_t worker);
+
+typedef uint32_t pf_job_id;
+#define PF_JOB_NONE 0xffffffffu
+
+/* thread_count >= 1 (the CLI rejects 0 and values above PF_JOBS_MAX_THREADS).
+ * Returns NULL only when the OS refuses threads or memory. */
+#define PF_JOBS_MAX_THREADS 256
+pf_jobs *pf_jobs_create(uint32_t thread_count);
+/* Runs any jobs still queued (as pf_jobs_wait_all), then joins the threads. */
+void pf_jobs_destroy(pf_jobs *jobs);
+uint32_t pf_jobs_thread_count(const pf_jobs *jobs);
+
+/* Adds a job of `count` items (count 0 is a no-op job that completes as soon
+ * as its dependencies do) depending on deps[0..dep_count). Deps may be
+ * PF_JOB_NONE (ignored) or ids of earlier jobs, finished or not. The job may
+ * start running at once. Thread-safe: jobs may add jobs. `grain` items are
+ * claimed at a time (0 = pick one that gives each thread several chunks). */
+pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, uint32_t grain,
+                      const pf_job_id *deps, uint32_t dep_count);
+
+/* Waits until job `id` has finished, running ready jobs meanwhile. From
+ * inside a job this is safe when `id` does not depend, directly or not, on a
+ * job that is already running (e.g. waiting for jobs the job just added). */
+void pf_jobs_wait(pf_jobs *jobs, pf_job_id id);
+
+/* Waits for every job added so far, then recycles job ids. Must be called from
+ * outside any job (the frame loop), never from inside one. */
+void pf_jobs_wait_all(pf_jobs *jobs);
+
+/* Convenience: add a job with no dependencies and wait for it. */
+void pf_jobs_parallel_for(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, uint32_t grain);
+
+/* Number of cores the OS reports (the default for --threads). */
+uint32_t pf_jobs_core_count(void);
+
+#endif

@@ -1,0 +1,134 @@
+/* pf_scene: scene ownership, validation and camera/light helpers (pf_scene.h). */
+#include "pf_scene.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void pf_scene_free(pf_scene *scene)
+{
+    if (!scene) return;
+    free(scene->positions);
+    free(scene->normals);
+    free(scene->uvs);
+    free(scene->indices);
+    free(scene->tri_material);
+    free(scene->materials);
+    free(scene->textures);
+    for (uint32_t i = 0; i < scene->image_count; i++) free(scene->images[i].texels);
+    free(scene->images);
+    free(scene->cameras);
+    free(scene->lights);
+    memset(scene, 0, sizeof *scene);
+}
+
+static int pf__coord_ok(pf_vec3 p)
+{
+    return pf_v3_is_finite(p) && fabsf(p.x) <= PF_SCENE_MAX_COORD && fabsf(p.y) <= PF_SCENE_MAX_COORD &&
+           fabsf(p.z) <= PF_SCENE_MAX_COORD;
+}
+
+pf_result pf_scene_validate(pf_scene *s, pf_error *err)
+{
+    if (s->tri_count == 0 || s->vertex_count == 0)
+        return pf_error_set(err, PF_ERR_NO_TRIANGLES, "the scene has no (non-degenerate) triangles to render");
+    if (s->material_count == 0) return pf_error_set(err, PF_ERR_PARSE, "the scene has no materials");
+    pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        pf_vec3 p = s->positions[v];
+        if (!pf_v3_is_finite(p))
+            return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite position (%g, %g, %g)", v,
+                                (double)p.x, (double)p.y, (double)p.z);
+        if (!pf__coord_ok(p))
+            return pf_error_set(err, PF_ERR_NONFINITE,
+                                "vertex %u lies at (%g, %g, %g), beyond the supported range |x| <= %g", v,
+                                (double)p.x, (double)p.y, (double)p.z, (double)PF_SCENE_MAX_COORD);
+        if (!pf_v3_is_finite(s->normals[v]))
+            return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite normal", v);
+        if (!isfinite(s->uvs[v].x) || !isfinite(s->uvs[v].y))
+            return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite texture coordinate", v);
+        lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+        hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+    }
+    for (uint32_t t = 0; t < s->tri_count; t++) {
+        for (int k = 0; k < 3; k++)
+            if (s->indices[3 * t + k] >= s->vertex_count)
+                return pf_error_set(err, PF_ERR_INDEX_RANGE, "triangle %u uses vertex %u of %u", t,
+                                    s->indices[3 * t + k], s->vertex_count);
+        if (s->tri_material[t] >= s->material_count)
+            return pf_error_set(err, PF_ERR_INDEX_RANGE, "triangle %u uses material %u of %u", t,
+                                s->tri_material[t], s->material_count);
+    }
+    for (uint32_t m = 0; m < s->material_count; m++) {
+        const pf_material *mat = &s->materials[m];
+        for (int k = 0; k < 4; k++)
+            if (!isfinite(mat->base_color[k]))
+                return pf_error_set(err, PF_ERR_NONFINITE, "material %u has a non-finite baseColorFactor", m);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(mat->emission[k]) || mat->emission[k] < 0.0f)
+                return pf_error_set(err, PF_ERR_NONFINITE, "material %u has a negative or non-finite emission", m);
+        if (mat->base_color_texture >= (int32_t)s->texture_count)
+            return pf_error_set(err, PF_ERR_INDEX_RANGE, "material %u uses texture %d of %u", m,
+                                mat->base_color_texture, s->texture_count);
+    }
+    for (uint32_t t = 0; t < s->texture_count; t++)
+        if (s->textures[t].image >= s->image_count || !s->images[s->textures[t].image].texels)
+            return pf_error_set(err, PF_ERR_TEXTURE, "texture %u has no image data", t);
+    for (uint32_t c = 0; c < s->camera_count; c++) {
+        const pf_camera *cam = &s->cameras[c];
+        if (!pf__coord_ok(cam->eye) || !pf_v3_is_finite(cam->forward) || !isfinite(cam->yfov))
+            return pf_error_set(err, PF_ERR_NONFINITE, "camera %u has a non-finite or huge placement", c);
+        if (!(cam->yfov > 0.0f && cam->yfov < PF_PI))
+            return pf_error_set(err, PF_ERR_PARSE, "camera %u has yfov %g rad, outside (0, pi)", c,
+                                (double)cam->yfov);
+    }
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        const pf_light *li = &s->lights[l];
+        if (!pf__coord_ok(li->position) || !pf_v3_is_finite(li->direction) || !pf_v3_is_finite(li->color) ||
+            !isfinite(li->intensity))
+            return pf_error_set(err, PF_ERR_NONFINITE, "light %u ('%s') has a non-finite or huge value", l,
+                                li->name);
+        if (li->intensity < 0.0f || li->color.x < 0.0f || li->color.y < 0.0f || li->color.z < 0.0f)
+            return pf_error_set(err, PF_ERR_PARSE, "light %u ('%s') has a negative intensity or colour", l,
+                                li->name);
+        if (li->type == PF_LIGHT_SPOT &&
+            !(li->inner_cone >= 0.0f && li->inner_cone < li->outer_cone && li->outer_cone <= 0.5f * PF_PI))
+            return pf_error_set(err, PF_ERR_PARSE,
+                                "spot light %u ('%s') needs 0 <= innerConeAngle < outerConeAngle <= pi/2 "
+                                "(got %g, %g rad)",
+                                l, li->name, (double)li->inner_cone, (double)li->outer_cone);
+    }
+    s->bounds_min = lo;
+    s->bounds_max = hi;
+    return PF_OK;
+}
+
+pf_result pf_scene_add_light(pf_scene *s, const pf_light *light, pf_error *err)
+{
+    pf_light *grown = realloc(s->lights, (s->light_count + 1) * sizeof *grown);
+    if (!grown) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory adding a light");
+    s->lights = grown;
+    s->lights[s->light_count++] = *light;
+    return PF_OK;
+}
+
+pf_result pf_camera_look_at(pf_camera *cam, pf_vec3 eye, pf_vec3 target, float yfov, pf_error *err)
+{
+    pf_vec3 f = pf_v3_normalize(pf_v3_sub(target, eye));
+    if (!pf_v3_is_finite(eye) || !pf_v3_is_finite(target) || pf_v3_length(f) == 0.0f)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "camera eye and target must be finite and distinct");
+    if (!(yfov > 0.0f && yfov < PF_PI))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "camera field of view must be in (0, 180) degrees");
+    /* +Y up unless looking (almost) straight up or down: then +Z. */
+    pf_vec3 up_hint = fabsf(f.y) > 0.999f ? pf_v3(0, 0, 1) : pf_v3(0, 1, 0);
+    pf_vec3 r = pf_v3_normalize(pf_v3_cross(f, up_hint));
+    memset(cam, 0, sizeof *cam);
+    snprintf(cam->name, sizeof cam->name, "cli");
+    cam->eye = eye;
+    cam->forward = f;
+    cam->right = r;
+    cam->up = pf_v3_cross(r, f);
+    cam->yfov = yfov;
+    cam->znear = 0.01f;
+    return PF_OK;
+}

@@ -1,0 +1,26 @@
+/* pf_timer: monotonic wall-clock timing of frame stages. A pf_stage_times
+ * records named stages in the order they ran, so `render` can print the
+ * per-stage table a learner reads next to the paper's outline. Timings never
+ * feed back into results (determinism). */
+#ifndef PF_TIMER_H
+#define PF_TIMER_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#define PF_MAX_STAGES 32
+
+typedef struct pf_stage_times {
+    uint32_t count;
+    const char *name[PF_MAX_STAGES]; /* static strings */
+    double ms[PF_MAX_STAGES];
+} pf_stage_times;
+
+/* Seconds since an arbitrary fixed point (CLOCK_MONOTONIC). */
+double pf_time_now(void);
+/* Adds `ms` to the stage called `name` (appending it on first use). */
+void pf_stage_add(pf_stage_times *t, const char *name, double ms);
+/* Prints "stage  ms" lines and a total. */
+void pf_stage_print(const pf_stage_times *t, FILE *out);
+
+#endif

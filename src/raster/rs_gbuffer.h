@@ -1,0 +1,39 @@
+/* rs_gbuffer: the G-buffer every shading stage reads (Laine 2007 Sec. 3,
+ * step 1: "render the scene from the camera into a G-buffer").
+ *
+ * Layout: structure of arrays, one plane per attribute, row-major from the
+ * top-left pixel, so a shading job that walks a tile touches only the planes
+ * it needs. Filled by the rasterizer (issue "rasterizer") or by Embree
+ * primary rays (gi_raytrace.c, the --raytrace reference path).
+ *
+ * Conventions
+ * - depth: view-space distance along the camera's forward axis (not along
+ *   the ray), +inf where nothing is hit.
+ * - pos/nrm: world space; nrm is the unit shading normal turned to face the
+ *   camera (softgi shades every surface two-sided; README).
+ * - albedo: linear RGB baseColor (texture-filtered).
+ * - prim: triangle index into the scene, RS_GBUFFER_EMPTY where nothing is hit. */
+#ifndef RS_GBUFFER_H
+#define RS_GBUFFER_H
+
+#include <stdint.h>
+
+#include "pf_result.h"
+
+#define RS_GBUFFER_EMPTY 0xffffffffu
+
+typedef struct rs_gbuffer {
+    uint32_t width, height;
+    float *depth;
+    float *pos_x, *pos_y, *pos_z;
+    float *nrm_x, *nrm_y, *nrm_z;
+    float *alb_r, *alb_g, *alb_b;
+    uint32_t *prim;
+} rs_gbuffer;
+
+/* Allocates all planes (zeroed; depth +inf, prim EMPTY). */
+pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_error *err);
+void rs_gbuffer_free(rs_gbuffer *g);
+void rs_gbuffer_clear(rs_gbuffer *g);
+
+#endif

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs what softgi needs to build and test on Debian 12 (bookworm), and
+# only what is missing. Uses sudo when not run as root.
+set -euo pipefail
+pkgs=(build-essential cmake pkg-config
+      libembree-dev      # Embree 3: every sampling-side ray
+      libglfw3-dev       # GLFW 3: the viewer window
+      libtinygltf-dev    # tinygltf: glTF 2.0 scenes
+      libstb-dev         # stb_image_write: PNG output
+      libcmocka-dev)     # cmocka: the test framework
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"

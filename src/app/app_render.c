@@ -91,9 +91,17 @@ int app_render(const pf_options *o)
     }
     pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
     pf_jobs *jobs = pf_jobs_create(threads);
+    rs_context *raster = NULL;
     gi_frame frame;
-    if (!jobs || (r = gi_frame_init(&frame, &scene, rt, jobs, &camera, width, height, &err)) != PF_OK) {
-        if (!jobs) pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+    if (!jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+    if (r == PF_OK && !o->raytrace) {
+        t0 = pf_time_now();
+        r = rs_context_create(&raster, &scene, jobs, rs_simd_for_isa(isa), &err);
+        pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
+    }
+    if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, &err);
+    if (r != PF_OK) {
+        rs_context_destroy(raster);
         pf_jobs_destroy(jobs);
         pf_rt_destroy(rt);
         pf_scene_free(&scene);
@@ -101,7 +109,8 @@ int app_render(const pf_options *o)
     }
 
     /* Frame */
-    gi_frame_render_raytraced(&frame);
+    if (o->raytrace) gi_frame_render_raytraced(&frame);
+    else gi_frame_render_raster(&frame);
     for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
 
     /* Output */
@@ -123,8 +132,9 @@ int app_render(const pf_options *o)
     if (r != PF_OK) status = app__fail(&err);
     else {
         if (!o->quiet) {
-            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s\n", stem, scene.tri_count,
-                   scene.light_count, width, height, threads, pf_isa_name(isa));
+            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", stem,
+                   scene.tri_count, scene.light_count, width, height, threads, pf_isa_name(isa),
+                   o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
             pf_stage_print(&t, stdout);
             printf("wrote %s and %s\n", png, pfm);
         }
@@ -133,6 +143,7 @@ int app_render(const pf_options *o)
                    (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3));
     }
     gi_frame_free(&frame);
+    rs_context_destroy(raster);
     pf_jobs_destroy(jobs);
     pf_rt_destroy(rt);
     pf_scene_free(&scene);

@@ -24,12 +24,13 @@ const char *gi_buffer_caption(gi_buffer_id id)
     return (unsigned)id < GI_BUF_COUNT ? gi__buffer_captions[id] : "?";
 }
 
-pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs, const pf_camera *camera,
-                        uint32_t width, uint32_t height, pf_error *err)
+pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
+                        const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err)
 {
     memset(f, 0, sizeof *f);
     f->scene = scene;
     f->rt = rt;
+    f->raster = raster;
     f->jobs = jobs;
     f->camera = *camera;
     f->width = width;
@@ -56,18 +57,9 @@ void gi_frame_free(gi_frame *f)
 
 pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y)
 {
-    /* Pinhole camera: the image plane at distance 1 spans
-     * [-tan(yfov/2) * aspect, +] horizontally and [-tan(yfov/2), +]
-     * vertically; pixel centres at (x + 0.5, y + 0.5), y down. The aspect is
-     * always the image's (a glTF aspectRatio would distort a differently
-     * sized image). */
-    float th = tanf(0.5f * cam->yfov);
-    float aspect = (float)width / (float)height;
-    float sx = (2.0f * ((float)x + 0.5f) / (float)width - 1.0f) * th * aspect;
-    float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)height) * th;
     pf_ray r;
     r.org = cam->eye;
-    r.dir = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
+    r.dir = pf_camera_ray_dir(cam, width, height, (float)x + 0.5f, (float)y + 0.5f);
     r.tnear = cam->znear;
     r.tfar = cam->zfar > 0.0f ? cam->zfar : INFINITY;
     return r;
@@ -104,10 +96,32 @@ static void gi__timed(gi_frame *f, const char *name, void (*stage)(gi_frame *))
     pf_stage_add(&f->times, name, (pf_time_now() - t0) * 1e3);
 }
 
+void gi_stage_gbuffer_raster(gi_frame *f)
+{
+    rs_target t = {f->width, f->height, f->gbuf.depth, f->gbuf.prim, NULL};
+    rs_pass pass;
+    pass.view_proj = rs_mat4_camera(&f->camera, f->width, f->height);
+    pass.cull = RS_CULL_NONE; /* two-sided shading, like the ray-traced path */
+    rs_render(f->raster, &pass, &t, NULL);
+}
+
+void gi_stage_gbuffer_resolve(gi_frame *f) { rs_gbuffer_resolve(&f->gbuf, f->scene, &f->camera, f->jobs); }
+
 void gi_frame_render_raytraced(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi__timed(f, "gbuffer (embree)", gi_stage_gbuffer_raytrace);
     gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
     gi__timed(f, "compose", gi_stage_compose);
+    pf_jobs_wait_all(f->jobs);
+}
+
+void gi_frame_render_raster(gi_frame *f)
+{
+    memset(&f->times, 0, sizeof f->times);
+    gi__timed(f, "gbuffer raster (visibility)", gi_stage_gbuffer_raster);
+    gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
+    gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    gi__timed(f, "compose", gi_stage_compose);
+    pf_jobs_wait_all(f->jobs);
 }

@@ -3,14 +3,21 @@
  * A frame reads like the outline of Laine 2007 Sec. 3: one function calls the
  * stages in order, each a named function, each timed, each writing a named
  * buffer of the frame (gi_buffer_id) so the CLI can dump it and the viewer
- * can show it. This issue's frame is the ray-traced reference path:
+ * can show it. Two frames exist today:
  *
- *   1. G-buffer            gi_stage_gbuffer_raytrace   (Embree primary rays)
- *   2. direct light        gi_stage_direct_raytrace    (shadow rays per light)
+ *   gi_frame_render_raster (the default):
+ *   1. G-buffer            gi_stage_gbuffer_raster     (rs_render: visibility buffer)
+ *                          gi_stage_gbuffer_resolve    (rs_gbuffer_resolve: attributes)
+ *   2. direct light        gi_stage_direct_raytrace    (shadow rays per light; shadow maps next)
  *   3. compose             gi_stage_compose            (emission + direct)
  *
- * Later issues add the rasterized G-buffer, shadow maps, the VPL set, the
- * interleaved split / accumulate / combine and the filter between 2 and 3.
+ *   gi_frame_render_raytraced (--raytrace, the reference):
+ *   1. G-buffer            gi_stage_gbuffer_raytrace   (Embree primary rays)
+ *   2. direct light        gi_stage_direct_raytrace
+ *   3. compose             gi_stage_compose
+ *
+ * Later issues add the VPL set, the interleaved split / accumulate /
+ * combine and the filter between 2 and 3.
  *
  * Memory: everything a frame writes is allocated once in gi_frame_init
  * (frame lifetime, reused every frame); stages do not allocate. */
@@ -22,6 +29,7 @@
 #include "pf_scene.h"
 #include "pf_timer.h"
 #include "rs_gbuffer.h"
+#include "rs_raster.h"
 
 typedef enum gi_buffer_id {
     GI_BUF_DEPTH = 0, /* G-buffer planes */
@@ -43,6 +51,7 @@ typedef struct gi_frame {
     const pf_scene *scene;
     const pf_rt *rt;
     pf_jobs *jobs;
+    rs_context *raster; /* NULL: only the ray-traced frame is available */
     pf_camera camera;
     uint32_t width, height;
     /* buffers (owned, frame lifetime) */
@@ -52,8 +61,8 @@ typedef struct gi_frame {
     pf_stage_times times;
 } gi_frame;
 
-pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs, const pf_camera *camera,
-                        uint32_t width, uint32_t height, pf_error *err);
+pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
+                        const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err);
 void gi_frame_free(gi_frame *f);
 
 /* The primary ray through the centre of pixel (x, y): dir is scaled so that
@@ -62,10 +71,14 @@ pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint
 
 /* Stages. */
 void gi_stage_gbuffer_raytrace(gi_frame *f);
+void gi_stage_gbuffer_raster(gi_frame *f);  /* visibility: triangle id + depth per pixel */
+void gi_stage_gbuffer_resolve(gi_frame *f); /* attributes from the visibility buffer */
 void gi_stage_direct_raytrace(gi_frame *f);
 void gi_stage_compose(gi_frame *f);
 
 /* The whole ray-traced frame: G-buffer, direct light, compose (timed). */
 void gi_frame_render_raytraced(gi_frame *f);
+/* The rasterized frame (needs f->raster). */
+void gi_frame_render_raster(gi_frame *f);
 
 #endif

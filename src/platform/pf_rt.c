@@ -211,22 +211,7 @@ int pf_rt_occluded1(const pf_rt *rt, pf_ray ray)
 
 void pf_rt_surface(const pf_rt *rt, const pf_hit *hit, float lod, pf_surface *out)
 {
-    const pf_scene *s = rt->src;
-    const uint32_t *tri = &s->indices[3 * hit->prim];
-    float u = hit->u, v = hit->v, w = 1.0f - u - v;
-    pf_vec3 p0 = s->positions[tri[0]], p1 = s->positions[tri[1]], p2 = s->positions[tri[2]];
-    out->p = pf_v3_add(pf_v3_add(pf_v3_scale(p0, w), pf_v3_scale(p1, u)), pf_v3_scale(p2, v));
-    out->ng = pf_v3_normalize(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
-    pf_vec3 n0 = s->normals[tri[0]], n1 = s->normals[tri[1]], n2 = s->normals[tri[2]];
-    pf_vec3 ns = pf_v3_add(pf_v3_add(pf_v3_scale(n0, w), pf_v3_scale(n1, u)), pf_v3_scale(n2, v));
-    out->ns = pf_v3_normalize(ns);
-    if (out->ns.x == 0.0f && out->ns.y == 0.0f && out->ns.z == 0.0f) out->ns = out->ng;
-    pf_vec2 a = s->uvs[tri[0]], b = s->uvs[tri[1]], c = s->uvs[tri[2]];
-    out->uv.x = w * a.x + u * b.x + v * c.x;
-    out->uv.y = w * a.y + u * b.y + v * c.y;
-    out->material = s->tri_material[hit->prim];
-    out->prim = hit->prim;
-    pf_material_sample(s, out->material, out->uv, lod, out->albedo);
+    pf_scene_surface(rt->src, hit->prim, hit->u, hit->v, lod, out);
 }
 
 pf_vec3 pf_rt_offset_origin(pf_vec3 p, pf_vec3 ng, pf_vec3 towards)

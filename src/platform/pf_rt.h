@@ -44,17 +44,6 @@ typedef struct pf_hit {
     float u, v;    /* barycentrics of vertices 1 and 2 */
 } pf_hit;
 
-/* The surface at a hit, interpolated from the scene. */
-typedef struct pf_surface {
-    pf_vec3 p;         /* position (barycentric interpolation of the vertices) */
-    pf_vec3 ng;        /* unit geometric normal of the CCW triangle */
-    pf_vec3 ns;        /* unit shading normal (interpolated vertex normals) */
-    pf_vec2 uv;
-    float albedo[4];   /* filtered baseColor (linear RGBA) */
-    uint32_t material;
-    uint32_t prim;
-} pf_surface;
-
 /* Builds the Embree device and scene for `scene` (which must outlive it).
  * isa: a resolved ISA (not AUTO) to pin Embree to; build_threads: Embree's
  * BVH build threads (1 for bit-exact builds regardless of --threads). */
@@ -71,7 +60,7 @@ void pf_rt_occluded(const pf_rt *rt, const pf_ray *rays, uint8_t *occluded, uint
 pf_hit pf_rt_intersect1(const pf_rt *rt, pf_ray ray);
 int pf_rt_occluded1(const pf_rt *rt, pf_ray ray);
 
-/* Interpolates the surface of a hit; `lod` is the texture level of detail. */
+/* Interpolates the surface of a hit (pf_scene_surface); `lod` is the texture mip level. */
 void pf_rt_surface(const pf_rt *rt, const pf_hit *hit, float lod, pf_surface *out);
 
 /* A ray origin pushed off a surface along its geometric normal, towards the

@@ -132,3 +132,30 @@ pf_result pf_camera_look_at(pf_camera *cam, pf_vec3 eye, pf_vec3 target, float y
     cam->znear = 0.01f;
     return PF_OK;
 }
+
+pf_vec3 pf_camera_ray_dir(const pf_camera *cam, uint32_t width, uint32_t height, float x, float y)
+{
+    float th = tanf(0.5f * cam->yfov);
+    float aspect = (float)width / (float)height;
+    float sx = (2.0f * x / (float)width - 1.0f) * th * aspect;
+    float sy = (1.0f - 2.0f * y / (float)height) * th;
+    return pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
+}
+
+void pf_scene_surface(const pf_scene *s, uint32_t prim, float u, float v, float lod, pf_surface *out)
+{
+    const uint32_t *tri = &s->indices[3 * prim];
+    float w = 1.0f - u - v;
+    pf_vec3 p0 = s->positions[tri[0]], p1 = s->positions[tri[1]], p2 = s->positions[tri[2]];
+    out->p = pf_v3_add(pf_v3_add(pf_v3_scale(p0, w), pf_v3_scale(p1, u)), pf_v3_scale(p2, v));
+    out->ng = pf_v3_normalize(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
+    pf_vec3 n0 = s->normals[tri[0]], n1 = s->normals[tri[1]], n2 = s->normals[tri[2]];
+    out->ns = pf_v3_normalize(pf_v3_add(pf_v3_add(pf_v3_scale(n0, w), pf_v3_scale(n1, u)), pf_v3_scale(n2, v)));
+    if (out->ns.x == 0.0f && out->ns.y == 0.0f && out->ns.z == 0.0f) out->ns = out->ng;
+    pf_vec2 a = s->uvs[tri[0]], b = s->uvs[tri[1]], c = s->uvs[tri[2]];
+    out->uv.x = w * a.x + u * b.x + v * c.x;
+    out->uv.y = w * a.y + u * b.y + v * c.y;
+    out->material = s->tri_material[prim];
+    out->prim = prim;
+    pf_material_sample(s, out->material, out->uv, lod, out->albedo);
+}

@@ -124,6 +124,17 @@ typedef struct pf_scene {
     char warnings[1024];         /* load warnings, newline separated */
 } pf_scene;
 
+/* The surface at a point of a triangle, interpolated from the scene. */
+typedef struct pf_surface {
+    pf_vec3 p;       /* position (barycentric interpolation of the vertices) */
+    pf_vec3 ng;      /* unit geometric normal of the CCW triangle */
+    pf_vec3 ns;      /* unit shading normal (interpolated vertex normals; ng if they cancel) */
+    pf_vec2 uv;
+    float albedo[4]; /* filtered baseColor (linear RGBA) */
+    uint32_t material;
+    uint32_t prim;
+} pf_surface;
+
 /* Largest |coordinate| softgi accepts anywhere in world space. Beyond this a
  * float keeps under 1 unit of precision per 1e7 and the rasterizer's
  * fixed-point snapping and Embree's epsilons stop being meaningful. */
@@ -141,6 +152,21 @@ pf_result pf_scene_add_light(pf_scene *scene, const pf_light *light, pf_error *e
 
 /* A camera looking from eye to target with a +Y-up roll, fovy in radians. */
 pf_result pf_camera_look_at(pf_camera *cam, pf_vec3 eye, pf_vec3 target, float yfov, pf_error *err);
+
+/* The surface of triangle `prim` at barycentrics (u, v) (weights of
+ * vertices 1 and 2), texture filtered at mip level `lod`. Shared by the
+ * ray-traced and the rasterized paths so both interpolate identically. */
+void pf_scene_surface(const pf_scene *scene, uint32_t prim, float u, float v, float lod, pf_surface *out);
+
+/* Direction of the primary ray through the centre of pixel (x, y) of a
+ * width x height image (y down), scaled so that t along it is view depth
+ * (its component along forward is 1). Pinhole model: the image plane at
+ * distance 1 spans tan(yfov/2) * (aspect, 1); the aspect is the image's. */
+pf_vec3 pf_camera_ray_dir(const pf_camera *cam, uint32_t width, uint32_t height, float x, float y);
+
+/* Mip level for a footprint given the uv derivatives per pixel: log2 of the
+ * larger texel extent, for the material's baseColor texture (0 without). */
+float pf_material_lod(const pf_scene *scene, uint32_t material, float dudx, float dvdx, float dudy, float dvdy);
 
 /* Builds the mip chain of an image whose level 0 is filled in (sRGB RGBA8:
  * averaging happens in linear space). Allocates image->texels anew from the

@@ -227,3 +227,16 @@ void pf_material_sample(const pf_scene *scene, uint32_t material, pf_vec2 uv, fl
     }
     for (int k = 0; k < 4; k++) out[k] = m->base_color[k] * t[k];
 }
+
+float pf_material_lod(const pf_scene *scene, uint32_t material, float dudx, float dvdx, float dudy, float dvdy)
+{
+    const pf_material *m = &scene->materials[material];
+    if (m->base_color_texture < 0) return 0.0f;
+    const pf_image *img = &scene->images[scene->textures[m->base_color_texture].image];
+    float w = (float)img->width, h = (float)img->height;
+    float ax = dudx * w, ay = dvdx * h, bx = dudy * w, by = dvdy * h;
+    float rho2 = fmaxf(ax * ax + ay * ay, bx * bx + by * by); /* OpenGL 4.6 Eq. 8.7, squared */
+    if (!(rho2 > 1.0f)) return 0.0f;
+    float lod = 0.5f * log2f(rho2);
+    return isfinite(lod) ? lod : (float)(PF_MAX_MIPS - 1);
+}

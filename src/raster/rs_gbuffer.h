@@ -18,7 +18,9 @@
 
 #include <stdint.h>
 
+#include "pf_jobs.h"
 #include "pf_result.h"
+#include "pf_scene.h"
 
 #define RS_GBUFFER_EMPTY 0xffffffffu
 
@@ -35,5 +37,17 @@ typedef struct rs_gbuffer {
 pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_error *err);
 void rs_gbuffer_free(rs_gbuffer *g);
 void rs_gbuffer_clear(rs_gbuffer *g);
+
+/* Deferred attribute resolve of a visibility buffer: g->prim holds the
+ * triangle per pixel (written by rs_render); for each covered pixel the
+ * camera ray through its centre is intersected with the triangle's plane,
+ * which gives perspective-correct barycentrics, the view depth (t along a
+ * ray whose forward component is 1) and, from the rays through the
+ * neighbouring pixel centres, the uv footprint that picks the texture mip
+ * level. Attributes come from pf_scene_surface, as on the ray-traced path.
+ * Barycentrics are clamped to the triangle (a pixel centre covered by the
+ * snapped triangle may lie a hair outside the exact one). Parallel over
+ * rows, deterministic. */
+void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs);
 
 #endif

@@ -1,0 +1,878 @@
+/* rs_raster: the triangle rasterizer (see rs_raster.h for the pipeline,
+ * the precision argument and the depth convention).
+ *
+ * Who calls what: rs_render (one pass over jobs) = rs__vertex_stage
+ * (parallel over vertex chunks) -> rs__cull_clusters -> rs__setup_bin
+ * (parallel over fixed triangle chunks) -> rs__raster_tiles (parallel over
+ * 64x64 tiles). rs_render_serial runs the same steps on the caller's thread.
+ *
+ * Fixed point and ranges. Screen positions are snapped to 1/256 pixel.
+ * Vertices must lie within the guard band |x|, |y| <= 2^15 pixels of the
+ * image centre (triangles reaching beyond are clipped against guard-band
+ * planes in homogeneous space first), so snapped coordinates are below 2^24
+ * in magnitude, edge-function coefficients below 2^25, and an edge function
+ * at any pixel centre below 2^25 * 2^24 * 2 = 2^50: exact in int64. */
+#include "rs_raster.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define RS_HAVE_X86 1
+#endif
+
+#define RS_CLUSTER 256     /* triangles per culling cluster */
+#define RS_CHUNK 2048      /* triangles per setup/binning job item */
+#define RS_BLOCK 8         /* hierarchical-Z block size (pixels) */
+#define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
+#define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
+#define RS_SUB 256         /* 1 << RS_SUBPIXEL_BITS */
+
+/* ------------------------------------------------------------------ types */
+
+/* A triangle after setup: what a tile needs to rasterize it. */
+typedef struct rs__tri {
+    int64_t a[3], b[3], c[3]; /* E_k(px, py) = a px + b py + c (fixed point, fill rule folded into c) */
+    /* depth plane, kept in double relative to vertex 0 so that clipped
+     * vertices far out in the guard band do not cost precision through
+     * cancellation: zs(x, y) = zv + dzdx (x + .5 - xv) + dzdy (y + .5 - yv) */
+    double zv, xv, yv, dzdx_d, dzdy_d;
+    float dzdx;                /* lane step within a row */
+    float zmin, zmax;          /* clamp range (vertex zs), zmax also feeds hierarchical Z */
+    int32_t x0, y0, x1, y1;    /* pixel bounding box, inclusive */
+    uint32_t prim;
+    uint32_t masked; /* alphaMode MASK: per-pixel alpha test (scalar, all paths) */
+    /* masked only: 1/w, b1/w, b2/w planes (b = barycentrics of the scene
+     * triangle), so b1 = (b1/w) / (1/w) is perspective-correct */
+    float iw0, diwdx, diwdy, u0, dudx, dudy, v0, dvdx, dvdy;
+} rs__tri;
+
+/* One setup chunk's output: triangles and their bins, sorted by tile. */
+typedef struct rs__chunk {
+    rs__tri *tris;
+    uint32_t tri_count, tri_cap;
+    uint64_t *entries; /* unsorted bin entries: tile << 32 | triangle index in this chunk */
+    uint32_t entry_count, entry_cap;
+    uint32_t *sorted;     /* tri indices grouped by tile, triangle order kept */
+    uint32_t *tile_start; /* tile_count + 1 */
+    uint32_t sorted_cap, tile_cap;
+    rs_stats stats;
+} rs__chunk;
+
+typedef struct rs__cluster {
+    pf_vec3 lo, hi;
+} rs__cluster;
+
+struct rs_scratch {
+    uint32_t chunk_count;
+    float *clip; /* 4 * vertex_count: x, y, z, w per vertex (AoS, 16-byte rows) */
+    uint8_t *cluster_visible;
+    rs__chunk *chunks; /* chunk_count */
+};
+
+struct rs_context {
+    const pf_scene *scene;
+    pf_jobs *jobs;
+    rs_simd simd;
+    uint32_t cluster_count, chunk_count;
+    rs__cluster *clusters;
+    rs_scratch *scratch; /* for rs_render */
+};
+
+/* The state of one pass, shared by the job items. */
+typedef struct rs__pass_state {
+    const rs_context *ctx;
+    rs_scratch *s;
+    const rs_pass *pass;
+    rs_target *t;
+    uint32_t tiles_x, tiles_y;
+    float gx, gy; /* guard band in NDC units */
+    rs_simd simd;
+} rs__pass_state;
+
+/* ---------------------------------------------------------------- matrices */
+
+rs_simd rs_simd_for_isa(pf_isa isa)
+{
+    if (isa == PF_ISA_AVX512) return RS_SIMD_AVX512;
+    if (isa == PF_ISA_AVX2) return RS_SIMD_AVX2;
+    return RS_SIMD_SCALAR;
+}
+
+const char *rs_simd_name(rs_simd simd)
+{
+    static const char *const names[] = {"scalar", "avx2", "avx512"};
+    return (unsigned)simd < 3 ? names[simd] : "?";
+}
+
+/* View matrix rows (right, up, -forward) times a projection; written out so
+ * the float operations are explicit. */
+static rs_mat4 rs__view_proj(pf_vec3 eye, pf_vec3 f, pf_vec3 up_hint, float sx, float sy, float zr_a, float zr_b,
+                             int perspective)
+{
+    f = pf_v3_normalize(f);
+    pf_vec3 r = pf_v3_normalize(pf_v3_cross(f, up_hint));
+    if (r.x == 0.0f && r.y == 0.0f && r.z == 0.0f) {
+        pf_vec3 t, b;
+        pf_v3_basis(f, &t, &b);
+        r = t;
+    }
+    pf_vec3 u = pf_v3_cross(r, f);
+    /* view space: vx = r.(p-e), vy = u.(p-e), vd = f.(p-e) (depth, > 0 in front) */
+    float tr = -pf_v3_dot(r, eye), tu = -pf_v3_dot(u, eye), tf = -pf_v3_dot(f, eye);
+    rs_mat4 m;
+    memset(&m, 0, sizeof m);
+    /* row 0: sx * vx; row 1: sy * vy */
+    m.m[0] = sx * r.x, m.m[4] = sx * r.y, m.m[8] = sx * r.z, m.m[12] = sx * tr;
+    m.m[1] = sy * u.x, m.m[5] = sy * u.y, m.m[9] = sy * u.z, m.m[13] = sy * tu;
+    if (perspective) {
+        /* z_clip = znear (constant), w_clip = vd: zs = znear / vd */
+        m.m[14] = zr_a;
+        m.m[3] = f.x, m.m[7] = f.y, m.m[11] = f.z, m.m[15] = tf;
+    } else {
+        /* z_clip = 1 - (vd - znear) / (zfar - znear) = zr_a * vd + zr_b, w = 1 */
+        m.m[2] = zr_a * f.x, m.m[6] = zr_a * f.y, m.m[10] = zr_a * f.z, m.m[14] = zr_a * tf + zr_b;
+        m.m[15] = 1.0f;
+    }
+    return m;
+}
+
+rs_mat4 rs_mat4_perspective(pf_vec3 eye, pf_vec3 forward, pf_vec3 up, float yfov, float aspect, float znear)
+{
+    float sy = 1.0f / tanf(0.5f * yfov);
+    return rs__view_proj(eye, forward, up, sy / aspect, sy, znear, 0.0f, 1);
+}
+
+rs_mat4 rs_mat4_ortho(pf_vec3 eye, pf_vec3 forward, pf_vec3 up, float half_w, float half_h, float znear, float zfar)
+{
+    float inv = 1.0f / (zfar - znear);
+    return rs__view_proj(eye, forward, up, 1.0f / half_w, 1.0f / half_h, -inv, 1.0f + znear * inv, 0);
+}
+
+rs_mat4 rs_mat4_camera(const pf_camera *cam, uint32_t width, uint32_t height)
+{
+    return rs_mat4_perspective(cam->eye, cam->forward, cam->up, cam->yfov, (float)width / (float)height,
+                               cam->znear > 0.0f ? cam->znear : 0.01f);
+}
+
+void rs_mat4_transform(const rs_mat4 *m, pf_vec3 p, float c[4])
+{
+    for (int r = 0; r < 4; r++) c[r] = m->m[r] * p.x + m->m[4 + r] * p.y + m->m[8 + r] * p.z + m->m[12 + r];
+}
+
+/* ---------------------------------------------------------------- context */
+
+static void rs__chunk_free(rs__chunk *c)
+{
+    free(c->tris);
+    free(c->entries);
+    free(c->sorted);
+    free(c->tile_start);
+}
+
+rs_scratch *rs_scratch_create(const rs_context *ctx)
+{
+    rs_scratch *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->clip = malloc(sizeof(float) * 4 * ((size_t)ctx->scene->vertex_count + 1));
+    s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
+    s->chunk_count = ctx->chunk_count;
+    s->chunks = calloc(ctx->chunk_count ? ctx->chunk_count : 1, sizeof *s->chunks);
+    if (!s->clip || !s->cluster_visible || !s->chunks) {
+        rs_scratch_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+void rs_scratch_destroy(rs_scratch *s)
+{
+    if (!s) return;
+    free(s->clip);
+    free(s->cluster_visible);
+    if (s->chunks)
+        for (uint32_t c = 0; c < s->chunk_count; c++) rs__chunk_free(&s->chunks[c]);
+    free(s->chunks);
+    free(s);
+}
+
+pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err)
+{
+    *out = NULL;
+    rs_context *ctx = calloc(1, sizeof *ctx);
+    if (!ctx) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer");
+    ctx->scene = scene;
+    ctx->jobs = jobs;
+    ctx->simd = simd;
+    ctx->cluster_count = (scene->tri_count + RS_CLUSTER - 1) / RS_CLUSTER;
+    ctx->chunk_count = (scene->tri_count + RS_CHUNK - 1) / RS_CHUNK;
+    ctx->clusters = calloc(ctx->cluster_count ? ctx->cluster_count : 1, sizeof *ctx->clusters);
+    if (!ctx->clusters) goto oom;
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
+        pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
+        uint32_t t1 = (c + 1) * RS_CLUSTER < scene->tri_count ? (c + 1) * RS_CLUSTER : scene->tri_count;
+        for (uint32_t t = c * RS_CLUSTER; t < t1; t++)
+            for (int k = 0; k < 3; k++) {
+                pf_vec3 p = scene->positions[scene->indices[3 * t + k]];
+                lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+                hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+            }
+        ctx->clusters[c].lo = lo;
+        ctx->clusters[c].hi = hi;
+    }
+    ctx->scratch = rs_scratch_create(ctx);
+    if (!ctx->scratch) goto oom;
+    *out = ctx;
+    return PF_OK;
+oom:
+    rs_context_destroy(ctx);
+    return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer");
+}
+
+void rs_context_destroy(rs_context *ctx)
+{
+    if (!ctx) return;
+    rs_scratch_destroy(ctx->scratch);
+    free(ctx->clusters);
+    free(ctx);
+}
+
+rs_simd rs_context_simd(const rs_context *ctx) { return ctx->simd; }
+void rs_context_set_simd(rs_context *ctx, rs_simd simd) { ctx->simd = simd; }
+
+/* ------------------------------------------------------- 1. vertex stage */
+
+/* Transforms vertices [v0, v1) to clip space. Written as a plain loop over
+ * batches the compiler vectorises (SSE2 baseline); with -ffp-contract=off
+ * every lane rounds exactly as the scalar expression. */
+static void rs__transform(const rs_mat4 *m, const pf_vec3 *pos, float *clip, uint32_t v0, uint32_t v1)
+{
+    const float *M = m->m;
+    for (uint32_t v = v0; v < v1; v++) {
+        float x = pos[v].x, y = pos[v].y, z = pos[v].z;
+        float *c = clip + 4 * (size_t)v;
+        c[0] = M[0] * x + M[4] * y + M[8] * z + M[12];
+        c[1] = M[1] * x + M[5] * y + M[9] * z + M[13];
+        c[2] = M[2] * x + M[6] * y + M[10] * z + M[14];
+        c[3] = M[3] * x + M[7] * y + M[11] * z + M[15];
+    }
+}
+
+static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    rs__pass_state *st = p;
+    uint32_t n = st->ctx->scene->vertex_count;
+    uint32_t v0 = item * RS_VCHUNK, v1 = v0 + RS_VCHUNK < n ? v0 + RS_VCHUNK : n;
+    rs__transform(&st->pass->view_proj, st->ctx->scene->positions, st->s->clip, v0, v1);
+}
+
+/* ------------------------------------------------------- 2. cluster culling */
+
+/* A cluster is culled when all 8 corners of its box lie outside one clip
+ * plane (x < -w, x > w, y < -w, y > w, z < 0, z > w): conservative. */
+static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
+{
+    const rs_context *ctx = st->ctx;
+    for (uint32_t c = c0; c < c1; c++) {
+        const rs__cluster *cl = &ctx->clusters[c];
+        unsigned all = 63;
+        for (int k = 0; k < 8; k++) {
+            pf_vec3 p = pf_v3(k & 1 ? cl->hi.x : cl->lo.x, k & 2 ? cl->hi.y : cl->lo.y, k & 4 ? cl->hi.z : cl->lo.z);
+            float q[4];
+            rs_mat4_transform(&st->pass->view_proj, p, q);
+            unsigned out = (q[0] < -q[3]) | (q[0] > q[3]) << 1 | (q[1] < -q[3]) << 2 | (q[1] > q[3]) << 3 |
+                           (q[2] < 0.0f) << 4 | (q[2] > q[3]) << 5;
+            all &= out;
+        }
+        st->s->cluster_visible[c] = all == 0;
+    }
+}
+
+/* ------------------------------------------------------- 3. setup + binning */
+
+typedef struct rs__cv {
+    float x, y, z, w;
+    float u, v; /* barycentrics of the scene triangle, carried through clipping */
+} rs__cv;
+
+/* Signed distance to clip plane k (inside >= 0): 0 near (w - z), 1 far (z),
+ * 2..5 guard band (gx w - x, gx w + x, gy w - y, gy w + y). */
+static float rs__plane(const rs__pass_state *st, int k, rs__cv v)
+{
+    switch (k) {
+    case 0: return v.w - v.z;
+    case 1: return v.z;
+    case 2: return st->gx * v.w - v.x;
+    case 3: return st->gx * v.w + v.x;
+    case 4: return st->gy * v.w - v.y;
+    default: return st->gy * v.w + v.y;
+    }
+}
+
+/* Sutherland-Hodgman against the planes in `mask`; returns the vertex count
+ * (0..9) of the clipped convex polygon. Intersections are computed from the
+ * inside vertex towards the outside one, so a shared edge is cut at the same
+ * point from both of its triangles (no cracks). */
+static int rs__clip_polygon(const rs__pass_state *st, unsigned mask, rs__cv *poly, int n)
+{
+    rs__cv tmp[12];
+    for (int k = 0; k < 6 && n > 0; k++) {
+        if (!(mask & (1u << k))) continue;
+        int m = 0;
+        for (int i = 0; i < n; i++) {
+            rs__cv a = poly[i], b = poly[(i + 1) % n];
+            float da = rs__plane(st, k, a), db = rs__plane(st, k, b);
+            if (da >= 0.0f) tmp[m++] = a;
+            if ((da >= 0.0f) != (db >= 0.0f)) {
+                /* from the inside vertex to the outside one */
+                rs__cv in = da >= 0.0f ? a : b, outv = da >= 0.0f ? b : a;
+                float di = da >= 0.0f ? da : db, dout = da >= 0.0f ? db : da;
+                float t = di / (di - dout);
+                rs__cv r = {in.x + (outv.x - in.x) * t, in.y + (outv.y - in.y) * t, in.z + (outv.z - in.z) * t,
+                            in.w + (outv.w - in.w) * t, in.u + (outv.u - in.u) * t, in.v + (outv.v - in.v) * t};
+                tmp[m++] = r;
+            }
+        }
+        n = m;
+        memcpy(poly, tmp, sizeof(rs__cv) * (size_t)n);
+    }
+    return n;
+}
+
+static int rs__grow(void **p, uint32_t *cap, uint32_t need, size_t elem)
+{
+    if (need <= *cap) return 1;
+    uint32_t nc = *cap ? *cap : 256;
+    while (nc < need) nc *= 2;
+    void *q = realloc(*p, (size_t)nc * elem);
+    if (!q) return 0;
+    *p = q;
+    *cap = nc;
+    return 1;
+}
+
+/* Sets up one (clipped) screen triangle and bins it. */
+static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim)
+{
+    const rs_target *t = st->t;
+    float W = (float)t->width, H = (float)t->height;
+    int64_t X[3], Y[3];
+    float Z[3], IW[3], U[3], V[3];
+    double DX[3], DY[3]; /* unsnapped screen positions: the depth plane goes through these */
+    for (int k = 0; k < 3; k++) {
+        float iw = 1.0f / v[k].w;
+        float sx = (v[k].x * iw * 0.5f + 0.5f) * W, sy = (0.5f - v[k].y * iw * 0.5f) * H;
+        DX[k] = ((double)v[k].x / v[k].w * 0.5 + 0.5) * W;
+        DY[k] = (0.5 - (double)v[k].y / v[k].w * 0.5) * H;
+        X[k] = (int64_t)floorf(sx * (float)RS_SUB + 0.5f);
+        Y[k] = (int64_t)floorf(sy * (float)RS_SUB + 0.5f);
+        Z[k] = v[k].z * iw;
+        IW[k] = iw;
+        U[k] = v[k].u * iw;
+        V[k] = v[k].v * iw;
+    }
+    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
+    /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
+    if (area == 0 || (st->pass->cull == RS_CULL_BACK && area > 0) || (st->pass->cull == RS_CULL_FRONT && area < 0)) {
+        ch->stats.triangles_culled++;
+        return;
+    }
+    if (area < 0) { /* orient so the interior is on the positive side of every edge */
+        int64_t tx = X[1], ty = Y[1];
+        float tz = Z[1], ti = IW[1], tu = U[1], tv = V[1];
+        double tdx = DX[1], tdy = DY[1];
+        X[1] = X[2], Y[1] = Y[2], Z[1] = Z[2], IW[1] = IW[2], U[1] = U[2], V[1] = V[2], DX[1] = DX[2], DY[1] = DY[2];
+        X[2] = tx, Y[2] = ty, Z[2] = tz, IW[2] = ti, U[2] = tu, V[2] = tv, DX[2] = tdx, DY[2] = tdy;
+        area = -area;
+    }
+    int64_t minx = X[0], maxx = X[0], miny = Y[0], maxy = Y[0];
+    for (int k = 1; k < 3; k++) {
+        minx = X[k] < minx ? X[k] : minx, maxx = X[k] > maxx ? X[k] : maxx;
+        miny = Y[k] < miny ? Y[k] : miny, maxy = Y[k] > maxy ? Y[k] : maxy;
+    }
+    /* pixels whose centre 256 x + 128 lies in [min, max] */
+    int64_t px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> RS_SUBPIXEL_BITS, px1 = (maxx - RS_SUB / 2) >> RS_SUBPIXEL_BITS;
+    int64_t py0 = (miny - RS_SUB / 2 + RS_SUB - 1) >> RS_SUBPIXEL_BITS, py1 = (maxy - RS_SUB / 2) >> RS_SUBPIXEL_BITS;
+    if (px0 < 0) px0 = 0;
+    if (py0 < 0) py0 = 0;
+    if (px1 > (int64_t)t->width - 1) px1 = (int64_t)t->width - 1;
+    if (py1 > (int64_t)t->height - 1) py1 = (int64_t)t->height - 1;
+    if (px0 > px1 || py0 > py1) {
+        ch->stats.triangles_culled++; /* falls between pixel centres or off screen */
+        return;
+    }
+    if (!rs__grow((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri))) abort();
+    rs__tri *r = &ch->tris[ch->tri_count];
+    for (int k = 0; k < 3; k++) {
+        int a = k, b = (k + 1) % 3;
+        /* E(p) = (Xb - Xa)(py - Ya) - (Yb - Ya)(px - Xa) = A px + B py + C */
+        int64_t A = Y[a] - Y[b], B = X[b] - X[a];
+        int64_t C = -A * X[a] - B * Y[a];
+        /* top-left rule (y down, interior positive): a top edge is horizontal
+         * going +x (A == 0, B > 0), a left edge goes up (A > 0). Pixels exactly
+         * on other edges are excluded: test E - 1 >= 0 there. */
+        int top_left = (A == 0 && B > 0) || A > 0;
+        r->a[k] = A;
+        r->b[k] = B;
+        r->c[k] = C - (top_left ? 0 : 1);
+    }
+    /* depth plane through the snapped vertices, in pixel units */
+    float fx[3], fy[3];
+    for (int k = 0; k < 3; k++) fx[k] = (float)X[k] * (1.0f / RS_SUB), fy[k] = (float)Y[k] * (1.0f / RS_SUB);
+    float e1x = fx[1] - fx[0], e1y = fy[1] - fy[0], e2x = fx[2] - fx[0], e2y = fy[2] - fy[0];
+    float inv_area = 1.0f / (e1x * e2y - e2x * e1y);
+    /* a screen-linear quantity q: plane through the vertices, evaluated as
+     * q0 + dqdx x + dqdy y at pixel centre (x + .5, y + .5) */
+#define RS__PLANE(Q, q0, dqdx, dqdy)                                                                                   \
+    do {                                                                                                           \
+        float d1 = Q[1] - Q[0], d2 = Q[2] - Q[0];                                                                  \
+        dqdx = (d1 * e2y - d2 * e1y) * inv_area;                                                                   \
+        dqdy = (d2 * e1x - d1 * e2x) * inv_area;                                                                   \
+        q0 = Q[0] + dqdx * (0.5f - fx[0]) + dqdy * (0.5f - fy[0]);                                                 \
+    } while (0)
+    {
+        double dx1 = DX[1] - DX[0], dy1 = DY[1] - DY[0], dx2 = DX[2] - DX[0], dy2 = DY[2] - DY[0];
+        double d1 = (double)Z[1] - Z[0], d2 = (double)Z[2] - Z[0];
+        double den = dx1 * dy2 - dx2 * dy1;
+        double inv = den != 0.0 ? 1.0 / den : 0.0; /* snapped area is nonzero; the exact one can vanish */
+        r->dzdx_d = (d1 * dy2 - d2 * dy1) * inv;
+        r->dzdy_d = (d2 * dx1 - d1 * dx2) * inv;
+        r->zv = Z[0];
+        r->xv = DX[0];
+        r->yv = DY[0];
+        r->dzdx = (float)r->dzdx_d;
+    }
+    r->masked = st->ctx->scene->materials[st->ctx->scene->tri_material[prim]].alpha_mode == PF_ALPHA_MASK;
+    if (r->masked) {
+        RS__PLANE(IW, r->iw0, r->diwdx, r->diwdy);
+        RS__PLANE(U, r->u0, r->dudx, r->dudy);
+        RS__PLANE(V, r->v0, r->dvdx, r->dvdy);
+    }
+#undef RS__PLANE
+    r->zmin = fminf(Z[0], fminf(Z[1], Z[2]));
+    r->zmax = fmaxf(Z[0], fmaxf(Z[1], Z[2]));
+    r->x0 = (int32_t)px0, r->x1 = (int32_t)px1, r->y0 = (int32_t)py0, r->y1 = (int32_t)py1;
+    r->prim = prim;
+    uint32_t ti = ch->tri_count++;
+    ch->stats.triangles_binned++;
+    uint32_t tx0 = (uint32_t)px0 / RS_TILE, tx1 = (uint32_t)px1 / RS_TILE;
+    uint32_t ty0 = (uint32_t)py0 / RS_TILE, ty1 = (uint32_t)py1 / RS_TILE;
+    uint32_t need = ch->entry_count + (tx1 - tx0 + 1) * (ty1 - ty0 + 1);
+    if (!rs__grow((void **)&ch->entries, &ch->entry_cap, need, sizeof(uint64_t))) abort();
+    for (uint32_t ty = ty0; ty <= ty1; ty++)
+        for (uint32_t tx = tx0; tx <= tx1; tx++)
+            ch->entries[ch->entry_count++] = (uint64_t)(ty * st->tiles_x + tx) << 32 | ti;
+}
+
+/* Frustum outcode (for trivial reject) and the planes a vertex violates
+ * (near, far, guard band: what clipping must handle). */
+static unsigned rs__outcode(rs__cv v) /* x<-w, x>w, y<-w, y>w, z<0, z>w */
+{
+    return (unsigned)(v.x < -v.w) | (unsigned)(v.x > v.w) << 1 | (unsigned)(v.y < -v.w) << 2 |
+           (unsigned)(v.y > v.w) << 3 | (unsigned)(v.z < 0.0f) << 4 | (unsigned)(v.z > v.w) << 5;
+}
+
+static unsigned rs__clip_mask(const rs__pass_state *st, rs__cv v)
+{
+    unsigned m = 0;
+    for (int k = 0; k < 6; k++)
+        if (!(rs__plane(st, k, v) >= 0.0f)) m |= 1u << k;
+    return m;
+}
+
+/* Setup and binning of one fixed chunk of triangles (scene order). */
+static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
+{
+    const pf_scene *sc = st->ctx->scene;
+    rs__chunk *ch = &st->s->chunks[chunk];
+    ch->tri_count = 0;
+    ch->entry_count = 0;
+    memset(&ch->stats, 0, sizeof ch->stats);
+    uint32_t t0 = chunk * RS_CHUNK, t1 = t0 + RS_CHUNK < sc->tri_count ? t0 + RS_CHUNK : sc->tri_count;
+    const float *clip = st->s->clip;
+    for (uint32_t t = t0; t < t1; t++) {
+        if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
+        ch->stats.triangles_in++;
+        const uint32_t *idx = &sc->indices[3 * t];
+        rs__cv v[3];
+        for (int k = 0; k < 3; k++) {
+            const float *c = clip + 4 * (size_t)idx[k];
+            v[k].x = c[0], v[k].y = c[1], v[k].z = c[2], v[k].w = c[3];
+            v[k].u = k == 1 ? 1.0f : 0.0f;
+            v[k].v = k == 2 ? 1.0f : 0.0f;
+        }
+        if (rs__outcode(v[0]) & rs__outcode(v[1]) & rs__outcode(v[2])) {
+            ch->stats.triangles_culled++;
+            continue;
+        }
+        unsigned need = rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
+        if (!need) {
+            rs__setup_tri(st, ch, v, t);
+            continue;
+        }
+        ch->stats.triangles_clipped++;
+        rs__cv poly[12] = {v[0], v[1], v[2]};
+        int n = rs__clip_polygon(st, need, poly, 3);
+        for (int i = 1; i + 1 < n; i++) {
+            rs__cv tri[3] = {poly[0], poly[i], poly[i + 1]};
+            rs__setup_tri(st, ch, tri, t);
+        }
+    }
+    /* counting sort of the bin entries by tile; stable, so triangle order is
+     * kept within every tile */
+    uint32_t tiles = st->tiles_x * st->tiles_y;
+    if (!rs__grow((void **)&ch->tile_start, &ch->tile_cap, tiles + 1, sizeof(uint32_t)) ||
+        !rs__grow((void **)&ch->sorted, &ch->sorted_cap, ch->entry_count ? ch->entry_count : 1, sizeof(uint32_t)))
+        abort();
+    memset(ch->tile_start, 0, sizeof(uint32_t) * (tiles + 1));
+    for (uint32_t e = 0; e < ch->entry_count; e++) ch->tile_start[(ch->entries[e] >> 32) + 1]++;
+    for (uint32_t k = 0; k < tiles; k++) ch->tile_start[k + 1] += ch->tile_start[k];
+    /* place entries: use tile_start as running cursors, then shift back */
+    for (uint32_t e = 0; e < ch->entry_count; e++) {
+        uint32_t tile = (uint32_t)(ch->entries[e] >> 32);
+        ch->sorted[ch->tile_start[tile]++] = (uint32_t)ch->entries[e];
+    }
+    for (uint32_t k = tiles; k > 0; k--) ch->tile_start[k] = ch->tile_start[k - 1];
+    ch->tile_start[0] = 0;
+}
+
+/* ------------------------------------------------------- 4. tile raster */
+
+/* One row of up to 8 pixels starting at (x, y): coverage of pixel centres
+ * by the three edge functions, depth test (greater wins), write. `lanes`
+ * masks pixels past the tile, image or bounding box. Returns 1 if any pixel
+ * was written. e[k] = edge k at pixel (x, y); step[k] = edge k's increase
+ * per pixel in x; zrow = depth at pixel (x, y) (from the double plane).
+ * Every path computes
+ *   covered = e0 + i*step0 >= 0 && ... (exact int64)
+ *   z = zrow + dzdx * (float)i, clamped to the vertices' range
+ * so all paths give identical bits. */
+typedef int (*rs__row_fn)(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3],
+                          const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim);
+
+static float rs__zrow(const rs__tri *t, int32_t x, int32_t y)
+{
+    return (float)(t->zv + t->dzdx_d * ((double)x + 0.5 - t->xv) + t->dzdy_d * ((double)y + 0.5 - t->yv));
+}
+
+/* Coverage counting (rs_target.coverage): the scalar coverage test only. */
+static void rs__row_count(const rs__tri *t, const int64_t e[3], const int64_t step[3], unsigned lanes, uint32_t *count)
+{
+    (void)t;
+    for (int i = 0; i < 8; i++) {
+        if (!(lanes >> i & 1)) continue;
+        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
+        if ((e0 | e1 | e2) >= 0) count[i]++;
+    }
+}
+
+static int rs__row_scalar(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3],
+                          const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim)
+{
+    (void)x, (void)y;
+    int wrote = 0;
+    for (int i = 0; i < 8; i++) {
+        if (!(lanes >> i & 1)) continue;
+        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
+        if ((e0 | e1 | e2) < 0) continue;
+        float z = zrow + t->dzdx * (float)i;
+        z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
+        if (z > depth[i]) {
+            depth[i] = z;
+            if (prim) prim[i] = t->prim;
+            wrote = 1;
+        }
+    }
+    return wrote;
+}
+
+/* Alpha-masked triangles (alphaMode MASK): coverage as rs__row_scalar, then
+ * the perspective-correct barycentrics give the texture coordinate and the
+ * texel alpha at mip level 0 decides (alpha < cutoff is a hole) — the same
+ * test Embree's filter function makes, so raster and ray agree. Every SIMD
+ * path uses this one function for masked triangles. */
+static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, int32_t x, int32_t y, float zrow,
+                          const int64_t e[3], const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim)
+{
+    const pf_scene *sc = st->ctx->scene;
+    const uint32_t *tri = &sc->indices[3 * t->prim];
+    uint32_t mat = sc->tri_material[t->prim];
+    int wrote = 0;
+    float yf = (float)y;
+    for (int i = 0; i < 8; i++) {
+        if (!(lanes >> i & 1)) continue;
+        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
+        if ((e0 | e1 | e2) < 0) continue;
+        float xf = (float)(x + i);
+        float z = zrow + t->dzdx * (float)i;
+        z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
+        if (!(z > depth[i])) continue;
+        float iw = t->iw0 + t->diwdx * xf + t->diwdy * yf;
+        float b1 = (t->u0 + t->dudx * xf + t->dudy * yf) / iw, b2 = (t->v0 + t->dvdx * xf + t->dvdy * yf) / iw;
+        float b0 = 1.0f - b1 - b2;
+        pf_vec2 a = sc->uvs[tri[0]], b = sc->uvs[tri[1]], c = sc->uvs[tri[2]];
+        pf_vec2 uv = {b0 * a.x + b1 * b.x + b2 * c.x, b0 * a.y + b1 * b.y + b2 * c.y};
+        float rgba[4];
+        pf_material_sample(sc, mat, uv, 0.0f, rgba);
+        if (rgba[3] < sc->materials[mat].alpha_cutoff) continue;
+        depth[i] = z;
+        if (prim) prim[i] = t->prim;
+        wrote = 1;
+    }
+    return wrote;
+}
+
+#ifdef RS_HAVE_X86
+__attribute__((target("avx2"))) static int rs__row_avx2(const rs__tri *t, int32_t x, int32_t y, float zrow,
+                                                        const int64_t e[3], const int64_t step[3], unsigned lanes,
+                                                        float *depth, uint32_t *prim)
+{
+    (void)x, (void)y;
+    /* coverage: 2 x 4 int64 lanes per edge */
+    __m256i acc_lo = _mm256_setzero_si256(), acc_hi = _mm256_setzero_si256();
+    for (int k = 0; k < 3; k++) {
+        __m256i s = _mm256_set1_epi64x(step[k]);
+        __m256i lo = _mm256_add_epi64(_mm256_set1_epi64x(e[k]),
+                                      _mm256_set_epi64x(3 * step[k], 2 * step[k], step[k], 0));
+        __m256i hi = _mm256_add_epi64(lo, _mm256_slli_epi64(s, 2));
+        acc_lo = _mm256_or_si256(acc_lo, lo);
+        acc_hi = _mm256_or_si256(acc_hi, hi);
+    }
+    unsigned neg = (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(acc_lo)) |
+                   (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(acc_hi)) << 4;
+    unsigned cov = ~neg & lanes & 0xffu;
+    if (!cov) return 0;
+    __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+    __m256 z = _mm256_add_ps(_mm256_set1_ps(zrow), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
+    z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
+    __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    __m256i lane_mask = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)cov), bits), bits);
+    __m256 old = _mm256_maskload_ps(depth, lane_mask);
+    unsigned pass = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(z, old, _CMP_GT_OQ)) & cov;
+    if (!pass) return 0;
+    __m256i wm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)pass), bits), bits);
+    _mm256_maskstore_ps(depth, wm, z);
+    if (prim) _mm256_maskstore_epi32((int *)prim, wm, _mm256_set1_epi32((int)t->prim));
+    return 1;
+}
+
+__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) static int
+rs__row_avx512(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3], const int64_t step[3],
+               unsigned lanes, float *depth, uint32_t *prim)
+{
+    (void)x, (void)y;
+    const __m512i lane = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    __m512i acc = _mm512_setzero_si512();
+    for (int k = 0; k < 3; k++) /* e + i * step, exact 64-bit (AVX512DQ vpmullq) */
+        acc = _mm512_or_si512(acc, _mm512_add_epi64(_mm512_set1_epi64(e[k]),
+                                                    _mm512_mullo_epi64(lane, _mm512_set1_epi64(step[k]))));
+    __mmask8 cov = (__mmask8)(_mm512_cmpge_epi64_mask(acc, _mm512_setzero_si512()) & lanes);
+    if (!cov) return 0;
+    __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+    __m256 z = _mm256_add_ps(_mm256_set1_ps(zrow), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
+    z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
+    __m256 old = _mm256_mask_loadu_ps(_mm256_setzero_ps(), cov, depth);
+    __mmask8 pass = _mm256_mask_cmp_ps_mask(cov, z, old, _CMP_GT_OQ);
+    if (!pass) return 0;
+    _mm256_mask_storeu_ps(depth, pass, z);
+    if (prim) _mm256_mask_storeu_epi32(prim, pass, _mm256_set1_epi32((int)t->prim));
+    return 1;
+}
+#endif
+
+static rs__row_fn rs__row_for(rs_simd simd)
+{
+#ifdef RS_HAVE_X86
+    if (simd == RS_SIMD_AVX512) return rs__row_avx512;
+    if (simd == RS_SIMD_AVX2) return rs__row_avx2;
+#endif
+    (void)simd;
+    return rs__row_scalar;
+}
+
+/* Rasterizes one triangle inside one tile, 8x8 block by block, with the
+ * hierarchical-Z test per block: block_far[b] is the farthest (smallest)
+ * depth in block b, so a triangle whose nearest depth zmax is not greater
+ * cannot pass the depth test anywhere in it. */
+static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__tri *t, int32_t tx0, int32_t ty0,
+                           int32_t tx1, int32_t ty1, float block_far[64], rs_stats *stats)
+{
+    const rs_target *tg = st->t;
+    int32_t bx0 = t->x0 > tx0 ? t->x0 : tx0, bx1 = t->x1 < tx1 ? t->x1 : tx1;
+    int32_t by0 = t->y0 > ty0 ? t->y0 : ty0, by1 = t->y1 < ty1 ? t->y1 : ty1;
+    if (bx0 > bx1 || by0 > by1) return;
+    int64_t step[3];
+    for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+    for (int32_t byy = (by0 - ty0) / RS_BLOCK; byy <= (by1 - ty0) / RS_BLOCK; byy++)
+        for (int32_t bxx = (bx0 - tx0) / RS_BLOCK; bxx <= (bx1 - tx0) / RS_BLOCK; bxx++) {
+            int b = byy * (RS_TILE / RS_BLOCK) + bxx;
+            if (t->zmax <= block_far[b] && !tg->coverage) {
+                stats->blocks_early_z_rejected++;
+                continue;
+            }
+            int32_t x = tx0 + bxx * RS_BLOCK, y = ty0 + byy * RS_BLOCK;
+            int32_t rx0 = x > bx0 ? x : bx0, rx1 = x + RS_BLOCK - 1 < bx1 ? x + RS_BLOCK - 1 : bx1;
+            int32_t ry0 = y > by0 ? y : by0, ry1 = y + RS_BLOCK - 1 < by1 ? y + RS_BLOCK - 1 : by1;
+            /* edge functions at pixel (x, ry0); block rejected if an edge is
+             * negative over the whole block (its maximum over the corners) */
+            int64_t e[3];
+            int outside = 0;
+            int64_t px = (int64_t)x * RS_SUB + RS_SUB / 2, py = (int64_t)ry0 * RS_SUB + RS_SUB / 2;
+            for (int k = 0; k < 3; k++) {
+                e[k] = t->a[k] * px + t->b[k] * py + t->c[k];
+                int64_t emax = e[k] + (t->a[k] > 0 ? t->a[k] * (RS_BLOCK - 1) * RS_SUB : 0) +
+                               (t->b[k] > 0 ? t->b[k] * (int64_t)(ry1 - ry0) * RS_SUB : 0);
+                outside |= emax < 0;
+            }
+            if (outside) continue;
+            unsigned lanes = 0;
+            for (int i = 0; i < RS_BLOCK; i++)
+                if (x + i >= rx0 && x + i <= rx1) lanes |= 1u << i;
+            int wrote = 0;
+            for (int32_t yy = ry0; yy <= ry1; yy++) {
+                size_t o = (size_t)yy * tg->width + (size_t)x;
+                /* lanes past the image edge are masked, so the row functions
+                 * never touch memory beyond the row */
+                if (tg->coverage) rs__row_count(t, e, step, lanes, tg->coverage + o);
+                float *drow = tg->depth + o;
+                uint32_t *prow = tg->prim ? tg->prim + o : NULL;
+                float zrow = rs__zrow(t, x, yy);
+                wrote |= t->masked ? rs__row_masked(st, t, x, yy, zrow, e, step, lanes, drow, prow)
+                                   : row(t, x, yy, zrow, e, step, lanes, drow, prow);
+                for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+            }
+            if (wrote) {
+                int32_t cx1 = x + RS_BLOCK - 1 < tx1 ? x + RS_BLOCK - 1 : tx1;
+                int32_t cy1 = y + RS_BLOCK - 1 < ty1 ? y + RS_BLOCK - 1 : ty1;
+                float far = INFINITY;
+                for (int32_t yy = y; yy <= cy1; yy++) {
+                    const float *d = tg->depth + (size_t)yy * tg->width;
+                    for (int32_t xx = x; xx <= cx1; xx++) far = d[xx] < far ? d[xx] : far; /* not fminf: a libm call */
+                }
+                block_far[b] = far;
+            }
+        }
+}
+
+static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *stats)
+{
+    const rs_target *tg = st->t;
+    int32_t tx0 = (int32_t)(tile % st->tiles_x) * RS_TILE, ty0 = (int32_t)(tile / st->tiles_x) * RS_TILE;
+    int32_t tx1 = tx0 + RS_TILE - 1 < (int32_t)tg->width - 1 ? tx0 + RS_TILE - 1 : (int32_t)tg->width - 1;
+    int32_t ty1 = ty0 + RS_TILE - 1 < (int32_t)tg->height - 1 ? ty0 + RS_TILE - 1 : (int32_t)tg->height - 1;
+    for (int32_t y = ty0; y <= ty1; y++) {
+        size_t o = (size_t)y * tg->width + (size_t)tx0;
+        memset(tg->depth + o, 0, sizeof(float) * (size_t)(tx1 - tx0 + 1));
+        if (tg->prim)
+            for (int32_t x = 0; x <= tx1 - tx0; x++) tg->prim[o + (size_t)x] = RS_NO_PRIM;
+        if (tg->coverage) memset(tg->coverage + o, 0, sizeof(uint32_t) * (size_t)(tx1 - tx0 + 1));
+    }
+    float block_far[64];
+    for (int b = 0; b < 64; b++) block_far[b] = 0.0f;
+    rs__row_fn row = rs__row_for(st->simd);
+    for (uint32_t c = 0; c < st->s->chunk_count; c++) {
+        const rs__chunk *ch = &st->s->chunks[c];
+        if (ch->tri_count == 0) continue;
+        for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++)
+            rs__raster_tri(st, row, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, stats);
+    }
+}
+
+/* ------------------------------------------------------- the pass */
+
+static void rs__cull_job(void *p, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    rs__pass_state *st = p;
+    uint32_t c0 = item * 64, c1 = c0 + 64 < st->ctx->cluster_count ? c0 + 64 : st->ctx->cluster_count;
+    rs__cull_clusters(st, c0, c1);
+}
+
+static void rs__setup_job(void *p, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    rs__setup_bin(p, item);
+}
+
+typedef struct rs__tile_ctx {
+    rs__pass_state *st;
+    rs_stats *tile_stats; /* one per tile: summed in tile order afterwards */
+} rs__tile_ctx;
+
+static void rs__tile_job(void *p, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    rs__tile_ctx *tc = p;
+    rs__raster_tile(tc->st, item, &tc->tile_stats[item]);
+}
+
+static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t,
+                     rs_simd simd)
+{
+    memset(st, 0, sizeof *st);
+    if (t->width == 0 || t->height == 0 || t->width > RS_MAX_SIZE || t->height > RS_MAX_SIZE) return 0;
+    st->ctx = ctx;
+    st->s = s;
+    st->pass = pass;
+    st->t = t;
+    st->tiles_x = (t->width + RS_TILE - 1) / RS_TILE;
+    st->tiles_y = (t->height + RS_TILE - 1) / RS_TILE;
+    st->gx = 2.0f * RS_GUARD / (float)t->width;
+    st->gy = 2.0f * RS_GUARD / (float)t->height;
+    st->simd = simd;
+    return 1;
+}
+
+static void rs__finish_stats(const rs__pass_state *st, const rs_stats *tile_stats, rs_stats *out)
+{
+    if (!out) return;
+    memset(out, 0, sizeof *out);
+    for (uint32_t c = 0; c < st->ctx->cluster_count; c++) out->clusters_culled += !st->s->cluster_visible[c];
+    for (uint32_t c = 0; c < st->s->chunk_count; c++) {
+        const rs_stats *cs = &st->s->chunks[c].stats;
+        out->triangles_in += cs->triangles_in;
+        out->triangles_clipped += cs->triangles_clipped;
+        out->triangles_culled += cs->triangles_culled;
+        out->triangles_binned += cs->triangles_binned;
+    }
+    uint32_t tiles = st->tiles_x * st->tiles_y;
+    for (uint32_t k = 0; k < tiles && tile_stats; k++) out->blocks_early_z_rejected += tile_stats[k].blocks_early_z_rejected;
+}
+
+void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *stats)
+{
+    rs__pass_state st;
+    if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
+    uint32_t tiles = st.tiles_x * st.tiles_y;
+    rs_stats *tile_stats = calloc(tiles, sizeof *tile_stats);
+    if (!tile_stats) abort();
+    rs__tile_ctx tc = {&st, tile_stats};
+    pf_jobs *jobs = ctx->jobs;
+    uint32_t nv = (ctx->scene->vertex_count + RS_VCHUNK - 1) / RS_VCHUNK;
+    pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, &st, nv, 1, NULL, 0);
+    pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, &st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
+    pf_job_id deps[2] = {vj, cj};
+    pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, &st, ctx->chunk_count, 1, deps, 2);
+    pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &tc, tiles, 1, &sj, 1);
+    pf_jobs_wait(jobs, tj);
+    rs__finish_stats(&st, tile_stats, stats);
+    free(tile_stats);
+}
+
+void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t, rs_stats *stats)
+{
+    rs__pass_state st;
+    if (!rs__begin(&st, ctx, s, pass, t, ctx->simd)) return;
+    rs__transform(&pass->view_proj, ctx->scene->positions, s->clip, 0, ctx->scene->vertex_count);
+    rs__cull_clusters(&st, 0, ctx->cluster_count);
+    for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
+    rs_stats ts;
+    memset(&ts, 0, sizeof ts);
+    uint32_t tiles = st.tiles_x * st.tiles_y;
+    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, k, &ts);
+    rs__finish_stats(&st, NULL, stats);
+    if (stats) stats->blocks_early_z_rejected = ts.blocks_early_z_rejected;
+}

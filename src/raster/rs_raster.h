@@ -1,0 +1,125 @@
+/* rs_raster: softgi's triangle rasterizer: the pass every G-buffer and
+ * shadow map is made with.
+ *
+ * Pipeline (llvmpipe-style; each step a named function in rs_raster.c):
+ *   1. rs__cull_clusters   clusters of 256 triangles (in scene order) are
+ *                          culled by their bounding boxes against the clip
+ *                          volume before any vertex is touched;
+ *   2. rs__setup_bin       per triangle: clip-space transform, trivial reject,
+ *                          homogeneous clipping against the near plane (w - z
+ *                          >= 0), the far plane (z >= 0) and, only when a
+ *                          vertex leaves the guard band, the guard-band
+ *                          planes; snap to 8-bit sub-pixel fixed point; back-
+ *                          face cull; edge functions with the top-left rule;
+ *                          binning into 64x64-pixel tiles;
+ *   3. rs__raster_tiles    every tile is rasterized by one job item, walking
+ *                          its bins in triangle order: hierarchical early-Z
+ *                          per 8x8 block, then exact coverage + depth test per
+ *                          pixel centre with SIMD (AVX-512: 8 int64 lanes,
+ *                          AVX2: 4 lanes, or scalar).
+ *
+ * Exactness: vertex positions are snapped to 1/256 pixel and edge functions
+ * are evaluated in 64-bit integers, so coverage is exact: a closed mesh
+ * covers every pixel centre inside its silhouette exactly once, and of two
+ * triangles sharing an edge exactly one covers a pixel centre on it (top-
+ * left fill rule). Depth is interpolated in float with one fixed expression
+ * (z = z0 + dzdx * x + dzdy * y, no FMA) in every path, so the SIMD paths
+ * give the same bits as the scalar one.
+ *
+ * Depth convention (reversed): the rasterizer interpolates zs = z_clip /
+ * w_clip linearly in screen space and keeps the GREATEST value; 0 means
+ * nothing drawn. rs_mat4_perspective gives zs = znear / view_depth (1 at the
+ * near plane, towards 0 at infinity: float precision where it matters);
+ * rs_mat4_ortho gives zs = 1 - (view_depth - znear) / (zfar - znear).
+ * Ties keep the earlier triangle (scene order), so results never depend on
+ * scheduling.
+ *
+ * Screen space: pixel (x, y) has its centre at (x + 0.5, y + 0.5), y down;
+ * NDC (-1, 1) is the top-left corner. Image size up to 16384 a side. */
+#ifndef RS_RASTER_H
+#define RS_RASTER_H
+
+#include <stdint.h>
+
+#include "pf_isa.h"
+#include "pf_jobs.h"
+#include "pf_scene.h"
+
+#define RS_NO_PRIM 0xffffffffu
+#define RS_SUBPIXEL_BITS 8
+#define RS_TILE 64
+#define RS_MAX_SIZE 16384
+
+typedef enum rs_simd { RS_SIMD_SCALAR = 0, RS_SIMD_AVX2, RS_SIMD_AVX512 } rs_simd;
+/* sse2/sse4.2 -> scalar, avx2 -> AVX2, avx512 -> AVX-512 (README "Determinism"). */
+rs_simd rs_simd_for_isa(pf_isa isa);
+const char *rs_simd_name(rs_simd simd);
+
+/* Column-major 4x4: clip = m * (x, y, z, 1). */
+typedef struct rs_mat4 {
+    float m[16];
+} rs_mat4;
+
+/* View-projection of a perspective camera looking along `forward` with
+ * `up`, vertical fov `yfov` (radians), aspect = width / height, and an
+ * infinite far plane; zs = znear / view_depth. */
+rs_mat4 rs_mat4_perspective(pf_vec3 eye, pf_vec3 forward, pf_vec3 up, float yfov, float aspect, float znear);
+/* Orthographic view-projection: the box [-half_w, half_w] x [-half_h, half_h]
+ * x [znear, zfar] in front of `eye` along `forward`. */
+rs_mat4 rs_mat4_ortho(pf_vec3 eye, pf_vec3 forward, pf_vec3 up, float half_w, float half_h, float znear, float zfar);
+/* The camera's view-projection for an image of width x height. */
+rs_mat4 rs_mat4_camera(const pf_camera *cam, uint32_t width, uint32_t height);
+/* clip = m * (p, 1) */
+void rs_mat4_transform(const rs_mat4 *m, pf_vec3 p, float clip[4]);
+
+typedef enum rs_cull { RS_CULL_NONE = 0, RS_CULL_BACK, RS_CULL_FRONT } rs_cull;
+
+/* Where a pass draws. depth is required (width*height floats); prim is
+ * optional (NULL for depth-only passes such as shadow maps). The pass clears
+ * them (depth 0, prim RS_NO_PRIM). `coverage`, optional, counts for every
+ * pixel how many triangles cover its centre, before the depth test: an
+ * overdraw view for learners, and how the tests prove that a closed mesh
+ * covers each pixel exactly once (counting runs on the scalar path; it is
+ * exact integer arithmetic in every path anyway). */
+typedef struct rs_target {
+    uint32_t width, height;
+    float *depth;
+    uint32_t *prim;
+    uint32_t *coverage;
+} rs_target;
+
+typedef struct rs_pass {
+    rs_mat4 view_proj;
+    rs_cull cull; /* back = clockwise on screen, i.e. facing away for CCW-front triangles */
+} rs_pass;
+
+/* Per-pass statistics (for the bench and tests). */
+typedef struct rs_stats {
+    uint64_t clusters_culled, triangles_in, triangles_clipped, triangles_culled, triangles_binned;
+    uint64_t blocks_early_z_rejected;
+} rs_stats;
+
+typedef struct rs_context rs_context;
+
+/* Prepares the scene for rasterization (clusters, bounds, per-worker bins).
+ * `scene` and `jobs` must outlive the context. */
+pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err);
+void rs_context_destroy(rs_context *ctx);
+rs_simd rs_context_simd(const rs_context *ctx);
+/* Switches the SIMD path (tests compare paths on one context). */
+void rs_context_set_simd(rs_context *ctx, rs_simd simd);
+
+/* Rasterizes the whole scene into `target` (cleared first), in parallel over
+ * the context's jobs, deterministic for any thread count and SIMD path. */
+void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *target, rs_stats *stats);
+
+/* The same for a single-threaded caller that already runs inside a job (used
+ * to render many small maps at once, one per job item): no jobs are
+ * spawned; `scratch` is per-caller memory from rs_scratch_create. */
+typedef struct rs_scratch rs_scratch;
+rs_scratch *rs_scratch_create(const rs_context *ctx);
+void rs_scratch_destroy(rs_scratch *s);
+void rs_render_serial(const rs_context *ctx, rs_scratch *scratch, const rs_pass *pass, rs_target *target,
+                      rs_stats *stats);
+
+#endif

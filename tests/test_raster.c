@@ -28,7 +28,7 @@
 #define CONFERENCE SOFTGI_SHARED_SCENES "/conference/conference.gltf"
 
 /* Golden: rasterized Cornell box G-buffer, 160x120, scalar path, all planes. */
-#define GOLDEN_GBUFFER_CORNELL 0x3688230121465e21ull
+#define GOLDEN_GBUFFER_CORNELL 0xe697fc892483a7d3ull
 
 /* ------------------------------------------------------------ helpers */
 

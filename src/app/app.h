@@ -8,4 +8,8 @@
 /* `softgi render`: load, override, build, render, write. Returns the exit status. */
 int app_render(const pf_options *opts);
 
+/* `softgi bench raster`: per-stage medians of the rasterizer passes against
+ * Embree, as a table and one JSON line. Returns the exit status. */
+int app_bench_raster(const pf_options *opts);
+
 #endif

@@ -2,6 +2,7 @@
  * command; every failure is one line on stderr and a non-zero exit status
  * (2 for bad usage, 1 for bad input or a failed write). */
 #include <stdio.h>
+#include <string.h>
 
 #include "app.h"
 #include "pf_fpenv.h"
@@ -24,5 +25,6 @@ int main(int argc, char **argv)
         printf("softgi %s\n", SOFTGI_VERSION);
         return 0;
     }
+    if (!strcmp(opts.command, "bench")) return app_bench_raster(&opts);
     return app_render(&opts);
 }

@@ -9,6 +9,7 @@
 void pf_cli_usage(FILE *out)
 {
     fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
+          "       softgi bench raster [--threads N] [--frames N] [--scenes DIR] [--isa ISA]\n"
           "\n"
           "Renders SCENE (default: the embedded Cornell box) to a PNG and a linear\n"
           "HDR .pfm, printing per-stage timings.\n"
@@ -30,6 +31,8 @@ void pf_cli_usage(FILE *out)
           "                          path; the only one until the rasterizer lands)\n"
           "  --hash                  print a 64-bit hash of the linear output\n"
           "  -q, --quiet             no timing table\n"
+          "  --frames N              bench: repetitions per measurement (default 15)\n"
+          "  --scenes DIR            bench: folder with sibenik/ and conference/ (default ../shared/scenes)\n"
           "  -h, --help, --version\n",
           out);
 }
@@ -180,8 +183,9 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         const char *a = argv[i];
         /* options that take a value */
         const char *val = NULL;
-        static const char *const with_value[] = {"-o",      "--output", "--hdr",    "--size",  "--threads",
-                                                 "--isa",   "--camera", "--light",  "--exposure"};
+        static const char *const with_value[] = {"-o",       "--output", "--hdr",      "--size",
+                                                 "--threads", "--isa",   "--camera",   "--light",
+                                                 "--exposure", "--frames", "--scenes"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -195,6 +199,8 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
         else if (!strcmp(a, "--hdr")) o->hdr_path = val;
         else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
+        else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
+        else if (!strcmp(a, "--scenes")) o->scenes_dir = val;
         else if (!strcmp(a, "--isa")) r = pf_isa_parse(val, &o->isa, err);
         else if (!strcmp(a, "--exposure")) {
             if (!pf__float(val, strlen(val), &o->exposure) || fabsf(o->exposure) > 64.0f)
@@ -230,8 +236,12 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
     if (r != PF_OK) return r;
     if (!o->help && !o->version) {
         if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
-        if (strcmp(o->command, "render") != 0)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "unknown command '%s' (softgi knows: render)", o->command);
+        if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "unknown command '%s' (softgi knows: render, bench)",
+                                o->command);
+        if (!strcmp(o->command, "bench") && (!o->scene_path || strcmp(o->scene_path, "raster") != 0))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster",
+                                o->scene_path ? o->scene_path : "");
     }
     return PF_OK;
 }

@@ -65,20 +65,53 @@ static pf_vec3 rs__ray_dir(const rs__resolve_ctx *rc, float x, float y)
     return pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
 }
 
-/* Barycentrics (u, v) and t of the ray o + t d on the plane of (p0, p1, p2)
- * (Moller-Trumbore without the inside test). Returns 0 for a ray parallel
- * to the plane. */
-static int rs__plane_bary(pf_vec3 o, pf_vec3 d, pf_vec3 p0, pf_vec3 e1, pf_vec3 e2, float *u, float *v, float *t)
+/* Per-triangle constants of the resolve. With the ray origin o fixed (the
+ * eye), Moller-Trumbore's terms that do not involve the direction d are
+ * constant per triangle: with tv = o - p0, e1 = p1 - p0, e2 = p2 - p0,
+ *   det = d . (e2 x e1),  u = d . (e2 x tv) / det,  v = d . (tv x e1) / det,
+ * so a pixel costs three dot products and a division. Pixels come in runs
+ * that share a triangle, so the constants are cached across a run. */
+typedef struct rs__tri_consts {
+    uint32_t prim;
+    pf_vec3 n_det, n_u, n_v;   /* e2 x e1, e2 x tv, tv x e1 */
+    pf_vec3 p0, e1, e2;
+    pf_vec3 ng;                /* unit geometric normal */
+    pf_vec3 n0, n1, n2;        /* vertex normals */
+    pf_vec2 uv0, uv1, uv2;
+    uint32_t material;
+    int textured;
+} rs__tri_consts;
+
+static void rs__tri_setup(rs__tri_consts *c, const pf_scene *s, pf_vec3 eye, uint32_t prim)
 {
-    pf_vec3 pv = pf_v3_cross(d, e2);
-    float det = pf_v3_dot(e1, pv);
-    if (det == 0.0f || !isfinite(det)) return 0;
+    const uint32_t *tri = &s->indices[3 * prim];
+    c->prim = prim;
+    c->p0 = s->positions[tri[0]];
+    c->e1 = pf_v3_sub(s->positions[tri[1]], c->p0);
+    c->e2 = pf_v3_sub(s->positions[tri[2]], c->p0);
+    pf_vec3 tv = pf_v3_sub(eye, c->p0);
+    c->n_det = pf_v3_cross(c->e2, c->e1);
+    c->n_u = pf_v3_cross(c->e2, tv);
+    c->n_v = pf_v3_cross(tv, c->e1);
+    c->ng = pf_v3_normalize(pf_v3_cross(c->e1, c->e2));
+    c->n0 = s->normals[tri[0]];
+    c->n1 = s->normals[tri[1]];
+    c->n2 = s->normals[tri[2]];
+    c->uv0 = s->uvs[tri[0]];
+    c->uv1 = s->uvs[tri[1]];
+    c->uv2 = s->uvs[tri[2]];
+    c->material = s->tri_material[prim];
+    c->textured = s->materials[c->material].base_color_texture >= 0;
+}
+
+/* Unclamped barycentrics of direction d on the triangle's plane. */
+static int rs__bary(const rs__tri_consts *c, pf_vec3 d, float *u, float *v)
+{
+    float det = pf_v3_dot(d, c->n_det);
+    if (det == 0.0f) return 0;
     float inv = 1.0f / det;
-    pf_vec3 tv = pf_v3_sub(o, p0);
-    pf_vec3 qv = pf_v3_cross(tv, e1);
-    *u = pf_v3_dot(tv, pv) * inv;
-    *v = pf_v3_dot(d, qv) * inv;
-    *t = pf_v3_dot(e2, qv) * inv;
+    *u = pf_v3_dot(d, c->n_u) * inv;
+    *v = pf_v3_dot(d, c->n_v) * inv;
     return 1;
 }
 
@@ -89,6 +122,9 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
     rs_gbuffer *g = rc->g;
     const pf_scene *s = rc->scene;
     const pf_camera *cam = rc->cam;
+    rs__tri_consts c;
+    memset(&c, 0, sizeof c);
+    c.prim = RS_GBUFFER_EMPTY;
     for (uint32_t x = 0; x < g->width; x++) {
         size_t i = (size_t)y * g->width + x;
         uint32_t prim = g->prim[i];
@@ -99,25 +135,20 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
             g->alb_r[i] = g->alb_g[i] = g->alb_b[i] = 0.0f;
             continue;
         }
-        const uint32_t *tri = &s->indices[3 * prim];
-        pf_vec3 p0 = s->positions[tri[0]];
-        pf_vec3 e1 = pf_v3_sub(s->positions[tri[1]], p0), e2 = pf_v3_sub(s->positions[tri[2]], p0);
+        if (prim != c.prim) rs__tri_setup(&c, s, cam->eye, prim);
         pf_vec3 d = rs__ray_dir(rc, (float)x + 0.5f, (float)y + 0.5f);
-        float u = 0.0f, v = 0.0f, t = 0.0f;
-        rs__plane_bary(cam->eye, d, p0, e1, e2, &u, &v, &t);
+        float u = 0.0f, v = 0.0f;
+        rs__bary(&c, d, &u, &v);
         /* uv footprint from the neighbouring pixel centres' rays on the same plane */
         float lod = 0.0f;
-        if (s->materials[s->tri_material[prim]].base_color_texture >= 0) {
-            float ux, vx, tx, uy, vy, ty;
-            pf_vec3 dx = rs__ray_dir(rc, (float)x + 1.5f, (float)y + 0.5f);
-            pf_vec3 dy = rs__ray_dir(rc, (float)x + 0.5f, (float)y + 1.5f);
-            if (rs__plane_bary(cam->eye, dx, p0, e1, e2, &ux, &vx, &tx) &&
-                rs__plane_bary(cam->eye, dy, p0, e1, e2, &uy, &vy, &ty)) {
-                pf_vec2 a = s->uvs[tri[0]], b = s->uvs[tri[1]], c = s->uvs[tri[2]];
-                float du1 = b.x - a.x, du2 = c.x - a.x, dv1 = b.y - a.y, dv2 = c.y - a.y;
-                lod = pf_material_lod(s, s->tri_material[prim], du1 * (ux - u) + du2 * (vx - v),
-                                      dv1 * (ux - u) + dv2 * (vx - v), du1 * (uy - u) + du2 * (vy - v),
-                                      dv1 * (uy - u) + dv2 * (vy - v));
+        if (c.textured) {
+            float ux, vx, uy, vy;
+            if (rs__bary(&c, rs__ray_dir(rc, (float)x + 1.5f, (float)y + 0.5f), &ux, &vx) &&
+                rs__bary(&c, rs__ray_dir(rc, (float)x + 0.5f, (float)y + 1.5f), &uy, &vy)) {
+                float du1 = c.uv1.x - c.uv0.x, du2 = c.uv2.x - c.uv0.x, dv1 = c.uv1.y - c.uv0.y,
+                      dv2 = c.uv2.y - c.uv0.y;
+                lod = pf_material_lod(s, c.material, du1 * (ux - u) + du2 * (vx - v), dv1 * (ux - u) + dv2 * (vx - v),
+                                      du1 * (uy - u) + du2 * (vy - v), dv1 * (uy - u) + dv2 * (vy - v));
             }
         }
         u = u < 0.0f ? 0.0f : (u > 1.0f ? 1.0f : u);
@@ -127,22 +158,24 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
             u /= sum;
             v /= sum;
         }
-        pf_surface sf;
-        pf_scene_surface(s, prim, u, v, lod, &sf);
-        pf_vec3 ns = sf.ns;
-        if (pf_v3_dot(sf.ng, d) > 0.0f) ns = pf_v3_scale(ns, -1.0f); /* two-sided shading */
-        /* view depth of the interpolated position (t of the plane hit, but
-         * from the clamped point so depth and position agree) */
-        g->depth[i] = pf_v3_dot(pf_v3_sub(sf.p, cam->eye), cam->forward);
-        g->pos_x[i] = sf.p.x;
-        g->pos_y[i] = sf.p.y;
-        g->pos_z[i] = sf.p.z;
+        float w = 1.0f - u - v;
+        pf_vec3 pos = pf_v3_add(c.p0, pf_v3_add(pf_v3_scale(c.e1, u), pf_v3_scale(c.e2, v)));
+        pf_vec3 ns = pf_v3_normalize(pf_v3_add(pf_v3_add(pf_v3_scale(c.n0, w), pf_v3_scale(c.n1, u)), pf_v3_scale(c.n2, v)));
+        if (ns.x == 0.0f && ns.y == 0.0f && ns.z == 0.0f) ns = c.ng;
+        if (pf_v3_dot(c.ng, d) > 0.0f) ns = pf_v3_scale(ns, -1.0f); /* two-sided shading */
+        float albedo[4];
+        pf_vec2 uv = {w * c.uv0.x + u * c.uv1.x + v * c.uv2.x, w * c.uv0.y + u * c.uv1.y + v * c.uv2.y};
+        pf_material_sample(s, c.material, uv, lod, albedo);
+        g->depth[i] = pf_v3_dot(pf_v3_sub(pos, cam->eye), cam->forward); /* view depth of the point */
+        g->pos_x[i] = pos.x;
+        g->pos_y[i] = pos.y;
+        g->pos_z[i] = pos.z;
         g->nrm_x[i] = ns.x;
         g->nrm_y[i] = ns.y;
         g->nrm_z[i] = ns.z;
-        g->alb_r[i] = sf.albedo[0];
-        g->alb_g[i] = sf.albedo[1];
-        g->alb_b[i] = sf.albedo[2];
+        g->alb_r[i] = albedo[0];
+        g->alb_g[i] = albedo[1];
+        g->alb_b[i] = albedo[2];
     }
 }
 

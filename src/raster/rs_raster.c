@@ -693,12 +693,38 @@ static rs__row_fn rs__row_for(rs_simd simd)
     return rs__row_scalar;
 }
 
+/* The farthest (smallest) depth in block [x, x1] x [y, y1]. A full 8x8
+ * block keeps 8 independent minima (one per column) so the loop vectorises
+ * instead of waiting on one long dependency chain; the ternary is used, not
+ * fminf, which is a libm call. */
+static float rs__block_min(const rs_target *tg, int32_t x, int32_t y, int32_t x1, int32_t y1)
+{
+    if (x1 - x == RS_BLOCK - 1) {
+        float acc[RS_BLOCK];
+        const float *d = tg->depth + (size_t)y * tg->width + (size_t)x;
+        for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i];
+        for (int32_t yy = y + 1; yy <= y1; yy++) {
+            d += tg->width;
+            for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i] < acc[i] ? d[i] : acc[i];
+        }
+        float m = acc[0];
+        for (int i = 1; i < RS_BLOCK; i++) m = acc[i] < m ? acc[i] : m;
+        return m;
+    }
+    float m = INFINITY;
+    for (int32_t yy = y; yy <= y1; yy++) {
+        const float *d = tg->depth + (size_t)yy * tg->width;
+        for (int32_t xx = x; xx <= x1; xx++) m = d[xx] < m ? d[xx] : m;
+    }
+    return m;
+}
+
 /* Rasterizes one triangle inside one tile, 8x8 block by block, with the
  * hierarchical-Z test per block: block_far[b] is the farthest (smallest)
  * depth in block b, so a triangle whose nearest depth zmax is not greater
  * cannot pass the depth test anywhere in it. */
 static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__tri *t, int32_t tx0, int32_t ty0,
-                           int32_t tx1, int32_t ty1, float block_far[64], rs_stats *stats)
+                           int32_t tx1, int32_t ty1, float block_far[64], uint8_t block_writes[64], rs_stats *stats)
 {
     const rs_target *tg = st->t;
     int32_t bx0 = t->x0 > tx0 ? t->x0 : tx0, bx1 = t->x1 < tx1 ? t->x1 : tx1;
@@ -728,9 +754,7 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__t
                 outside |= emax < 0;
             }
             if (outside) continue;
-            unsigned lanes = 0;
-            for (int i = 0; i < RS_BLOCK; i++)
-                if (x + i >= rx0 && x + i <= rx1) lanes |= 1u << i;
+            unsigned lanes = ((1u << (rx1 - x + 1)) - 1u) & ~((1u << (rx0 - x)) - 1u);
             int wrote = 0;
             for (int32_t yy = ry0; yy <= ry1; yy++) {
                 size_t o = (size_t)yy * tg->width + (size_t)x;
@@ -744,15 +768,15 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__t
                                    : row(t, x, yy, zrow, e, step, lanes, drow, prow);
                 for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
             }
-            if (wrote) {
+            /* Depths only grow, so a stale block_far stays a valid (lower)
+             * bound: refresh it only every few writes, or when this triangle
+             * spans the whole block, instead of after every triangle. */
+            if (wrote && (++block_writes[b] >= 4 || (rx0 == x && rx1 == x + RS_BLOCK - 1 && ry0 == y &&
+                                                     ry1 == y + RS_BLOCK - 1))) {
+                block_writes[b] = 0;
                 int32_t cx1 = x + RS_BLOCK - 1 < tx1 ? x + RS_BLOCK - 1 : tx1;
                 int32_t cy1 = y + RS_BLOCK - 1 < ty1 ? y + RS_BLOCK - 1 : ty1;
-                float far = INFINITY;
-                for (int32_t yy = y; yy <= cy1; yy++) {
-                    const float *d = tg->depth + (size_t)yy * tg->width;
-                    for (int32_t xx = x; xx <= cx1; xx++) far = d[xx] < far ? d[xx] : far; /* not fminf: a libm call */
-                }
-                block_far[b] = far;
+                block_far[b] = rs__block_min(tg, x, y, cx1, cy1);
             }
         }
 }
@@ -771,13 +795,14 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *stats)
         if (tg->coverage) memset(tg->coverage + o, 0, sizeof(uint32_t) * (size_t)(tx1 - tx0 + 1));
     }
     float block_far[64];
-    for (int b = 0; b < 64; b++) block_far[b] = 0.0f;
+    uint8_t block_writes[64];
+    for (int b = 0; b < 64; b++) block_far[b] = 0.0f, block_writes[b] = 0;
     rs__row_fn row = rs__row_for(st->simd);
     for (uint32_t c = 0; c < st->s->chunk_count; c++) {
         const rs__chunk *ch = &st->s->chunks[c];
         if (ch->tri_count == 0) continue;
         for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++)
-            rs__raster_tri(st, row, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, stats);
+            rs__raster_tri(st, row, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
     }
 }
 

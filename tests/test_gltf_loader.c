@@ -1123,6 +1123,9 @@ static const bad_case regress_cases[] = {
      * 139-byte buffer: tinygltf 2.7 hands the unchecked range to stb_image
      * (heap over-read in stbi__parse_png_file) before the loader sees it. */
     {"image_view_past_buffer.glb", PF_ERR_ACCESSOR, "bufferView 2", "buffer 0"},
+    /* 200 bytes asking for an accessor of 2^28 zero VEC3s (no bufferView):
+     * 8 GB and 15 s before the cap on data-less accessors. */
+    {"implicit_accessor_huge.gltf", PF_ERR_ACCESSOR, "no bufferView", "268435456"},
 };
 
 static void test_fuzz_regression_cases(void **state)

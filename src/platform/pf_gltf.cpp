@@ -32,7 +32,12 @@ namespace {
 
 /* Limits that keep a hostile file from asking for absurd memory or time. */
 const size_t kMaxAccessorCount = size_t(1) << 28;  /* elements per accessor */
-const size_t kMaxSceneTriangles = size_t(1) << 28; /* after instancing */
+const size_t kMaxSceneTriangles = size_t(1) << 25; /* after instancing */
+/* Elements an accessor without a bufferView may claim (they are zeros, or
+ * sparse substitutions): at most this many per byte of input, plus a floor.
+ * Without it a 200-byte file can ask for gigabytes of zeros. */
+const size_t kImplicitPerByte = 64;
+const size_t kImplicitFloor = size_t(1) << 20;
 const int kMaxNodeDepth = 256;
 const size_t kMaxFileBytes = size_t(1) << 32;
 
@@ -259,10 +264,14 @@ const tinygltf::Accessor &get_accessor(const tinygltf::Model &m, int index, cons
 /* Reads a float-valued accessor (positions, normals, uvs) with `ncomp`
  * components, honouring byteStride, normalisation and sparse substitution. */
 std::vector<float> read_floats(const tinygltf::Model &m, int index, int ncomp, bool allow_normalized_ints,
-                               const std::string &what)
+                               size_t implicit_limit, const std::string &what)
 {
     const tinygltf::Accessor &a = get_accessor(m, index, what);
     std::string where = fmt("accessor %d (%s)", index, what.c_str());
+    if (a.bufferView < 0 && a.count > implicit_limit)
+        fail(PF_ERR_ACCESSOR, fmt("%s has count %zu but no bufferView; softgi allows at most %zu such elements for "
+                                  "a file of this size",
+                                  where.c_str(), a.count, implicit_limit));
     if (type_components(a.type) != ncomp)
         fail(PF_ERR_ACCESSOR, fmt("%s must have %d components per element", where.c_str(), ncomp));
     size_t csize = component_size(a.componentType);
@@ -383,6 +392,7 @@ struct Builder {
     const tinygltf::Model &m;
     const pf_gltf_options &opts;
     std::string name;
+    size_t implicit_limit; /* see kImplicitPerByte */
     std::vector<pf_vec3> pos, nrm;
     std::vector<pf_vec2> uv;
     std::vector<uint32_t> idx, tri_mat;
@@ -430,17 +440,17 @@ struct Builder {
             return;
         }
         uint32_t material = material_for(p.material);
-        std::vector<float> P = read_floats(m, pit->second, 3, false, what + " POSITION");
+        std::vector<float> P = read_floats(m, pit->second, 3, false, implicit_limit, what + " POSITION");
         size_t nv = P.size() / 3;
         std::vector<float> N, T;
         auto nit = p.attributes.find("NORMAL");
         if (nit != p.attributes.end()) {
-            N = read_floats(m, nit->second, 3, false, what + " NORMAL");
+            N = read_floats(m, nit->second, 3, false, implicit_limit, what + " NORMAL");
             if (N.size() != P.size()) fail(PF_ERR_ACCESSOR, what + ": NORMAL count differs from POSITION count");
         }
         auto tit = p.attributes.find("TEXCOORD_0");
         if (tit != p.attributes.end()) {
-            T = read_floats(m, tit->second, 2, true, what + " TEXCOORD_0");
+            T = read_floats(m, tit->second, 2, true, implicit_limit, what + " TEXCOORD_0");
             if (T.size() / 2 != nv) fail(PF_ERR_ACCESSOR, what + ": TEXCOORD_0 count differs from POSITION count");
         }
         std::vector<uint32_t> I;
@@ -720,9 +730,10 @@ template <typename T> T *copy_out(const std::vector<T> &v, size_t extra = 0)
 }
 
 void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options &opts, const std::string &name,
-                 std::string warnings_in)
+                 std::string warnings_in, size_t input_bytes)
 {
-    Builder b{m, opts, name, {}, {}, {}, {}, {}, {}, {}, {}, 0, -1, 0};
+    size_t limit = input_bytes > (SIZE_MAX / kImplicitPerByte) ? SIZE_MAX : input_bytes * kImplicitPerByte;
+    Builder b{m, opts, name, limit > kImplicitFloor ? limit : kImplicitFloor, {}, {}, {}, {}, {}, {}, {}, {}, 0, -1, 0};
     b.warnings = warnings_in.size() > 400 ? warnings_in.substr(0, 400) : warnings_in;
 
     std::vector<int> roots;
@@ -934,10 +945,14 @@ pf_result load(pf_scene *out, const unsigned char *data, size_t size, const char
             if (msg.find("File not found") != std::string::npos || msg.find("cannot open") != std::string::npos ||
                 msg.find("Failed to load external") != std::string::npos)
                 code = PF_ERR_IO;
+            if (code == PF_ERR_IO)
+                return pf_error_set(err, code, "%s: cannot read a file it refers to: %s", nm, msg.c_str());
             return pf_error_set(err, code, "%s: %s is not a loadable glTF 2.0 file: %s", nm, is_glb ? "binary" : "text",
                                 msg.empty() ? "unknown tinygltf error" : msg.c_str());
         }
-        build_scene(out, model, opts, nm, twarn);
+        size_t input_bytes = size;
+        for (const tinygltf::Buffer &buf : model.buffers) input_bytes += buf.data.size();
+        build_scene(out, model, opts, nm, twarn, input_bytes);
         return PF_OK;
     } catch (const LoadError &e) {
         return pf_error_set(err, e.code, "%s: %s", nm, e.message.c_str());

@@ -49,7 +49,7 @@ static void setup_floor(fixture *fx, const pf_light *light)
     assert_non_null(fx->jobs);
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.1f, 3.0f, 0.2f), pf_v3(0, 0, 0), pf_radians(70.0f), &err), PF_OK);
-    assert_int_equal(gi_frame_init(&fx->frame, &fx->scene, fx->rt, NULL, fx->jobs, &cam, W, H, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&fx->frame, &fx->scene, fx->rt, NULL, fx->jobs, &cam, W, H, 0, &err), PF_OK);
     gi_frame_render_raytraced(&fx->frame);
 }
 
@@ -183,7 +183,7 @@ static void test_shadow_and_backside(void **state)
     pf_camera cam;
     /* look at the floor from the side, below the occluder */
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0.5f, 3.0f), pf_v3(0, 0, 0), pf_radians(60.0f), &err), PF_OK);
-    assert_int_equal(gi_frame_init(&fx.frame, &fx.scene, fx.rt, NULL, fx.jobs, &cam, W, H, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&fx.frame, &fx.scene, fx.rt, NULL, fx.jobs, &cam, W, H, 0, &err), PF_OK);
     gi_frame_render_raytraced(&fx.frame);
     int shadowed = 0, lit = 0;
     for (int i = 0; i < W * H; i++) {

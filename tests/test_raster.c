@@ -457,8 +457,8 @@ static void check_vs_embree(const char *path)
     assert_int_equal(rs_context_create(&ctx, &s, jobs, rs_simd_for_isa(pf_isa_detect()), &err), PF_OK);
     pf_camera cam = scene_camera(&s);
     gi_frame a, b;
-    assert_int_equal(gi_frame_init(&a, &s, rt, ctx, jobs, &cam, W, H, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&b, &s, rt, ctx, jobs, &cam, W, H, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&a, &s, rt, ctx, jobs, &cam, W, H, 0, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&b, &s, rt, ctx, jobs, &cam, W, H, 0, &err), PF_OK);
     gi_stage_gbuffer_raster(&a);
     gi_stage_gbuffer_resolve(&a);
     gi_stage_gbuffer_raytrace(&b);
@@ -515,7 +515,7 @@ static void test_golden_gbuffer(void **state)
     rs_context *ctx;
     assert_int_equal(rs_context_create(&ctx, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
     gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, NULL, ctx, jobs, &s.cameras[0], 160, 120, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&f, &s, NULL, ctx, jobs, &s.cameras[0], 160, 120, 0, &err), PF_OK);
     gi_stage_gbuffer_raster(&f);
     gi_stage_gbuffer_resolve(&f);
     const rs_gbuffer *g = &f.gbuf;

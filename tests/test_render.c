@@ -47,7 +47,7 @@ static uint64_t render(const pf_scene *s, pf_isa isa, uint32_t threads, uint32_t
     pf_jobs *jobs = pf_jobs_create(threads);
     assert_non_null(jobs);
     gi_frame f;
-    assert_int_equal(gi_frame_init(&f, s, rt, NULL, jobs, &s->cameras[0], W, H, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&f, s, rt, NULL, jobs, &s->cameras[0], W, H, 0, &err), PF_OK);
     gi_frame_render_raytraced(&f);
     uint64_t h = frame_hash(&f);
     *final_hash = pf_imageio_hash(f.final, 3ull * W * H);

@@ -99,7 +99,7 @@ int app_render(const pf_options *o)
         r = rs_context_create(&raster, &scene, jobs, rs_simd_for_isa(isa), &err);
         pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
     }
-    if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, &err);
+    if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, o->shadow_size, &err);
     if (r != PF_OK) {
         rs_context_destroy(raster);
         pf_jobs_destroy(jobs);

@@ -25,7 +25,7 @@ const char *gi_buffer_caption(gi_buffer_id id)
 }
 
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
-                        const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err)
+                        const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err)
 {
     memset(f, 0, sizeof *f);
     f->scene = scene;
@@ -44,12 +44,23 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
         gi_frame_free(f);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width, height);
     }
+    if (raster) {
+        rs_shadow_desc desc;
+        memset(&desc, 0, sizeof desc);
+        desc.size = shadow_size;
+        r = rs_shadow_set_init(&f->shadows, scene, &desc, err);
+        if (r != PF_OK) {
+            gi_frame_free(f);
+            return r;
+        }
+    }
     return PF_OK;
 }
 
 void gi_frame_free(gi_frame *f)
 {
     rs_gbuffer_free(&f->gbuf);
+    rs_shadow_set_free(&f->shadows);
     free(f->direct);
     free(f->final);
     memset(f, 0, sizeof *f);
@@ -121,7 +132,8 @@ void gi_frame_render_raster(gi_frame *f)
     memset(&f->times, 0, sizeof f->times);
     gi__timed(f, "gbuffer raster (visibility)", gi_stage_gbuffer_raster);
     gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
-    gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    gi__timed(f, "shadow maps", gi_stage_shadow_maps);
+    gi__timed(f, "direct light (shadow maps)", gi_stage_direct_shadowmap);
     gi__timed(f, "compose", gi_stage_compose);
     pf_jobs_wait_all(f->jobs);
 }

@@ -8,7 +8,8 @@
  *   gi_frame_render_raster (the default):
  *   1. G-buffer            gi_stage_gbuffer_raster     (rs_render: visibility buffer)
  *                          gi_stage_gbuffer_resolve    (rs_gbuffer_resolve: attributes)
- *   2. direct light        gi_stage_direct_raytrace    (shadow rays per light; shadow maps next)
+ *   2. direct light        gi_stage_shadow_maps        (rs_shadow_render: one map or cube per light)
+ *                          gi_stage_direct_shadowmap   (16-tap PCF, Laine 2007 Sec. 6)
  *   3. compose             gi_stage_compose            (emission + direct)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):
@@ -30,6 +31,7 @@
 #include "pf_timer.h"
 #include "rs_gbuffer.h"
 #include "rs_raster.h"
+#include "rs_shadow.h"
 
 typedef enum gi_buffer_id {
     GI_BUF_DEPTH = 0, /* G-buffer planes */
@@ -56,13 +58,15 @@ typedef struct gi_frame {
     uint32_t width, height;
     /* buffers (owned, frame lifetime) */
     rs_gbuffer gbuf;
+    rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
     float *direct; /* RGB, width*height*3 */
     float *final;  /* RGB, width*height*3 */
     pf_stage_times times;
 } gi_frame;
 
+/* shadow_size: texels per side of each direct-light shadow map (0: 1024). */
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
-                        const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err);
+                        const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err);
 void gi_frame_free(gi_frame *f);
 
 /* The primary ray through the centre of pixel (x, y): dir is scaled so that
@@ -74,6 +78,8 @@ void gi_stage_gbuffer_raytrace(gi_frame *f);
 void gi_stage_gbuffer_raster(gi_frame *f);  /* visibility: triangle id + depth per pixel */
 void gi_stage_gbuffer_resolve(gi_frame *f); /* attributes from the visibility buffer */
 void gi_stage_direct_raytrace(gi_frame *f);
+void gi_stage_shadow_maps(gi_frame *f);
+void gi_stage_direct_shadowmap(gi_frame *f);
 void gi_stage_compose(gi_frame *f);
 
 /* The whole ray-traced frame: G-buffer, direct light, compose (timed). */

@@ -27,8 +27,9 @@ void pf_cli_usage(FILE *out)
           "  --light spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I\n"
           "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
           "                          lights given replace the scene's lights\n"
-          "  --raytrace              Embree primary rays for visibility (the reference\n"
-          "                          path; the only one until the rasterizer lands)\n"
+          "  --shadow-size N         direct-light shadow map resolution (default 1024)\n"
+          "  --raytrace              Embree primary rays and shadow rays (the reference\n"
+          "                          path) instead of the rasterized G-buffer and shadow maps\n"
           "  --hash                  print a 64-bit hash of the linear output\n"
           "  -q, --quiet             no timing table\n"
           "  --frames N              bench: repetitions per measurement (default 15)\n"
@@ -185,7 +186,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         const char *val = NULL;
         static const char *const with_value[] = {"-o",       "--output", "--hdr",      "--size",
                                                  "--threads", "--isa",   "--camera",   "--light",
-                                                 "--exposure", "--frames", "--scenes"};
+                                                 "--exposure", "--frames", "--scenes", "--shadow-size"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -200,6 +201,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--hdr")) o->hdr_path = val;
         else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
         else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
+        else if (!strcmp(a, "--shadow-size")) r = pf__uint(a, val, 16, 8192, &o->shadow_size, err);
         else if (!strcmp(a, "--scenes")) o->scenes_dir = val;
         else if (!strcmp(a, "--isa")) r = pf_isa_parse(val, &o->isa, err);
         else if (!strcmp(a, "--exposure")) {

@@ -26,6 +26,7 @@ typedef struct pf_options {
     const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench */
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
     uint32_t frames;        /* bench: repetitions per measurement (0: default 15) */
+    uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */
     uint32_t width, height; /* 0: default 640x480 */

@@ -1,0 +1,47 @@
+/* gi_direct: direct light from shadow maps (Laine 2007 Sec. 3 step 5's
+ * "direct illumination" with the shadow maps of Sec. 6): every light's
+ * unshadowed irradiance (gi_light) times its shadow map's 16-tap PCF
+ * visibility (rs_shadow_visibility), albedo / pi. The ray-traced
+ * counterpart is gi_stage_direct_raytrace (--raytrace), the reference these
+ * maps are tested against. One job item per row; each writes its own row. */
+#include <string.h>
+
+#include "gi_frame.h"
+#include "gi_light.h"
+
+void gi_stage_shadow_maps(gi_frame *f) { rs_shadow_set_render(f->raster, &f->shadows, NULL); }
+
+static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ctx;
+    const rs_gbuffer *g = &f->gbuf;
+    const pf_scene *s = f->scene;
+    float *out = f->direct + (size_t)y * f->width * 3;
+    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    for (uint32_t x = 0; x < f->width; x++) {
+        size_t p = (size_t)y * f->width + x;
+        if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
+        pf_vec3 pos = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
+        pf_vec3 nrm = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
+        const uint32_t *tri = &s->indices[3 * g->prim[p]];
+        pf_vec3 p0 = s->positions[tri[0]];
+        pf_vec3 ng = pf_v3_normalize(
+            pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
+        float e[3] = {0, 0, 0};
+        for (uint32_t l = 0; l < s->light_count; l++) {
+            gi_light_sample ls;
+            if (!gi_light_irradiance(&s->lights[l], pos, nrm, &ls)) continue;
+            float vis = rs_shadow_visibility(&f->shadows.maps[l], pos, ng);
+            if (vis <= 0.0f) continue;
+            e[0] += ls.irradiance.x * vis;
+            e[1] += ls.irradiance.y * vis;
+            e[2] += ls.irradiance.z * vis;
+        }
+        out[3 * x + 0] = e[0] * g->alb_r[p] * PF_INV_PI;
+        out[3 * x + 1] = e[1] * g->alb_g[p] * PF_INV_PI;
+        out[3 * x + 2] = e[2] * g->alb_b[p] * PF_INV_PI;
+    }
+}
+
+void gi_stage_direct_shadowmap(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__direct_sm_row, f, f->height, 1); }

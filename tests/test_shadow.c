@@ -1,0 +1,830 @@
+/* test_shadow: direct-light shadow maps (rs_shadow) against Embree shadow
+ * rays, and their determinism.
+ *
+ * - Agreement: on the Cornell box, the maze and Sibenik, each lit in turn by
+ *   a spot (perspective map), a point (cube map) and a directional light
+ *   (ortho map), all maps at the default 1024. Samples are the points a
+ *   frame shades: Embree primary rays (gi_camera_ray) through every pixel
+ *   of a 400x400 view from the scene's camera (Sibenik has none: one view
+ *   down the nave, one from outside), kept where the light reaches the side
+ *   the camera sees (gi_light_irradiance > 0 with the geometric normal
+ *   turned to the camera). The reference is the shadow ray gi_raytrace.c
+ *   shoots: from pf_rt_offset_origin(p, ng, wi) towards the light, stopping
+ *   just short of it. The map says lit when its visibility is 1 (single
+ *   tap) or >= 1/2 (16-tap PCF).
+ *   Required: >= 99.9% agreement on the samples farther than 3 shadow-map
+ *   texels from a ray-traced shadow boundary (BOUNDARY_TEXELS: how that is
+ *   decided, with 8 more shadow rays per sample) for both modes, and >=
+ *   98.5% on all samples. The exclusion is needed: within a few texels of
+ *   a boundary a shadow map differs from exact rays by construction (edges
+ *   snap to texel centres, PCF blurs 2 texels, thin shadows under 2 texels
+ *   fade), and on Sibenik, at 3-4 cm texels, 15-18% of the samples lie that
+ *   close to one. Every figure is printed; set SOFTGI_SHADOW_IMAGES=<dir>
+ *   for PPM images of the disagreements, SOFTGI_SHADOW_DEBUG=1 to list the
+ *   ones away from boundaries.
+ * - The maps hold what rays cast from the light through each texel centre
+ *   hit, at the same depth (the lookup's axes match the matrices).
+ * - Determinism: identical map bytes with 1 and 2 threads and on the scalar,
+ *   AVX2 and AVX-512 paths (paths the CPU lacks are skipped).
+ * - PCF gives fractional values across a shadow edge and exactly 0 or 1
+ *   farther than 3 texels from it.
+ * - Bias: every floor point a spot, a point light or a low sun reaches
+ *   (up to 83 degrees from the normal) is fully lit: no acne.
+ * - Frustum and box edges, cube face selection, bad input.
+ * - Timing of each map kind on Sibenik at 1024 with 1 and 2 threads
+ *   (printed only). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_frame.h"
+#include "gi_light.h"
+#include "pf_gltf.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
+#include "rs_raster.h"
+#include "rs_shadow.h"
+#include "test_util.h"
+
+#define CORNELL_PATH SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+#define MAZE_PATH SOFTGI_SOURCE_DIR "/scenes/maze/maze.gltf"
+#define SIBENIK_PATH SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
+
+#define VIEW 400u
+#define MIN_AGREEMENT 0.999     /* away from shadow boundaries */
+#define MIN_AGREEMENT_ALL 0.985 /* all samples (a regression guard) */
+
+/* ------------------------------------------------------------------ helpers */
+
+static uint64_t rng_next(uint64_t *s) /* splitmix64 */
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+static double rng_unit(uint64_t *s) { return (double)(rng_next(s) >> 11) * (1.0 / 9007199254740992.0); }
+
+static pf_light make_spot(pf_vec3 pos, pf_vec3 target, float inner_deg, float outer_deg)
+{
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "test spot");
+    L.type = PF_LIGHT_SPOT;
+    L.position = pos;
+    L.direction = pf_v3_normalize(pf_v3_sub(target, pos));
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 10.0f;
+    L.inner_cone = pf_radians(inner_deg);
+    L.outer_cone = pf_radians(outer_deg);
+    return L;
+}
+
+static pf_light make_point(pf_vec3 pos)
+{
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "test point");
+    L.type = PF_LIGHT_POINT;
+    L.position = pos;
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 10.0f;
+    return L;
+}
+
+static pf_light make_directional(pf_vec3 dir)
+{
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "test sun");
+    L.type = PF_LIGHT_DIRECTIONAL;
+    L.direction = pf_v3_normalize(dir);
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 3.0f;
+    return L;
+}
+
+/* A scene with its Embree scene, jobs, rasterizer context and shadow maps. */
+typedef struct world {
+    pf_scene scene;
+    pf_rt *rt;
+    pf_jobs *jobs;
+    rs_context *ctx;
+    rs_shadow_set set;
+} world;
+
+static void world_lights(world *w, const pf_light *lights, uint32_t count)
+{
+    pf_error err;
+    w->scene.light_count = 0; /* replace the file's lights */
+    for (uint32_t i = 0; i < count; i++) assert_int_equal(pf_scene_add_light(&w->scene, &lights[i], &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&w->scene, &err), PF_OK);
+}
+
+/* Embree, 2 threads, the best SIMD path, maps of `size` for every light. */
+static void world_build(world *w, uint32_t size, int with_rt)
+{
+    pf_error err;
+    pf_isa isa = pf_isa_detect();
+    w->rt = NULL;
+    if (with_rt) assert_int_equal(pf_rt_create(&w->rt, &w->scene, isa, 1, &err), PF_OK);
+    w->jobs = pf_jobs_create(2);
+    assert_non_null(w->jobs);
+    assert_int_equal(rs_context_create(&w->ctx, &w->scene, w->jobs, rs_simd_for_isa(isa), &err), PF_OK);
+    rs_shadow_desc desc = {.size = size};
+    assert_int_equal(rs_shadow_set_init(&w->set, &w->scene, &desc, &err), PF_OK);
+    rs_shadow_set_render(w->ctx, &w->set, NULL);
+}
+
+static void world_free(world *w)
+{
+    rs_shadow_set_free(&w->set);
+    rs_context_destroy(w->ctx);
+    pf_jobs_destroy(w->jobs);
+    if (w->rt) pf_rt_destroy(w->rt);
+    pf_scene_free(&w->scene);
+}
+
+static int load(world *w, const char *path)
+{
+    memset(w, 0, sizeof *w);
+    if (!tu_file_exists(path)) {
+        print_message("SKIP: %s is absent\n", path);
+        return 0;
+    }
+    pf_error err;
+    pf_gltf_options opts = {.ignore_textures = 1};
+    pf_result r = pf_gltf_load(&w->scene, path, &opts, &err);
+    if (r != PF_OK) print_error("%s\n", err.message);
+    assert_int_equal(r, PF_OK);
+    return 1;
+}
+
+/* ---------------------------------------------------------------- agreement */
+
+typedef struct sample {
+    pf_vec3 p;      /* visible point */
+    pf_vec3 ng;     /* unit geometric normal of the CCW triangle */
+    pf_vec3 n_view; /* ng turned to face the camera (the side a frame shades) */
+    uint32_t pixel;
+} sample;
+
+/* The points a frame shades: Embree primary rays through every pixel centre
+ * of a width x height image (gi_camera_ray), those that hit. */
+static sample *sample_camera(const world *w, const pf_camera *cam, uint32_t width, uint32_t height, uint32_t *count)
+{
+    const pf_scene *s = &w->scene;
+    sample *out = malloc(sizeof(sample) * width * height);
+    assert_non_null(out);
+    uint32_t n = 0;
+    for (uint32_t y = 0; y < height; y++)
+        for (uint32_t x0 = 0; x0 < width; x0 += PF_RT_WIDTH) {
+            pf_ray rays[PF_RT_WIDTH];
+            pf_hit hits[PF_RT_WIDTH];
+            uint32_t k = width - x0 < PF_RT_WIDTH ? width - x0 : PF_RT_WIDTH;
+            for (uint32_t i = 0; i < k; i++) rays[i] = gi_camera_ray(cam, width, height, x0 + i, y);
+            pf_rt_intersect(w->rt, rays, hits, k);
+            for (uint32_t i = 0; i < k; i++) {
+                if (hits[i].prim == PF_RT_MISS) continue;
+                const uint32_t *t = &s->indices[3 * hits[i].prim];
+                pf_vec3 a = s->positions[t[0]], b = s->positions[t[1]], c = s->positions[t[2]];
+                float u = hits[i].u, v = hits[i].v;
+                sample *o = &out[n++];
+                o->pixel = y * width + x0 + i;
+                o->p = pf_v3_add(pf_v3_add(pf_v3_scale(a, 1.0f - u - v), pf_v3_scale(b, u)), pf_v3_scale(c, v));
+                o->ng = pf_v3_normalize(pf_v3_cross(pf_v3_sub(b, a), pf_v3_sub(c, a)));
+                o->n_view = pf_v3_dot(o->ng, rays[i].dir) > 0.0f ? pf_v3_scale(o->ng, -1.0f) : o->ng;
+            }
+        }
+    *count = n;
+    return out;
+}
+
+/* World size of one shadow-map texel at p (across the light's rays). */
+static float texel_world(const rs_shadow_map *m, pf_vec3 p)
+{
+    if (m->kind == RS_SHADOW_ORTHO) return 2.0f * fmaxf(m->half_w, m->half_h) / (float)m->size;
+    uint32_t f = m->kind == RS_SHADOW_CUBE ? rs_shadow_cube_face(m->eye, p) : 0u;
+    return 2.0f * m->tan_half * pf_v3_dot(pf_v3_sub(p, m->eye), m->forward[f]) / (float)m->size;
+}
+
+/* The shadow ray of gi_raytrace.c from p (geometric normal ng) to the light;
+ * returns 0 when the light cannot reach (beyond a point light). */
+static int shadow_ray(const pf_light *L, pf_vec3 p, pf_vec3 ng, pf_ray *r)
+{
+    pf_vec3 wi;
+    float dist = INFINITY;
+    if (L->type == PF_LIGHT_DIRECTIONAL)
+        wi = pf_v3_scale(L->direction, -1.0f);
+    else {
+        pf_vec3 d = pf_v3_sub(L->position, p);
+        dist = pf_v3_length(d);
+        if (!(dist > 0.0f)) return 0;
+        wi = pf_v3_scale(d, 1.0f / dist);
+    }
+    r->org = pf_rt_offset_origin(p, ng, wi);
+    r->dir = wi;
+    r->tnear = 0.0f;
+    r->tfar = isinf(dist) ? INFINITY : dist * (1.0f - 1.0e-4f);
+    return 1;
+}
+
+#define NEIGHBOURS 8
+/* A sample is "near a shadow boundary" when the ray-traced answer changes
+ * within BOUNDARY_TEXELS shadow-map texels of it, measured across the
+ * light's rays (in the map's image plane): 8 more shadow rays start from p
+ * moved by that much in 8 directions perpendicular to the light direction
+ * (pushed along the light direction back onto p's tangent plane where the
+ * move went below it), and any answer differing from p's marks p. 3 texels
+ * = the 4x4 kernel's reach (2 per axis) plus the half texel by which the
+ * rasterized edge may lie off the true one, rounded up. */
+#define BOUNDARY_TEXELS 3.0f
+
+static const char *g_scene = "x";
+
+typedef struct agreement {
+    uint32_t samples, lit_rt, agree1, agree16, fractional; /* all samples */
+    uint32_t away, away_agree1, away_agree16;              /* samples away from shadow boundaries */
+} agreement;
+
+static agreement measure(const world *w, uint32_t light, const sample *smp, uint32_t n)
+{
+    const pf_light *L = &w->scene.lights[light];
+    rs_shadow_map m1 = w->set.maps[light], m16 = w->set.maps[light];
+    m1.desc.filter = RS_SHADOW_PCF1;
+    m16.desc.filter = RS_SHADOW_PCF16;
+    const uint32_t per = 1 + NEIGHBOURS;
+    pf_ray *rays = malloc(sizeof(pf_ray) * n * per);
+    uint8_t *valid = calloc((size_t)n * per, 1), *occ = malloc((size_t)n * per);
+    uint32_t *which = malloc(sizeof(uint32_t) * n);
+    assert_true(rays && valid && occ && which);
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        gi_light_sample ls;
+        if (!gi_light_irradiance(L, smp[k].p, smp[k].n_view, &ls)) continue;
+        pf_ray *r = &rays[m * per];
+        uint8_t *v = &valid[m * per];
+        v[0] = (uint8_t)shadow_ray(L, smp[k].p, smp[k].ng, &r[0]);
+        assert_true(v[0]);
+        pf_vec3 l = ls.wi, n_l = pf_v3_dot(smp[k].ng, l) < 0.0f ? pf_v3_scale(smp[k].ng, -1.0f) : smp[k].ng;
+        pf_vec3 ta, tb;
+        pf_v3_basis(l, &ta, &tb);
+        float radius = BOUNDARY_TEXELS * texel_world(&w->set.maps[light], smp[k].p);
+        for (uint32_t j = 0; j < NEIGHBOURS; j++) {
+            float ang = (float)j * (2.0f * PF_PI / NEIGHBOURS);
+            pf_vec3 e = pf_v3_add(pf_v3_scale(ta, radius * cosf(ang)), pf_v3_scale(tb, radius * sinf(ang)));
+            float below = -pf_v3_dot(e, n_l), cos_l = pf_v3_dot(l, n_l);
+            if (below > 0.0f) e = pf_v3_add(e, pf_v3_scale(l, below / cos_l));
+            pf_vec3 q = pf_v3_add(smp[k].p, e);
+            /* pushed past a point light: nothing can shadow it */
+            if (L->type != PF_LIGHT_DIRECTIONAL && pf_v3_dot(pf_v3_sub(L->position, q), l) <= 0.0f) continue;
+            v[1 + j] = (uint8_t)shadow_ray(L, q, smp[k].ng, &r[1 + j]);
+        }
+        which[m++] = k;
+    }
+    /* compact the valid rays, trace, scatter back */
+    pf_ray *packed = malloc(sizeof(pf_ray) * m * per);
+    uint8_t *pocc = malloc((size_t)m * per);
+    assert_true(packed && pocc);
+    uint32_t np = 0;
+    for (uint32_t i = 0; i < m * per; i++)
+        if (valid[i]) packed[np++] = rays[i];
+    pf_rt_occluded(w->rt, packed, pocc, np);
+    np = 0;
+    for (uint32_t i = 0; i < m * per; i++) occ[i] = valid[i] ? pocc[np++] : 0;
+    free(packed);
+    free(pocc);
+
+    agreement a;
+    memset(&a, 0, sizeof a);
+    a.samples = m;
+    unsigned char *img = getenv("SOFTGI_SHADOW_IMAGES") ? calloc((size_t)VIEW * VIEW * 3 * 3, 1) : NULL;
+    for (uint32_t i = 0; i < m; i++) {
+        const sample *s = &smp[which[i]];
+        int lit_rt = !occ[i * per];
+        int near = 0;
+        for (uint32_t j = 1; j < per; j++) near |= valid[i * per + j] && occ[i * per + j] != occ[i * per];
+        float v1 = rs_shadow_visibility(&m1, s->p, s->ng);
+        float v16 = rs_shadow_visibility(&m16, s->p, s->ng);
+        assert_true(v1 == 0.0f || v1 == 1.0f);
+        assert_true(v16 >= 0.0f && v16 <= 1.0f);
+        int ok1 = lit_rt == (v1 == 1.0f), ok16 = lit_rt == (v16 >= 0.5f);
+        a.lit_rt += (uint32_t)lit_rt;
+        a.agree1 += (uint32_t)ok1;
+        a.agree16 += (uint32_t)ok16;
+        a.fractional += (uint32_t)(v16 > 0.0f && v16 < 1.0f);
+        if (!near) {
+            a.away++;
+            a.away_agree1 += (uint32_t)ok1;
+            a.away_agree16 += (uint32_t)ok16;
+        }
+        if (img) { /* grey: lit, dark: shadow, blue: near a boundary, red: leak, yellow: false shadow */
+            unsigned char *px = img + 3 * s->pixel;
+            unsigned char g = lit_rt ? 120 : 30;
+            px[0] = !ok16 ? 255 : g;
+            px[1] = !ok16 ? (lit_rt ? 255 : 0) : g;
+            px[2] = !ok16 ? 0 : (near ? 200 : g);
+        }
+        if (getenv("SOFTGI_SHADOW_DEBUG") && !near && (!ok1 || !ok16)) {
+            float c = fabsf(pf_v3_dot(s->ng, rays[i * per].dir));
+            print_message("  disagree%s%s: ray %s cos %.4f p (%.4f %.4f %.4f) ng (%.3f %.3f %.3f) 1-tap %g PCF %g\n",
+                          ok1 ? "" : " 1-tap", ok16 ? "" : " PCF", lit_rt ? "lit" : "shadow", c, s->p.x, s->p.y,
+                          s->p.z, s->ng.x, s->ng.y, s->ng.z, v1, v16);
+        }
+    }
+    if (img) {
+        char name[256];
+        snprintf(name, sizeof name, "%s/shadow_%s_%u.ppm", getenv("SOFTGI_SHADOW_IMAGES"), g_scene, light);
+        FILE *f = fopen(name, "wb");
+        if (f) {
+            fprintf(f, "P6 %u %u 255\n", VIEW, 3 * VIEW);
+            fwrite(img, 1, (size_t)VIEW * VIEW * 3 * 3, f);
+            fclose(f);
+        }
+        free(img);
+    }
+    free(rays);
+    free(valid);
+    free(occ);
+    free(which);
+    return a;
+}
+
+typedef struct view {
+    pf_vec3 eye, target;
+} view;
+
+/* Renders the maps of the three lights (spot, point, directional) at the
+ * default 1024 and checks each against the rays at the points seen in
+ * VIEW x VIEW images from the scene's camera, if it has one, and from each
+ * of `views` (60-degree cameras from eye to target). */
+
+static void check_scene(const char *path, const pf_light lights[3], const view *views, uint32_t view_count)
+{
+    static const char *const kind_name[] = {"perspective", "cube", "ortho"};
+    static const rs_shadow_kind want_kind[3] = {RS_SHADOW_SPOT, RS_SHADOW_CUBE, RS_SHADOW_ORTHO};
+    world w;
+    if (!load(&w, path)) return;
+    world_lights(&w, lights, 3);
+    world_build(&w, 0, 1);
+    /* the scene's camera, then the given views, one after another */
+    sample *smp = malloc(sizeof(sample) * VIEW * VIEW * (1 + view_count));
+    assert_non_null(smp);
+    uint32_t n = 0, panel = 0;
+    for (uint32_t v = 0; v < 1 + view_count; v++) {
+        pf_camera cam;
+        if (v == 0 && w.scene.camera_count == 0) continue;
+        assert_true(panel < 3); /* the debug images hold 3 views */
+        if (v == 0)
+            cam = w.scene.cameras[0];
+        else {
+            pf_error err;
+            assert_int_equal(pf_camera_look_at(&cam, views[v - 1].eye, views[v - 1].target, pf_radians(60.0f), &err),
+                             PF_OK);
+        }
+        uint32_t k;
+        sample *part = sample_camera(&w, &cam, VIEW, VIEW, &k);
+        for (uint32_t i = 0; i < k; i++) part[i].pixel += panel * VIEW * VIEW;
+        panel++;
+        memcpy(smp + n, part, sizeof(sample) * k);
+        n += k;
+        free(part);
+    }
+    const char *name = strrchr(path, '/') + 1;
+    g_scene = name;
+    for (uint32_t l = 0; l < 3; l++) {
+        assert_int_equal(w.set.maps[l].kind, want_kind[l]);
+        assert_int_equal(w.set.maps[l].size, RS_SHADOW_DEFAULT_SIZE);
+        agreement a = measure(&w, l, smp, n);
+        double p1 = (double)a.agree1 / a.samples, p16 = (double)a.agree16 / a.samples;
+        double q1 = (double)a.away_agree1 / a.away, q16 = (double)a.away_agree16 / a.away;
+        print_message("%s %s: %u samples (%.1f%% lit): 1-tap %.3f%%, PCF %.3f%% (%u fractional); "
+                      "%.2f%% near a boundary, away from them: 1-tap %.3f%%, PCF %.3f%%\n",
+                      name, kind_name[l], a.samples, 100.0 * a.lit_rt / a.samples, 100.0 * p1, 100.0 * p16,
+                      a.fractional, 100.0 * (a.samples - a.away) / a.samples, 100.0 * q1, 100.0 * q16);
+        /* enough samples in light and in shadow for the figure to mean something */
+        assert_true(a.samples >= VIEW * VIEW / 20);
+        assert_true(a.lit_rt >= a.samples / 20 && a.lit_rt <= a.samples - a.samples / 20);
+        assert_true(a.away >= a.samples / 2);
+        assert_true(q1 >= MIN_AGREEMENT);
+        assert_true(q16 >= MIN_AGREEMENT);
+        assert_true(p1 >= MIN_AGREEMENT_ALL);
+        assert_true(p16 >= MIN_AGREEMENT_ALL);
+    }
+    free(smp);
+    world_free(&w);
+}
+
+static void test_agreement_cornell(void **state)
+{
+    (void)state;
+    const pf_light lights[3] = {
+        make_spot(pf_v3(0.45f, 0.5f, 0.1f), pf_v3(0.25f, 0.0f, 0.35f), 30.0f, 40.0f),
+        make_point(pf_v3(0.278f, 0.5388f, 0.2795f)), /* the scene's own light */
+        make_directional(pf_v3(-0.3f, -0.6f, 1.0f)), /* in through the open front */
+    };
+    check_scene(CORNELL_PATH, lights, NULL, 0);
+}
+
+static void test_agreement_maze(void **state)
+{
+    (void)state;
+    const pf_light lights[3] = {
+        make_spot(pf_v3(3.0f, 4.0f, -3.0f), pf_v3(0.0f, 0.0f, 0.5f), 25.0f, 35.0f),
+        make_point(pf_v3(0.5f, 4.0f, 0.5f)), /* the scene's own light */
+        make_directional(pf_v3(0.35f, -1.0f, 0.2f)),
+    };
+    check_scene(MAZE_PATH, lights, NULL, 0);
+}
+
+static void test_agreement_sibenik(void **state)
+{
+    (void)state;
+    const pf_light lights[3] = {
+        make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
+        make_point(pf_v3(-2.0f, -6.0f, 0.5f)), /* in the nave, among the columns */
+        make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
+    };
+    /* Sibenik has no camera: one down the nave, one from outside (the sun
+     * reaches nothing inside). */
+    const view views[2] = {{{-17.0f, -12.0f, 0.0f}, {10.0f, -10.0f, 0.0f}},
+                           {{-32.0f, 12.0f, 30.0f}, {0.0f, -6.0f, 0.0f}}};
+    check_scene(SIBENIK_PATH, lights, views, 2);
+}
+
+/* ------------------------------------------------------------- determinism */
+
+static int isa_has(pf_isa want)
+{
+    pf_isa best = pf_isa_detect();
+    return best >= want;
+}
+
+static void render_all(pf_scene *scene, uint32_t threads, rs_simd simd, uint32_t size, float **out, size_t *bytes)
+{
+    pf_error err;
+    pf_jobs *jobs = pf_jobs_create(threads);
+    rs_context *ctx;
+    assert_int_equal(rs_context_create(&ctx, scene, jobs, simd, &err), PF_OK);
+    rs_shadow_set set;
+    rs_shadow_desc desc = {.size = size};
+    assert_int_equal(rs_shadow_set_init(&set, scene, &desc, &err), PF_OK);
+    *bytes = 0;
+    for (uint32_t l = 0; l < set.count; l++)
+        *bytes += sizeof(float) * set.maps[l].face_count * set.maps[l].size * set.maps[l].size;
+    *out = malloc(*bytes);
+    assert_non_null(*out);
+    size_t off = 0;
+    for (uint32_t l = 0; l < set.count; l++) {
+        rs_shadow_render(ctx, &set.maps[l], 1, NULL);
+        size_t b = sizeof(float) * set.maps[l].face_count * set.maps[l].size * set.maps[l].size;
+        memcpy((char *)*out + off, set.maps[l].depth, b);
+        off += b;
+    }
+    rs_shadow_set_free(&set);
+    rs_context_destroy(ctx);
+    pf_jobs_destroy(jobs);
+}
+
+static void test_deterministic(void **state)
+{
+    (void)state;
+    world w;
+    const char *path = SIBENIK_PATH;
+    if (!tu_file_exists(path)) path = MAZE_PATH;
+    assert_int_equal(load(&w, path), 1);
+    const pf_light lights[3] = {
+        make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
+        make_point(pf_v3(-2.0f, -6.0f, 0.5f)),
+        make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
+    };
+    world_lights(&w, lights, 3);
+    const uint32_t size = 512;
+    float *ref;
+    size_t ref_bytes;
+    render_all(&w.scene, 1, RS_SIMD_SCALAR, size, &ref, &ref_bytes);
+    /* not trivially empty */
+    size_t drawn = 0;
+    for (size_t i = 0; i < ref_bytes / sizeof(float); i++) drawn += ref[i] > 0.0f;
+    assert_true(drawn > ref_bytes / sizeof(float) / 4);
+    /* 1 vs 2 threads on the scalar path, then each SIMD path against it */
+    const struct {
+        uint32_t threads;
+        rs_simd simd;
+        pf_isa needs;
+    } runs[] = {{2, RS_SIMD_SCALAR, PF_ISA_SSE2}, {2, RS_SIMD_AVX2, PF_ISA_AVX2}, {2, RS_SIMD_AVX512, PF_ISA_AVX512}};
+    for (size_t r = 0; r < sizeof runs / sizeof runs[0]; r++) {
+        if (!isa_has(runs[r].needs)) {
+            print_message("SKIP: %s path (the CPU lacks %s)\n", rs_simd_name(runs[r].simd), pf_isa_name(runs[r].needs));
+            continue;
+        }
+        float *got;
+        size_t bytes;
+        render_all(&w.scene, runs[r].threads, runs[r].simd, size, &got, &bytes);
+        assert_int_equal(bytes, ref_bytes);
+        if (memcmp(got, ref, bytes) != 0)
+            fail_msg("%u threads, %s: shadow map bytes differ from 1 thread scalar", runs[r].threads,
+                     rs_simd_name(runs[r].simd));
+        free(got);
+    }
+    free(ref);
+    world_free(&w);
+}
+
+/* ----------------------------------------------------- maps vs ray casting */
+
+/* Every texel of every face, ray-cast from the light through the texel's
+ * centre with Embree: the rasterized map must hold a surface exactly where
+ * the ray hits one, at the ray's depth. This checks that the axes, fov and
+ * box the lookup uses (right/up/forward, tan_half, half_w/half_h, znear,
+ * zfar) describe the matrices the maps were rendered with. Texel centres on
+ * a silhouette may go either way (the rasterizer snaps vertices to 1/256
+ * pixel, Embree does not), so a few mismatches are allowed: 1 in 2000
+ * (measured: at most 3 in 65536). */
+static void test_map_matches_rays(void **state)
+{
+    (void)state;
+    world w;
+    assert_int_equal(load(&w, MAZE_PATH), 1);
+    const pf_light lights[3] = {
+        make_spot(pf_v3(3.0f, 4.0f, -3.0f), pf_v3(0.0f, 0.0f, 0.5f), 25.0f, 35.0f),
+        make_point(pf_v3(0.5f, 1.0f, 0.5f)), /* below the wall tops: walls on every side face */
+        make_directional(pf_v3(0.35f, -1.0f, 0.2f)),
+    };
+    world_lights(&w, lights, 3);
+    world_build(&w, 256, 1);
+    for (uint32_t l = 0; l < 3; l++) {
+        const rs_shadow_map *m = &w.set.maps[l];
+        uint32_t texels = 0, coverage_bad = 0, hits = 0, depth_bad = 0;
+        for (uint32_t f = 0; f < m->face_count; f++) {
+            const float *plane = rs_shadow_map_face(m, f);
+            for (uint32_t y = 0; y < m->size; y++)
+                for (uint32_t x = 0; x < m->size; x++) {
+                    float nx = 2.0f * ((float)x + 0.5f) / (float)m->size - 1.0f;
+                    float ny = 1.0f - 2.0f * ((float)y + 0.5f) / (float)m->size;
+                    pf_ray r;
+                    if (m->kind == RS_SHADOW_ORTHO) { /* parallel rays over the box, t = depth */
+                        r.org = pf_v3_add(m->eye, pf_v3_add(pf_v3_scale(m->right[0], nx * m->half_w),
+                                                            pf_v3_scale(m->up[0], ny * m->half_h)));
+                        r.dir = m->forward[0];
+                        r.tnear = m->znear;
+                        r.tfar = m->zfar;
+                    } else { /* |dir . forward| = 1, so t = depth along the face axis */
+                        pf_vec3 side = pf_v3_add(pf_v3_scale(m->right[f], nx * m->tan_half),
+                                                 pf_v3_scale(m->up[f], ny * m->tan_half));
+                        r.org = m->eye;
+                        r.dir = pf_v3_add(m->forward[f], side);
+                        r.tnear = m->znear;
+                        r.tfar = INFINITY;
+                    }
+                    pf_hit h = pf_rt_intersect1(w.rt, r);
+                    float zs = plane[(size_t)y * m->size + x];
+                    texels++;
+                    if ((h.prim != PF_RT_MISS) != (zs > 0.0f)) {
+                        coverage_bad++;
+                        continue;
+                    }
+                    if (h.prim == PF_RT_MISS) continue;
+                    hits++;
+                    double d = m->kind == RS_SHADOW_ORTHO ? m->znear + (1.0 - zs) * (m->zfar - m->znear)
+                                                          : m->znear / zs;
+                    depth_bad += fabs(d - h.t) > 1e-3 * h.t;
+                }
+        }
+        print_message("light %u: %u texels, %u hit, coverage differs at %u, depth differs by > 0.1%% at %u\n", l,
+                      texels, hits, coverage_bad, depth_bad);
+        assert_true(hits > texels / 4);
+        assert_true(coverage_bad <= texels / 2000);
+        assert_true(depth_bad <= texels / 2000);
+    }
+    world_free(&w);
+}
+
+/* ---------------------------------------------------------- PCF and bias */
+
+/* Texel coordinates of p in a single-face map. */
+static void texel_of(const rs_shadow_map *m, pf_vec3 p, float *fx, float *fy)
+{
+    float c[4];
+    rs_mat4_transform(&m->view_proj[0], p, c);
+    *fx = (0.5f * c[0] / c[3] + 0.5f) * (float)m->size;
+    *fy = (0.5f - 0.5f * c[1] / c[3]) * (float)m->size;
+}
+
+/* A floor (y = 0) and a blocker (x <= 0 at y = 1) under a directional light
+ * straight down (shadow edge: x = 0) and a spot at (2, 3, 0.3) (edge: x =
+ * 2 - 2 * 3 / (3 - 1) = -1). Walking across the edge in steps of 1/100
+ * texel, PCF must give fractional values near it and exactly 0 (shadow
+ * side) or 1 (lit side) farther from it than 3 texels in the map: the 4x4
+ * kernel reaches 2 texels, the rasterized edge lies within half a texel of
+ * the true one. */
+static void test_pcf_edge(void **state)
+{
+    (void)state;
+    world w;
+    memset(&w, 0, sizeof w);
+    tu_quad quads[2] = {
+        {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+        {{-5, 1, 0}, {5, 0, 0}, {0, 0, -10}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+    };
+    tu_make_scene(&w.scene, quads, 2);
+    const pf_light lights[2] = {make_directional(pf_v3(0, -1, 0)),
+                                make_spot(pf_v3(2.0f, 3.0f, 0.3f), pf_v3(0, 0, 0), 30.0f, 45.0f)};
+    world_lights(&w, lights, 2);
+    world_build(&w, 256, 0);
+    for (uint32_t l = 0; l < 2; l++) {
+        const rs_shadow_map *m = &w.set.maps[l];
+        float edge = l == 0 ? 0.0f : -1.0f;
+        float ex, ey, fx, fy;
+        texel_of(m, pf_v3(edge, 0, 0.3f), &ex, &ey);
+        texel_of(m, pf_v3(edge + 0.01f, 0, 0.3f), &fx, &fy);
+        float step = 0.01f * 0.01f / hypotf(fx - ex, fy - ey); /* world x per 1/100 texel */
+        int fractional = 0, far = 0;
+        for (int k = -600; k <= 600; k++) {
+            pf_vec3 p = pf_v3(edge + (float)k * step, 0, 0.3f);
+            float v = rs_shadow_visibility(m, p, pf_v3(0, 1, 0));
+            if (v > 0.0f && v < 1.0f) fractional++;
+            texel_of(m, p, &fx, &fy);
+            if (hypotf(fx - ex, fy - ey) > 3.0f) {
+                far++;
+                if (p.x < edge) assert_true(v == 0.0f);
+                else assert_true(v == 1.0f);
+            }
+        }
+        print_message("light %u: %d of 1201 positions across the edge fractional, %d beyond 3 texels\n", l,
+                      fractional, far);
+        assert_true(fractional > 200);
+        assert_true(far > 400);
+    }
+    world_free(&w);
+}
+
+/* A lit floor (8 x 8 m sampled) under a wide spot (outer cone 55 degrees,
+ * 1.2 m up), a point light 0.7 m up (light arriving at up to 84 degrees from
+ * the normal) and a low sun (75 degrees from the normal): every floor point
+ * the light reaches is fully lit, with PCF and with one tap. */
+static void test_no_acne(void **state)
+{
+    (void)state;
+    world w;
+    memset(&w, 0, sizeof w);
+    tu_quad floor = {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f};
+    tu_make_scene(&w.scene, &floor, 1);
+    const pf_light lights[3] = {make_spot(pf_v3(0.3f, 1.2f, -0.2f), pf_v3(0.4f, 0.0f, -0.1f), 40.0f, 55.0f),
+                                make_point(pf_v3(-0.5f, 0.7f, 0.4f)),
+                                make_directional(pf_v3(cosf(pf_radians(15.0f)), -sinf(pf_radians(15.0f)), 0.2f))};
+    world_lights(&w, lights, 3);
+    world_build(&w, 0, 0);
+    uint64_t seed = 42;
+    for (uint32_t l = 0; l < 3; l++) {
+        uint32_t tested = 0;
+        for (int k = 0; k < 20000; k++) {
+            pf_vec3 p = pf_v3((float)(rng_unit(&seed) * 8.0 - 4.0), 0.0f, (float)(rng_unit(&seed) * 8.0 - 4.0));
+            gi_light_sample ls;
+            if (!gi_light_irradiance(&w.scene.lights[l], p, pf_v3(0, 1, 0), &ls)) continue;
+            rs_shadow_map m = w.set.maps[l];
+            float v16 = rs_shadow_visibility(&m, p, pf_v3(0, 1, 0));
+            m.desc.filter = RS_SHADOW_PCF1;
+            float v1 = rs_shadow_visibility(&m, p, pf_v3(0, 1, 0));
+            if (v16 != 1.0f || v1 != 1.0f)
+                fail_msg("light %u: floor point (%g, 0, %g) self-shadowed: PCF %g, 1 tap %g", l, p.x, p.z, v16, v1);
+            tested++;
+        }
+        assert_true(tested > 1000);
+    }
+    world_free(&w);
+}
+
+/* Points outside a spot's frustum are unlit; outside the ortho box lit. */
+static void test_outside(void **state)
+{
+    (void)state;
+    world w;
+    memset(&w, 0, sizeof w);
+    tu_quad floor = {{0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f};
+    tu_make_scene(&w.scene, &floor, 1);
+    const pf_light lights[2] = {make_spot(pf_v3(0, 1, 0), pf_v3(0, 0, 0), 10.0f, 20.0f),
+                                make_directional(pf_v3(0, -1, 0))};
+    world_lights(&w, lights, 2);
+    world_build(&w, 64, 0);
+    assert_true(rs_shadow_visibility(&w.set.maps[0], pf_v3(0, 0, 0), pf_v3(0, 1, 0)) == 1.0f);
+    assert_true(rs_shadow_visibility(&w.set.maps[0], pf_v3(0.9f, 0, 0), pf_v3(0, 1, 0)) == 0.0f); /* 42 deg */
+    assert_true(rs_shadow_visibility(&w.set.maps[0], pf_v3(0, 2, 0), pf_v3(0, 1, 0)) == 0.0f);    /* behind */
+    assert_true(rs_shadow_visibility(&w.set.maps[1], pf_v3(0.5f, 0, 0.5f), pf_v3(0, 1, 0)) == 1.0f);
+    assert_true(rs_shadow_visibility(&w.set.maps[1], pf_v3(5, 0, 0), pf_v3(0, 1, 0)) == 1.0f);
+    assert_true(rs_shadow_visibility(&w.set.maps[1], pf_v3(0, -3, 0), pf_v3(0, 1, 0)) == 1.0f);
+    /* a wide spot (outer cone over 60 degrees) gets a cube map */
+    pf_light wide = make_spot(pf_v3(0, 1, 0), pf_v3(0, 0, 0), 50.0f, 80.0f);
+    rs_shadow_map m;
+    pf_error err;
+    w.scene.lights[0] = wide;
+    assert_int_equal(rs_shadow_map_init(&m, &w.scene, 0, NULL, &err), PF_OK);
+    assert_int_equal(m.kind, RS_SHADOW_CUBE);
+    assert_int_equal(m.face_count, 6);
+    assert_int_equal(m.size, RS_SHADOW_DEFAULT_SIZE);
+    rs_shadow_map_free(&m);
+    world_free(&w);
+}
+
+static void test_cube_faces(void **state)
+{
+    (void)state;
+    pf_vec3 e = pf_v3(1, 2, 3);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(5, 2, 3)), 0);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(-5, 2, 3)), 1);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(1, 9, 3)), 2);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(1, -9, 3)), 3);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(1, 2, 9)), 4);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(1, 2, -9)), 5);
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(2, 3, 3)), 0); /* tie x = y: x */
+    assert_int_equal(rs_shadow_cube_face(e, pf_v3(1, 1, 4)), 3); /* tie y = z: y */
+}
+
+static void test_bad_input(void **state)
+{
+    (void)state;
+    pf_scene s;
+    tu_quad floor = {{0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f};
+    tu_make_scene(&s, &floor, 1);
+    pf_light L = make_point(pf_v3(0, 1, 0));
+    pf_error err;
+    assert_int_equal(pf_scene_add_light(&s, &L, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    rs_shadow_map m;
+    assert_int_equal(rs_shadow_map_init(&m, &s, 1, NULL, &err), PF_ERR_ARGUMENT);
+    rs_shadow_map_free(&m);
+    rs_shadow_desc tiny = {.size = 8}, huge = {.size = RS_MAX_SIZE + 1};
+    assert_int_equal(rs_shadow_map_init(&m, &s, 0, &tiny, &err), PF_ERR_ARGUMENT);
+    rs_shadow_map_free(&m);
+    assert_int_equal(rs_shadow_map_init(&m, &s, 0, &huge, &err), PF_ERR_ARGUMENT);
+    rs_shadow_map_free(&m);
+    s.lights[0].type = PF_LIGHT_DIRECTIONAL;
+    s.lights[0].direction = pf_v3(0, 0, 0);
+    assert_int_equal(rs_shadow_map_init(&m, &s, 0, NULL, &err), PF_ERR_ARGUMENT);
+    rs_shadow_map_free(&m);
+    pf_scene_free(&s);
+}
+
+/* Render times of each map kind on Sibenik at 1024, 1 and 2 threads, best
+ * of 5, printed, not asserted (skipped in debug builds, whose times mean
+ * nothing and which must stay fast under the sanitizers). */
+static void test_timing(void **state)
+{
+    (void)state;
+#ifndef NDEBUG
+    print_message("SKIP: timing in a debug build\n");
+    return;
+#endif
+    world w;
+    if (!load(&w, SIBENIK_PATH)) return;
+    const pf_light lights[3] = {
+        make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
+        make_point(pf_v3(-2.0f, -6.0f, 0.5f)),
+        make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
+    };
+    world_lights(&w, lights, 3);
+    const int reps = 5;
+    rs_simd simd = rs_simd_for_isa(pf_isa_detect());
+    pf_error err;
+    rs_shadow_set set;
+    assert_int_equal(rs_shadow_set_init(&set, &w.scene, NULL, &err), PF_OK);
+    for (uint32_t threads = 1; threads <= 2; threads++) {
+        pf_jobs *jobs = pf_jobs_create(threads);
+        rs_context *ctx;
+        assert_int_equal(rs_context_create(&ctx, &w.scene, jobs, simd, &err), PF_OK);
+        double best[3] = {INFINITY, INFINITY, INFINITY};
+        for (int r = 0; r < reps; r++)
+            for (uint32_t l = 0; l < 3; l++) {
+                double t0 = pf_time_now();
+                rs_shadow_render(ctx, &set.maps[l], 1, NULL);
+                best[l] = fmin(best[l], 1000.0 * (pf_time_now() - t0));
+            }
+        print_message("sibenik 1024, %u thread(s), %s: spot %.1f ms, cube (6 faces) %.1f ms, ortho %.1f ms\n",
+                      threads, rs_simd_name(simd), best[0], best[1], best[2]);
+        rs_context_destroy(ctx);
+        pf_jobs_destroy(jobs);
+    }
+    rs_shadow_set_free(&set);
+    world_free(&w);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cube_faces),        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_outside),           cmocka_unit_test(test_no_acne),
+        cmocka_unit_test(test_pcf_edge),          cmocka_unit_test(test_map_matches_rays),
+        cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_agreement_cornell), cmocka_unit_test(test_agreement_maze),
+        cmocka_unit_test(test_agreement_sibenik), cmocka_unit_test(test_timing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -44,6 +44,7 @@ typedef struct rs__tri {
     int32_t x0, y0, x1, y1;    /* pixel bounding box, inclusive */
     uint32_t prim;
     uint32_t masked; /* alphaMode MASK: per-pixel alpha test (scalar, all paths) */
+    uint32_t small;  /* edge functions vary by < 2^29 over an 8x8 block: 32-bit lanes are exact */
     /* masked only: 1/w, b1/w, b2/w planes (b = barycentrics of the scene
      * triangle), so b1 = (b1/w) / (1/w) is perspective-correct */
     float iw0, diwdx, diwdy, u0, dudx, dudy, v0, dvdx, dvdy;
@@ -76,6 +77,12 @@ struct rs_context {
     const pf_scene *scene;
     pf_jobs *jobs;
     rs_simd simd;
+    /* Positions welded by exact value: scenes with flat normals store three
+     * vertices per triangle, but the vertex stage only needs each distinct
+     * position once (the conference room: 994K vertices, 194K positions). */
+    uint32_t weld_count;
+    pf_vec3 *weld_pos;
+    uint32_t *weld_idx; /* 3 per triangle, into weld_pos */
     uint32_t cluster_count, chunk_count;
     rs__cluster *clusters;
     rs_scratch *scratch; /* for rs_render */
@@ -176,7 +183,7 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
 {
     rs_scratch *s = calloc(1, sizeof *s);
     if (!s) return NULL;
-    s->clip = malloc(sizeof(float) * 4 * ((size_t)ctx->scene->vertex_count + 1));
+    s->clip = malloc(sizeof(float) * 4 * ((size_t)ctx->weld_count + 1));
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
     s->chunk_count = ctx->chunk_count;
     s->chunks = calloc(ctx->chunk_count ? ctx->chunk_count : 1, sizeof *s->chunks);
@@ -198,6 +205,49 @@ void rs_scratch_destroy(rs_scratch *s)
     free(s);
 }
 
+/* Welds the scene's positions by exact bit pattern with an open-addressing
+ * hash; ids are assigned in order of first use, so the result is fixed. */
+static int rs__weld(rs_context *ctx)
+{
+    const pf_scene *sc = ctx->scene;
+    uint32_t n = sc->vertex_count, cap = 16;
+    while (cap < 2 * n) cap *= 2;
+    uint32_t *table = malloc(sizeof(uint32_t) * cap), *remap = malloc(sizeof(uint32_t) * (n ? n : 1));
+    ctx->weld_pos = malloc(sizeof(pf_vec3) * ((size_t)n + 1));
+    ctx->weld_idx = malloc(sizeof(uint32_t) * 3 * ((size_t)sc->tri_count + 1));
+    if (!table || !remap || !ctx->weld_pos || !ctx->weld_idx) {
+        free(table);
+        free(remap);
+        return 0;
+    }
+    memset(table, 0xff, sizeof(uint32_t) * cap);
+    uint32_t count = 0;
+    for (uint32_t v = 0; v < n; v++) {
+        uint32_t b[3];
+        memcpy(b, &sc->positions[v], sizeof b);
+        uint32_t h = (b[0] * 0x9e3779b1u) ^ (b[1] * 0x85ebca77u) ^ (b[2] * 0xc2b2ae3du);
+        h ^= h >> 15;
+        for (uint32_t slot = h & (cap - 1);; slot = (slot + 1) & (cap - 1)) {
+            uint32_t id = table[slot];
+            if (id == 0xffffffffu) {
+                table[slot] = count;
+                ctx->weld_pos[count] = sc->positions[v];
+                remap[v] = count++;
+                break;
+            }
+            if (memcmp(&ctx->weld_pos[id], &sc->positions[v], sizeof(pf_vec3)) == 0) {
+                remap[v] = id;
+                break;
+            }
+        }
+    }
+    for (size_t i = 0; i < 3 * (size_t)sc->tri_count; i++) ctx->weld_idx[i] = remap[sc->indices[i]];
+    ctx->weld_count = count;
+    free(table);
+    free(remap);
+    return 1;
+}
+
 pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err)
 {
     *out = NULL;
@@ -209,7 +259,7 @@ pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jo
     ctx->cluster_count = (scene->tri_count + RS_CLUSTER - 1) / RS_CLUSTER;
     ctx->chunk_count = (scene->tri_count + RS_CHUNK - 1) / RS_CHUNK;
     ctx->clusters = calloc(ctx->cluster_count ? ctx->cluster_count : 1, sizeof *ctx->clusters);
-    if (!ctx->clusters) goto oom;
+    if (!ctx->clusters || !rs__weld(ctx)) goto oom;
     for (uint32_t c = 0; c < ctx->cluster_count; c++) {
         pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
         uint32_t t1 = (c + 1) * RS_CLUSTER < scene->tri_count ? (c + 1) * RS_CLUSTER : scene->tri_count;
@@ -236,6 +286,8 @@ void rs_context_destroy(rs_context *ctx)
     if (!ctx) return;
     rs_scratch_destroy(ctx->scratch);
     free(ctx->clusters);
+    free(ctx->weld_pos);
+    free(ctx->weld_idx);
     free(ctx);
 }
 
@@ -264,9 +316,9 @@ static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
 {
     (void)worker;
     rs__pass_state *st = p;
-    uint32_t n = st->ctx->scene->vertex_count;
+    uint32_t n = st->ctx->weld_count;
     uint32_t v0 = item * RS_VCHUNK, v1 = v0 + RS_VCHUNK < n ? v0 + RS_VCHUNK : n;
-    rs__transform(&st->pass->view_proj, st->ctx->scene->positions, st->s->clip, v0, v1);
+    rs__transform(&st->pass->view_proj, st->ctx->weld_pos, st->s->clip, v0, v1);
 }
 
 /* ------------------------------------------------------- 2. cluster culling */
@@ -354,6 +406,14 @@ static int rs__grow(void **p, uint32_t *cap, uint32_t need, size_t elem)
     return 1;
 }
 
+/* floorf without the libm call: exact for |x| < 2^62 (the guard band keeps
+ * snapped coordinates below 2^24). */
+static int64_t rs__floor64(float x)
+{
+    int64_t i = (int64_t)x;
+    return i - ((float)i > x);
+}
+
 /* Sets up one (clipped) screen triangle and bins it. */
 static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim)
 {
@@ -367,8 +427,8 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         float sx = (v[k].x * iw * 0.5f + 0.5f) * W, sy = (0.5f - v[k].y * iw * 0.5f) * H;
         DX[k] = ((double)v[k].x / v[k].w * 0.5 + 0.5) * W;
         DY[k] = (0.5 - (double)v[k].y / v[k].w * 0.5) * H;
-        X[k] = (int64_t)floorf(sx * (float)RS_SUB + 0.5f);
-        Y[k] = (int64_t)floorf(sy * (float)RS_SUB + 0.5f);
+        X[k] = rs__floor64(sx * (float)RS_SUB + 0.5f);
+        Y[k] = rs__floor64(sy * (float)RS_SUB + 0.5f);
         Z[k] = v[k].z * iw;
         IW[k] = iw;
         U[k] = v[k].u * iw;
@@ -415,6 +475,9 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
          * going +x (A == 0, B > 0), a left edge goes up (A > 0). Pixels exactly
          * on other edges are excluded: test E - 1 >= 0 there. */
         int top_left = (A == 0 && B > 0) || A > 0;
+        int64_t reach = ((A < 0 ? -A : A) + (B < 0 ? -B : B)) * RS_SUB * (RS_BLOCK - 1);
+        if (k == 0) r->small = 1;
+        if (reach >= ((int64_t)1 << 29)) r->small = 0;
         r->a[k] = A;
         r->b[k] = B;
         r->c[k] = C - (top_left ? 0 : 1);
@@ -496,7 +559,7 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     for (uint32_t t = t0; t < t1; t++) {
         if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
         ch->stats.triangles_in++;
-        const uint32_t *idx = &sc->indices[3 * t];
+        const uint32_t *idx = &st->ctx->weld_idx[3 * t];
         rs__cv v[3];
         for (int k = 0; k < 3; k++) {
             const float *c = clip + 4 * (size_t)idx[k];
@@ -683,6 +746,147 @@ rs__row_avx512(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t
 }
 #endif
 
+/* ------------------------------------------------------- block kernels
+ * One 8-pixel-wide block, rows y0..y1, of one triangle. For "small"
+ * triangles (edge functions vary by less than 2^29 over a block) the SIMD
+ * paths use 32-bit lanes, 16 wide on AVX-512 (two rows at once) and 8 wide
+ * on AVX2: the int64 value at the block's first pixel is clamped to 2^30
+ * (an edge that positive stays positive over the whole block; a value below
+ * -2^30 cannot occur, such a block was rejected before), so every lane holds
+ * the exact sign. Depth per pixel is zrow(y) + dzdx * i in every path, so
+ * the bits equal the scalar path's. */
+typedef int (*rs__block_fn)(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
+                            unsigned lanes, float *depth, uint32_t *prim, size_t stride);
+
+static int rs__block_scalar(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
+                            unsigned lanes, float *depth, uint32_t *prim, size_t stride)
+{
+    int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
+    for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+    int wrote = 0;
+    for (int32_t y = y0; y <= y1; y++) {
+        size_t o = (size_t)(y - y0) * stride;
+        wrote |= rs__row_scalar(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
+        for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+    }
+    return wrote;
+}
+
+#ifdef RS_HAVE_X86
+static int32_t rs__clamp32(int64_t v) { return v > ((int64_t)1 << 30) ? (int32_t)1 << 30 : (int32_t)v; }
+
+__attribute__((target("avx2"))) static int rs__block_avx2(const rs__tri *t, int32_t x, int32_t y0, int32_t y1,
+                                                          const int64_t e_in[3], unsigned lanes, float *depth,
+                                                          uint32_t *prim, size_t stride)
+{
+    int wrote = 0;
+    if (!t->small) {
+        int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
+        for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+        for (int32_t y = y0; y <= y1; y++) {
+            size_t o = (size_t)(y - y0) * stride;
+            wrote |= rs__row_avx2(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
+            for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+        }
+        return wrote;
+    }
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    __m256i ev[3], sy[3];
+    for (int k = 0; k < 3; k++) {
+        ev[k] = _mm256_add_epi32(_mm256_set1_epi32(rs__clamp32(e_in[k])),
+                                 _mm256_mullo_epi32(lane, _mm256_set1_epi32((int32_t)(t->a[k] * RS_SUB))));
+        sy[k] = _mm256_set1_epi32((int32_t)(t->b[k] * RS_SUB));
+    }
+    const __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    for (int32_t y = y0; y <= y1; y++) {
+        __m256i any = _mm256_or_si256(_mm256_or_si256(ev[0], ev[1]), ev[2]);
+        unsigned cov = ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(any)) & lanes;
+        for (int k = 0; k < 3; k++) ev[k] = _mm256_add_epi32(ev[k], sy[k]);
+        if (!cov) continue;
+        float *d = depth + (size_t)(y - y0) * stride;
+        __m256 z = _mm256_add_ps(_mm256_set1_ps(rs__zrow(t, x, y)), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
+        z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
+        __m256i cm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)cov), bits), bits);
+        __m256 old = _mm256_maskload_ps(d, cm);
+        unsigned pass = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(z, old, _CMP_GT_OQ)) & cov;
+        if (!pass) continue;
+        __m256i wm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)pass), bits), bits);
+        _mm256_maskstore_ps(d, wm, z);
+        if (prim) _mm256_maskstore_epi32((int *)(prim + (size_t)(y - y0) * stride), wm, _mm256_set1_epi32((int)t->prim));
+        wrote = 1;
+    }
+    return wrote;
+}
+
+__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) static int
+rs__block_avx512(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3], unsigned lanes,
+                 float *depth, uint32_t *prim, size_t stride)
+{
+    int wrote = 0;
+    if (!t->small) {
+        int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
+        for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+        for (int32_t y = y0; y <= y1; y++) {
+            size_t o = (size_t)(y - y0) * stride;
+            wrote |= rs__row_avx512(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
+            for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+        }
+        return wrote;
+    }
+    /* 16 lanes = 2 rows of 8: lane l is column l & 7 of row l >> 3 */
+    const __m512i col = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
+    const __m512i row = _mm512_setr_epi32(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1);
+    const __m512 colf = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
+    __m512i ev[3], sy2[3];
+    for (int k = 0; k < 3; k++) {
+        int32_t sx = (int32_t)(t->a[k] * RS_SUB), syk = (int32_t)(t->b[k] * RS_SUB);
+        ev[k] = _mm512_add_epi32(_mm512_set1_epi32(rs__clamp32(e_in[k])),
+                                 _mm512_add_epi32(_mm512_mullo_epi32(col, _mm512_set1_epi32(sx)),
+                                                  _mm512_mullo_epi32(row, _mm512_set1_epi32(syk))));
+        sy2[k] = _mm512_set1_epi32(2 * syk);
+    }
+    const __mmask16 lanes16 = (__mmask16)(lanes | lanes << 8);
+    for (int32_t y = y0; y <= y1; y += 2) {
+        __mmask16 valid = y + 1 <= y1 ? lanes16 : (__mmask16)lanes;
+        __m512i any = _mm512_or_si512(_mm512_or_si512(ev[0], ev[1]), ev[2]);
+        __mmask16 cov = _mm512_mask_cmpge_epi32_mask(valid, any, _mm512_setzero_si512());
+        for (int k = 0; k < 3; k++) ev[k] = _mm512_add_epi32(ev[k], sy2[k]);
+        if (!cov) continue;
+        float *d0 = depth + (size_t)(y - y0) * stride, *d1 = d0 + stride;
+        float zr0 = rs__zrow(t, x, y), zr1 = y + 1 <= y1 ? rs__zrow(t, x, y + 1) : zr0;
+        __m512 zb = _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_set1_ps(zr0)), _mm256_set1_ps(zr1), 1);
+        __m512 z = _mm512_add_ps(zb, _mm512_mul_ps(_mm512_set1_ps(t->dzdx), colf));
+        z = _mm512_max_ps(_mm512_min_ps(z, _mm512_set1_ps(t->zmax)), _mm512_set1_ps(t->zmin));
+        __m256 o0 = _mm256_maskz_loadu_ps((__mmask8)cov, d0);
+        __m256 o1 = _mm256_maskz_loadu_ps((__mmask8)(cov >> 8), d1);
+        __m512 old = _mm512_insertf32x8(_mm512_castps256_ps512(o0), o1, 1);
+        __mmask16 pass = _mm512_mask_cmp_ps_mask(cov, z, old, _CMP_GT_OQ);
+        if (!pass) continue;
+        _mm256_mask_storeu_ps(d0, (__mmask8)pass, _mm512_castps512_ps256(z));
+        _mm256_mask_storeu_ps(d1, (__mmask8)(pass >> 8), _mm512_extractf32x8_ps(z, 1));
+        if (prim) {
+            uint32_t *p0 = prim + (size_t)(y - y0) * stride;
+            __m256i pv = _mm256_set1_epi32((int)t->prim);
+            _mm256_mask_storeu_epi32(p0, (__mmask8)pass, pv);
+            _mm256_mask_storeu_epi32(p0 + stride, (__mmask8)(pass >> 8), pv);
+        }
+        wrote = 1;
+    }
+    return wrote;
+}
+#endif
+
+static rs__block_fn rs__block_for(rs_simd simd)
+{
+#ifdef RS_HAVE_X86
+    if (simd == RS_SIMD_AVX512) return rs__block_avx512;
+    if (simd == RS_SIMD_AVX2) return rs__block_avx2;
+#endif
+    (void)simd;
+    return rs__block_scalar;
+}
+
 static rs__row_fn rs__row_for(rs_simd simd)
 {
 #ifdef RS_HAVE_X86
@@ -723,7 +927,8 @@ static float rs__block_min(const rs_target *tg, int32_t x, int32_t y, int32_t x1
  * hierarchical-Z test per block: block_far[b] is the farthest (smallest)
  * depth in block b, so a triangle whose nearest depth zmax is not greater
  * cannot pass the depth test anywhere in it. */
-static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__tri *t, int32_t tx0, int32_t ty0,
+static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_fn block, const rs__tri *t,
+                           int32_t tx0, int32_t ty0,
                            int32_t tx1, int32_t ty1, float block_far[64], uint8_t block_writes[64], rs_stats *stats)
 {
     const rs_target *tg = st->t;
@@ -756,6 +961,10 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, const rs__t
             if (outside) continue;
             unsigned lanes = ((1u << (rx1 - x + 1)) - 1u) & ~((1u << (rx0 - x)) - 1u);
             int wrote = 0;
+            if (!t->masked && !tg->coverage) {
+                size_t o = (size_t)ry0 * tg->width + (size_t)x;
+                wrote = block(t, x, ry0, ry1, e, lanes, tg->depth + o, tg->prim ? tg->prim + o : NULL, tg->width);
+            } else
             for (int32_t yy = ry0; yy <= ry1; yy++) {
                 size_t o = (size_t)yy * tg->width + (size_t)x;
                 /* lanes past the image edge are masked, so the row functions
@@ -798,11 +1007,12 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *stats)
     uint8_t block_writes[64];
     for (int b = 0; b < 64; b++) block_far[b] = 0.0f, block_writes[b] = 0;
     rs__row_fn row = rs__row_for(st->simd);
+    rs__block_fn block = rs__block_for(st->simd);
     for (uint32_t c = 0; c < st->s->chunk_count; c++) {
         const rs__chunk *ch = &st->s->chunks[c];
         if (ch->tri_count == 0) continue;
         for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++)
-            rs__raster_tri(st, row, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
+            rs__raster_tri(st, row, block, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
     }
 }
 
@@ -876,7 +1086,7 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     if (!tile_stats) abort();
     rs__tile_ctx tc = {&st, tile_stats};
     pf_jobs *jobs = ctx->jobs;
-    uint32_t nv = (ctx->scene->vertex_count + RS_VCHUNK - 1) / RS_VCHUNK;
+    uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
     pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, &st, nv, 1, NULL, 0);
     pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, &st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
     pf_job_id deps[2] = {vj, cj};
@@ -891,7 +1101,7 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
 {
     rs__pass_state st;
     if (!rs__begin(&st, ctx, s, pass, t, ctx->simd)) return;
-    rs__transform(&pass->view_proj, ctx->scene->positions, s->clip, 0, ctx->scene->vertex_count);
+    rs__transform(&pass->view_proj, ctx->weld_pos, s->clip, 0, ctx->weld_count);
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
     rs_stats ts;

@@ -7,6 +7,7 @@ pkgs=(build-essential cmake pkg-config
       libglfw3-dev       # GLFW 3: the viewer window
       libtinygltf-dev    # tinygltf: glTF 2.0 scenes
       libstb-dev         # stb_image_write: PNG output
+      libmeshoptimizer-dev   # meshoptimizer: simplified shadow geometry
       libcmocka-dev)     # cmocka: the test framework
 missing=()
 for p in "${pkgs[@]}"; do

@@ -5,6 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_error *err)
 {
     memset(g, 0, sizeof *g);
@@ -16,6 +20,8 @@ pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_err
     for (size_t i = 0; i < sizeof planes / sizeof planes[0]; i++)
         if (!(*planes[i] = calloc(n ? n : 1, sizeof(float)))) goto oom;
     if (!(g->prim = calloc(n ? n : 1, sizeof(uint32_t)))) goto oom;
+    if (!(g->ray_sx = calloc((size_t)width + 1, sizeof(float))) || !(g->ray_sy = calloc((size_t)height + 1, sizeof(float))))
+        goto oom;
     rs_gbuffer_clear(g);
     return PF_OK;
 oom:
@@ -45,6 +51,8 @@ void rs_gbuffer_free(rs_gbuffer *g)
     free(g->alb_g);
     free(g->alb_b);
     free(g->prim);
+    free(g->ray_sx);
+    free(g->ray_sy);
     memset(g, 0, sizeof *g);
 }
 
@@ -53,17 +61,9 @@ typedef struct rs__resolve_ctx {
     const pf_scene *scene;
     const pf_camera *cam;
     float th, aspect; /* tan(yfov/2) and width/height, as pf_camera_ray_dir computes them */
+    float *sx, *sy;   /* per column / row: the screen offsets of pixel centres (+1 for the neighbour) */
 } rs__resolve_ctx;
 
-/* pf_camera_ray_dir with its per-frame constants hoisted (same operations,
- * same bits). */
-static pf_vec3 rs__ray_dir(const rs__resolve_ctx *rc, float x, float y)
-{
-    const pf_camera *cam = rc->cam;
-    float sx = (2.0f * x / (float)rc->g->width - 1.0f) * rc->th * rc->aspect;
-    float sy = (1.0f - 2.0f * y / (float)rc->g->height) * rc->th;
-    return pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
-}
 
 /* Per-triangle constants of the resolve. With the ray origin o fixed (the
  * eye), Moller-Trumbore's terms that do not involve the direction d are
@@ -115,6 +115,46 @@ static int rs__bary(const rs__tri_consts *c, pf_vec3 d, float *u, float *v)
     return 1;
 }
 
+/* Normalises the row's normals (pf_v3_normalize's operations: l =
+ * sqrt((x*x + y*y) + z*z), n * (1 / l)), four at a time with SSE2 whose
+ * sqrtps/divps round exactly like the scalar sqrtss/divss, so the bits are
+ * the scalar function's; taken out of the per-pixel loop because its
+ * sqrt -> divide latency chain dominated the resolve. A covered pixel whose
+ * interpolated normal vanishes gets the camera-facing geometric normal, as
+ * pf_scene_surface does. */
+static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera *cam, const float *sx, float sy,
+                              uint32_t y)
+{
+    float *nx = g->nrm_x + (size_t)y * g->width, *ny = g->nrm_y + (size_t)y * g->width;
+    float *nz = g->nrm_z + (size_t)y * g->width;
+    uint32_t x = 0;
+#if defined(__SSE2__)
+    for (; x + 4 <= g->width; x += 4) {
+        __m128 a = _mm_loadu_ps(nx + x), b = _mm_loadu_ps(ny + x), c = _mm_loadu_ps(nz + x);
+        __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(a, a), _mm_mul_ps(b, b)), _mm_mul_ps(c, c)));
+        __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
+        __m128 inv = _mm_and_ps(pos, _mm_div_ps(_mm_set1_ps(1.0f), l));
+        _mm_storeu_ps(nx + x, _mm_mul_ps(a, inv));
+        _mm_storeu_ps(ny + x, _mm_mul_ps(b, inv));
+        _mm_storeu_ps(nz + x, _mm_mul_ps(c, inv));
+    }
+#endif
+    for (; x < g->width; x++) {
+        pf_vec3 n = pf_v3_normalize(pf_v3(nx[x], ny[x], nz[x]));
+        nx[x] = n.x, ny[x] = n.y, nz[x] = n.z;
+    }
+    for (x = 0; x < g->width; x++) {
+        size_t i = (size_t)y * g->width + x;
+        if (g->prim[i] == RS_GBUFFER_EMPTY || nx[x] != 0.0f || ny[x] != 0.0f || nz[x] != 0.0f) continue;
+        const uint32_t *tri = &s->indices[3 * g->prim[i]];
+        pf_vec3 p0 = s->positions[tri[0]];
+        pf_vec3 ng = pf_v3_normalize(pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
+        pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx[x]), pf_v3_scale(cam->up, sy)));
+        if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
+        nx[x] = ng.x, ny[x] = ng.y, nz[x] = ng.z;
+    }
+}
+
 static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -136,15 +176,20 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
             continue;
         }
         if (prim != c.prim) rs__tri_setup(&c, s, cam->eye, prim);
-        pf_vec3 d = rs__ray_dir(rc, (float)x + 0.5f, (float)y + 0.5f);
+        /* pf_camera_ray_dir's expression, its per-column and per-row factors
+         * taken from the tables (same formulas, same bits) */
+        pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, rc->sx[x]), pf_v3_scale(cam->up, rc->sy[y])));
         float u = 0.0f, v = 0.0f;
         rs__bary(&c, d, &u, &v);
         /* uv footprint from the neighbouring pixel centres' rays on the same plane */
         float lod = 0.0f;
         if (c.textured) {
             float ux, vx, uy, vy;
-            if (rs__bary(&c, rs__ray_dir(rc, (float)x + 1.5f, (float)y + 0.5f), &ux, &vx) &&
-                rs__bary(&c, rs__ray_dir(rc, (float)x + 0.5f, (float)y + 1.5f), &uy, &vy)) {
+            pf_vec3 dx = pf_v3_add(cam->forward,
+                                   pf_v3_add(pf_v3_scale(cam->right, rc->sx[x + 1]), pf_v3_scale(cam->up, rc->sy[y])));
+            pf_vec3 dy = pf_v3_add(cam->forward,
+                                   pf_v3_add(pf_v3_scale(cam->right, rc->sx[x]), pf_v3_scale(cam->up, rc->sy[y + 1])));
+            if (rs__bary(&c, dx, &ux, &vx) && rs__bary(&c, dy, &uy, &vy)) {
                 float du1 = c.uv1.x - c.uv0.x, du2 = c.uv2.x - c.uv0.x, dv1 = c.uv1.y - c.uv0.y,
                       dv2 = c.uv2.y - c.uv0.y;
                 lod = pf_material_lod(s, c.material, du1 * (ux - u) + du2 * (vx - v), dv1 * (ux - u) + dv2 * (vx - v),
@@ -160,12 +205,17 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
         }
         float w = 1.0f - u - v;
         pf_vec3 pos = pf_v3_add(c.p0, pf_v3_add(pf_v3_scale(c.e1, u), pf_v3_scale(c.e2, v)));
-        pf_vec3 ns = pf_v3_normalize(pf_v3_add(pf_v3_add(pf_v3_scale(c.n0, w), pf_v3_scale(c.n1, u)), pf_v3_scale(c.n2, v)));
-        if (ns.x == 0.0f && ns.y == 0.0f && ns.z == 0.0f) ns = c.ng;
-        if (pf_v3_dot(c.ng, d) > 0.0f) ns = pf_v3_scale(ns, -1.0f); /* two-sided shading */
+        /* the interpolated normal, turned to face the camera (two-sided
+         * shading); normalised for the whole row by rs__normalize_row */
+        pf_vec3 ns = pf_v3_add(pf_v3_add(pf_v3_scale(c.n0, w), pf_v3_scale(c.n1, u)), pf_v3_scale(c.n2, v));
+        if (pf_v3_dot(c.ng, d) > 0.0f) ns = pf_v3_scale(ns, -1.0f);
         float albedo[4];
-        pf_vec2 uv = {w * c.uv0.x + u * c.uv1.x + v * c.uv2.x, w * c.uv0.y + u * c.uv1.y + v * c.uv2.y};
-        pf_material_sample(s, c.material, uv, lod, albedo);
+        if (c.textured) {
+            pf_vec2 uv = {w * c.uv0.x + u * c.uv1.x + v * c.uv2.x, w * c.uv0.y + u * c.uv1.y + v * c.uv2.y};
+            pf_material_sample(s, c.material, uv, lod, albedo);
+        } else {
+            memcpy(albedo, s->materials[c.material].base_color, sizeof albedo); /* what pf_material_sample returns */
+        }
         g->depth[i] = pf_v3_dot(pf_v3_sub(pos, cam->eye), cam->forward); /* view depth of the point */
         g->pos_x[i] = pos.x;
         g->pos_y[i] = pos.y;
@@ -177,10 +227,18 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
         g->alb_g[i] = albedo[1];
         g->alb_b[i] = albedo[2];
     }
+    rs__normalize_row(g, s, cam, rc->sx, rc->sy[y], y);
 }
 
 void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs)
 {
-    rs__resolve_ctx rc = {g, scene, cam, tanf(0.5f * cam->yfov), (float)g->width / (float)g->height};
+    rs__resolve_ctx rc = {g, scene, cam, tanf(0.5f * cam->yfov), (float)g->width / (float)g->height, NULL, NULL};
+    /* screen offsets of pixel centres, one more than the image for the
+     * neighbour rays; bit-identical to rs__ray_dir's terms */
+    rc.sx = g->ray_sx;
+    rc.sy = g->ray_sy;
+    for (uint32_t x = 0; x <= g->width; x++)
+        rc.sx[x] = (2.0f * ((float)x + 0.5f) / (float)g->width - 1.0f) * rc.th * rc.aspect;
+    for (uint32_t y = 0; y <= g->height; y++) rc.sy[y] = (1.0f - 2.0f * ((float)y + 0.5f) / (float)g->height) * rc.th;
     pf_jobs_parallel_for(jobs, rs__resolve_row, &rc, g->height, 4);
 }

@@ -31,6 +31,7 @@ typedef struct rs_gbuffer {
     float *nrm_x, *nrm_y, *nrm_z;
     float *alb_r, *alb_g, *alb_b;
     uint32_t *prim;
+    float *ray_sx, *ray_sy; /* resolve scratch: width + 1 and height + 1 screen offsets */
 } rs_gbuffer;
 
 /* Allocates all planes (zeroed; depth +inf, prim EMPTY). */
@@ -44,7 +45,8 @@ void rs_gbuffer_clear(rs_gbuffer *g);
  * which gives perspective-correct barycentrics, the view depth (t along a
  * ray whose forward component is 1) and, from the rays through the
  * neighbouring pixel centres, the uv footprint that picks the texture mip
- * level. Attributes come from pf_scene_surface, as on the ray-traced path.
+ * level. Attributes are interpolated as pf_scene_surface does on the
+ * ray-traced path (same formulas; the per-triangle terms are cached).
  * Barycentrics are clamped to the triangle (a pixel centre covered by the
  * snapped triangle may lie a hair outside the exact one). Parallel over
  * rows, deterministic. */

@@ -1,0 +1,1557 @@
+/* rs_paraboloid: exact paraboloid shadow maps (see rs_paraboloid.h for the
+ * mapping, the storage format and the lookup).
+ *
+ * Who calls what: rs_para_render -> one job item per map -> rs__render_map:
+ *   1. rs__cluster_bound   per cluster: behind the tangent plane? else the
+ *                          image of its bounding sphere's cone (a disc, see
+ *                          "Cluster bound" below) as a texel rectangle and
+ *                          its nearest possible distance;
+ *   2. rs__sort_clusters   front to back (stable radix sort on a 16-bit
+ *                          distance key), so near occluders come first;
+ *   3. rs__draw_cluster    unless rs__occluded (every 8x8 tile its disc
+ *                          touches is nearer than the cluster): the front end
+ *                          rs__front_scalar / _avx2 / _avx512 (8 or 16
+ *                          triangles at a time: local coordinates, hemisphere
+ *                          cull, conservative (u, v) bound, texel rectangle),
+ *                          then per survivor the same occlusion test with the
+ *                          triangle's nearest possible distance,
+ *                          rs__setup_triangle (edge normals, filter bounds,
+ *                          orientation, tighter bound) and rs__scan_scalar /
+ *                          _avx2 / _avx512 (8 or 16 texels of a row at a
+ *                          time): the exact per-texel test, nearest distance;
+ *   4. quantise            float distances -> 16-bit codes.
+ *
+ * The exact test. All rays start at the VPL o, so a triangle with local
+ * vertices A, B, C (relative to o) is hit by the ray along D iff D lies in
+ * the cone the triangle subtends: with the edge normals
+ *     e0 = A x B,  e1 = B x C,  e2 = C x A,   det = A . (B x C),
+ * the ray meets the triangle in front of o iff sign(det) = sign(D . e_k) for
+ * k = 0..2. This is the watertight test of Woop, Benthin and Wald (JCGT 2013)
+ * for a common ray origin: their shear to ray space is not needed because
+ * the edge functions are already the triple products D . (A x B). With
+ * s = sign(det) and the oriented normals e'_k = s e_k the test is
+ * D . e'_k > 0, and the distance is
+ *     t = det' |D| / (D . N'),   N' = s (B - A) x (C - A),  det' = |det|,
+ * where |D| = 1 + u^2 + v^2 = W for the texel direction D = (2u, 2v, 1-u^2-v^2)
+ * (tabulated once per resolution). N is precomputed per triangle in world
+ * space (in double, stored as float) and rotated into the VPL frame, so the
+ * distance keeps float precision even for small far triangles.
+ *
+ * Watertightness. Two triangles sharing the edge PQ and lying on either side
+ * of it as seen from o get exactly opposite oriented normals for that edge:
+ * the shared vertices have the same local coordinates (same float
+ * expression), the cross product of the two vectors swapped is the exact
+ * negation (x y - y x rounds symmetrically), and s flips exactly when the
+ * orientation as seen flips. So D . e' evaluates to exactly negated values in
+ * the two triangles, and any decision rule that is odd in e' gives the texel
+ * to exactly one of them. The rule: the sign of D . e'; where it is zero in
+ * double (the centre lies on the edge's plane) the sign of the first nonzero
+ * component of e' (x, then y, then z) decides, i.e. the ray is perturbed by
+ * (eps, eps^2, eps^3) (Simulation of Simplicity, Edelsbrunner & Muecke 1990),
+ * the same perturbation for every edge, so vertices are owned once too.
+ *
+ * Float filter (all paths evaluate the same float expressions, then fall
+ * back to double where float cannot decide). Local coordinates are computed
+ * in float from the float world positions: each component within 4u |A| of
+ * the real value (u = 2^-24; the basis t, b, n is taken as exact), so
+ * |dA| <= 7u |A|; the float cross product e_f is within (7 + 7 + 4) u |A||B|
+ * of the real A x B per component, and g = (D.x e.x + D.y e.y) + D.z e.z in
+ * float within
+ *     |D|_1 (18 + 3.01) u |A||B| <= 60 u |A||B|      (|D|_1 <= 2 sqrt 2)
+ * of the real D . (A x B). So |g| > 2^-17 |A||B| (128 u, twice the error)
+ * fixes the sign, and the sign is the one the double evaluation finds too
+ * (its error is ~1e-16 |A||B|). Texel centres closer to an edge's plane than
+ * about 8e-6 / sin(angle AB) rad take the double path (the edge normal from
+ * double local coordinates, rs_para_stats.texels_exact_fallback): rare, and
+ * antisymmetric like the float path. det gets the same treatment (its float
+ * error is below 16 u |A||N|; the filter is 2^-17 |A| |N|_1). The decisions
+ * are those of the double evaluation in every path, so the coverage is that
+ * of the float scene to ~1e-16 rad, far inside the bound's margin.
+ *
+ * Triangle bound. The image of the triangle (clipped to z >= 0) is bounded by
+ * circular arcs, each the image of a great-circle arc of less than 180
+ * degrees: an edge's plane through o, e . d = 0, maps to
+ *     2u e.x + 2v e.y + (1 - u^2 - v^2) e.z = 0,
+ * the circle of centre (e.x, e.y) / e.z and radius r = |e| / |e.z| >= 1 (a
+ * line when e.z = 0), and the clipped part, z = 0, maps to the unit circle.
+ * Every such circle meets the unit circle at two antipodal points (where its
+ * great circle crosses the horizon), so its part inside the disc is at most a
+ * semicircle and every edge's image is a minor arc. A minor arc with chord c
+ * deviates from its chord by at most its sagitta
+ *     h = (c^2 / 4) / (r + sqrt(r^2 - c^2 / 4))  <=  c^2 / 4   (r >= 1),
+ * so the image lies in the bounding box of the projected (clipped) vertices
+ * grown by the largest h (the region lies in the convex hull of its boundary
+ * arcs). The front end uses c^2 / 4 (no edge normals needed yet); the setup
+ * tightens it with each edge's exact h when that matters (more than 1/8
+ * texel). A margin of RS__UV_EPS (4e-6, against ~5e-7 of float error in the
+ * projections) makes the bound conservative. Triangles crossing the tangent
+ * plane are clipped in double (their clip points can lie close to o, where
+ * float would lose the direction).
+ *
+ * Cluster bound. A cluster's bounding sphere (centre c, radius r, distance
+ * L = |c - o| > r) subtends the cap of half-angle alpha = asin(r / L) around
+ * the direction at polar angle phi. Stereographic projection maps circles to
+ * circles, and the cap's boundary is symmetric about the plane through n and
+ * c, so its image is the disc whose diameter joins the images of the polar
+ * angles phi - alpha and phi + alpha on that plane: rho(theta) = tan(theta/2)
+ * = sin(theta) / (1 + cos(theta)), evaluated with the angle-sum formulas (no
+ * trigonometric calls). The cluster is skipped when its sphere lies wholly
+ * behind the tangent plane, or when every tile its disc touches already holds
+ * depths all nearer than L - r (hierarchical occlusion culling; clusters are
+ * drawn front to back). A triangle is skipped likewise when every point of
+ * it, at least min |vertex| - longest edge from o, lies beyond the tiles its
+ * rectangle touches. These tests only drop triangles that cannot change the
+ * minimum (up to the float error of hits within ~0.1 degree of grazing, see
+ * rs__draw_cluster), so the map does not depend on them, nor on the draw
+ * order: the minimum of floats is order-free. They are the same in every
+ * path, so the bytes do not depend on the path either way.
+ *
+ * SIMD. rs__front_avx512 and rs__scan_avx512 compute, lane by lane, the same
+ * IEEE operations in the same order as the scalar functions (no FMA: softgi
+ * builds with -ffp-contract=off and the intrinsics used are plain mul/add/
+ * div/sqrt/min/max/round), and undecided lanes go through the same scalar
+ * rs__resolve, so every path gives the same bits and the same statistics
+ * (tested). rs__front_avx2 and rs__scan_avx2 are the same at 8 lanes. */
+#include "rs_paraboloid.h"
+
+#include <assert.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define RS__HAVE_X86 1
+#endif
+
+#define RS__UV_EPS 4e-6f      /* uv margin of every bound (float error of projections is ~5e-7) */
+#define RS__TILE 8            /* tile side (texels) of the occlusion-culling depth maxima */
+#define RS__LANES 16          /* triangles per front-end batch; cluster sizes are multiples of it */
+#define RS__FILTER 0x1p-17f   /* float filter: |g| > RS__FILTER |A||B| fixes the sign */
+
+/* ------------------------------------------------------------------ types */
+
+typedef struct rs__cluster {
+    float cx, cy, cz, r; /* bounding sphere */
+    uint32_t first, count;
+} rs__cluster;
+
+typedef struct rs__rect {
+    int32_t i0, i1, j0, j1; /* inclusive texel range; empty when i0 > i1 or j0 > j1 */
+} rs__rect;
+
+/* The front end's survivors in one cluster, structure of arrays (the SIMD
+ * front end compress-stores into it). */
+typedef struct rs__batch {
+    uint32_t n;
+    uint32_t *tri;
+    float *l[9];          /* local coordinates x0 y0 z0 x1 y1 z1 x2 y2 z2 */
+    float *len[3];        /* |A|, |B|, |C| */
+    float *pu[3], *pv[3]; /* projected vertices (when not crossing) */
+    float *c2max;         /* largest squared chord (when not crossing) */
+    int32_t *rect[4];     /* i0 i1 j0 j1 (when not crossing) */
+    int32_t *crossing;    /* 1: crosses the tangent plane (bound made by rs__setup_triangle) */
+} rs__batch;
+
+/* A triangle after setup: what the texel loop needs. */
+typedef struct rs__setup {
+    float e[3][3];  /* oriented edge normals e'_k, float */
+    float bound[3]; /* float filter bounds */
+    float nf[3];    /* oriented plane normal N', float */
+    float det;      /* det' (float) */
+    float sgn;      /* s */
+    /* the double path, made on first use */
+    int have_d;
+    double ed[3][3];
+    const struct rs_para_context *ctx;
+    const rs_para_frame *f;
+    uint32_t tri;
+} rs__setup;
+
+/* One worker's scratch, in its own cache lines (the statistics are written
+ * per triangle: two workers sharing a line would slow each other down). */
+typedef struct rs__scratch {
+    _Alignas(64) float *depth; /* R*R: nearest distance so far (INFINITY: nothing) */
+    float *tile_max;     /* tiles*tiles: maximum depth over a tile's inside texels */
+    uint8_t *tile_dirty; /* tiles*tiles: tile_max is stale (too large) */
+    rs__rect *crect;     /* per cluster: texel rectangle of its image */
+    float *cnear;        /* per cluster: nearest possible hit distance */
+    uint16_t *key;       /* sort keys */
+    uint32_t *order, *order_tmp;
+    void *batch_block;
+    rs__batch batch;
+    rs_para_stats stats;
+} rs__scratch;
+
+struct rs_para_context {
+    uint32_t res, tiles;
+    uint32_t tri_count, tri_padded;
+    uint32_t cluster_size, cluster_count;
+    float *soa[13]; /* x0 y0 z0 x1 y1 z1 x2 y2 z2 nx ny nz emax, tri_padded each (zero padding) */
+    float *soa_block;
+    rs__cluster *clusters;
+    /* texel tables */
+    float *u;                 /* R: u_i = (2i+1-R)/R (also v_j) */
+    float *d2;                /* R: 2 u_i (D.x of column i, D.y of row j) */
+    float *dz, *w;            /* R*R: 1 - (u^2 + v^2), 1 + (u^2 + v^2) */
+    int32_t *row_lo, *row_hi; /* inside columns of row j */
+    rs_simd simd;
+    uint32_t scratch_count;
+    rs__scratch **scratch; /* per worker, each 64-byte aligned */
+};
+
+/* ------------------------------------------------------------------ mapping */
+
+rs_para_frame rs_para_frame_make(pf_vec3 position, pf_vec3 normal)
+{
+    rs_para_frame f;
+    f.o = position;
+    f.n = pf_v3_normalize(normal);
+    pf_v3_basis(f.n, &f.t, &f.b);
+    return f;
+}
+
+pf_vec3 rs_para_to_local(const rs_para_frame *f, pf_vec3 p)
+{
+    float px = p.x - f->o.x, py = p.y - f->o.y, pz = p.z - f->o.z;
+    return pf_v3((px * f->t.x + py * f->t.y) + pz * f->t.z, (px * f->b.x + py * f->b.y) + pz * f->b.z,
+                 (px * f->n.x + py * f->n.y) + pz * f->n.z);
+}
+
+static inline float rs__texel_centre(uint32_t res, uint32_t i)
+{
+    return ((float)(2 * i + 1) - (float)res) / (float)res;
+}
+
+pf_vec2 rs_para_texel_uv(uint32_t resolution, uint32_t i, uint32_t j)
+{
+    pf_vec2 r = {rs__texel_centre(resolution, i), rs__texel_centre(resolution, j)};
+    return r;
+}
+
+int rs_para_texel_inside(uint32_t resolution, uint32_t i, uint32_t j)
+{
+    int64_t a = 2 * (int64_t)i + 1 - resolution, b = 2 * (int64_t)j + 1 - resolution;
+    return a * a + b * b <= (int64_t)resolution * resolution;
+}
+
+uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d)
+{
+    float u, v;
+    if (d.z > 0.0f) {
+        float den = pf_v3_length(d) + d.z;
+        u = d.x / den;
+        v = d.y / den;
+    } else {
+        /* at or below the horizon: the rim point of the same azimuth (the
+         * straight-down direction -n has none; it takes azimuth 0) */
+        float rr = sqrtf(d.x * d.x + d.y * d.y);
+        u = rr > 0.0f ? d.x / rr : 1.0f;
+        v = rr > 0.0f ? d.y / rr : 0.0f;
+    }
+    float h = 0.5f * (float)resolution;
+    for (int pass = 0; pass < 2; pass++) {
+        float fi = floorf((u + 1.0f) * h), fj = floorf((v + 1.0f) * h);
+        uint32_t i = (uint32_t)pf_clampf(fi, 0.0f, (float)resolution - 1.0f);
+        uint32_t j = (uint32_t)pf_clampf(fj, 0.0f, (float)resolution - 1.0f);
+        if (rs_para_texel_inside(resolution, i, j) || pass == 1) return j * resolution + i;
+        /* The texel holding (u, v) has its centre outside the disc: move
+         * (u, v) in to radius 1 - 1.5/R. The texel holding a point at that
+         * radius has its centre within sqrt(2)/R < 1.5/R of it, so inside. */
+        float rr = sqrtf(u * u + v * v);
+        float k = (1.0f - 1.5f / (float)resolution) / (rr > 0.0f ? rr : 1.0f);
+        u *= k;
+        v *= k;
+    }
+    return 0; /* not reached */
+}
+
+uint16_t rs_para_fetch(const uint16_t *map, uint32_t resolution, pf_vec3 d_local)
+{
+    return map[rs_para_texel_of(resolution, d_local)];
+}
+
+float rs_para_decode(uint16_t code, float range)
+{
+    if (code > RS_PARA_MAX_CODE) return INFINITY;
+    return ((float)code + 1.0f) * (range / RS_PARA_CODES);
+}
+
+float rs_para_depth(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 dir)
+{
+    pf_vec3 d = pf_v3((dir.x * f->t.x + dir.y * f->t.y) + dir.z * f->t.z,
+                      (dir.x * f->b.x + dir.y * f->b.y) + dir.z * f->b.z,
+                      (dir.x * f->n.x + dir.y * f->n.y) + dir.z * f->n.z);
+    return rs_para_decode(rs_para_fetch(map, resolution, d), range);
+}
+
+float rs_para_texel_world_size(uint32_t resolution, float dist, pf_vec3 d)
+{
+    pf_vec2 uv = rs_para_dir_to_uv(pf_v3_normalize(d));
+    float rho2 = uv.x * uv.x + uv.y * uv.y;
+    return dist * (4.0f / (float)resolution) / (1.0f + rho2);
+}
+
+float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p, pf_vec3 ng)
+{
+    pf_vec3 to = pf_v3_sub(f->o, p);
+    float dist = pf_v3_length(to);
+    if (!(dist > 0.0f)) return 2.0f * range / RS_PARA_CODES;
+    pf_vec3 n = pf_v3_normalize(ng);
+    float c = fabsf(pf_v3_dot(n, to)) / dist;
+    float s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
+    float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
+    float w = rs_para_texel_world_size(resolution, dist, rs_para_to_local(f, p));
+    return w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES;
+}
+
+int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
+                    float bias)
+{
+    pf_vec3 d = rs_para_to_local(f, p);
+    if (!(d.z > 0.0f)) return 0; /* behind the VPL: it emits nothing there */
+    float dist = pf_v3_length(d);
+    uint16_t code = rs_para_fetch(map, resolution, d);
+    if (code > RS_PARA_MAX_CODE) return 1;
+    return dist <= rs_para_decode(code, range) + bias;
+}
+
+float rs_para_default_range(const pf_scene *scene)
+{
+    pf_vec3 ext = pf_v3_sub(scene->bounds_max, scene->bounds_min);
+    float diag = pf_v3_length(ext);
+    return diag > 0.0f ? 1.01f * diag : 1.0f;
+}
+
+/* Distance -> code (see the header): floor(t S), clamped. */
+static inline uint16_t rs__quantise_one(float t, float scale)
+{
+    if (t == INFINITY) return RS_PARA_EMPTY;
+    float q = t * scale;
+    if (!(q < (float)RS_PARA_MAX_CODE)) return RS_PARA_MAX_CODE;
+    return (uint16_t)q; /* truncation = floor for q >= 0 */
+}
+
+/* ------------------------------------------------------------------ context */
+
+static void rs__scratch_free(rs__scratch *s)
+{
+    free(s->depth);
+    free(s->tile_max);
+    free(s->tile_dirty);
+    free(s->crect);
+    free(s->cnear);
+    free(s->key);
+    free(s->order);
+    free(s->order_tmp);
+    free(s->batch_block);
+}
+
+static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
+{
+    memset(s, 0, sizeof *s);
+    size_t texels = (size_t)ctx->res * ctx->res, cl = ctx->cluster_count, cs = ctx->cluster_size;
+    s->depth = malloc(texels * sizeof(float));
+    s->tile_max = malloc((size_t)ctx->tiles * ctx->tiles * sizeof(float));
+    s->tile_dirty = malloc((size_t)ctx->tiles * ctx->tiles);
+    s->crect = malloc(cl * sizeof(rs__rect));
+    s->cnear = malloc(cl * sizeof(float));
+    s->key = malloc(cl * sizeof(uint16_t));
+    s->order = malloc(cl * sizeof(uint32_t));
+    s->order_tmp = malloc(cl * sizeof(uint32_t));
+    /* 26 arrays of cluster_size 4-byte words: tri, 9 l, 3 len, 3 pu, 3 pv,
+     * c2max, 4 rect, crossing */
+    s->batch_block = malloc(26 * cs * 4);
+    if (!s->depth || !s->tile_max || !s->tile_dirty || !s->crect || !s->cnear || !s->key || !s->order ||
+        !s->order_tmp || !s->batch_block) {
+        rs__scratch_free(s);
+        return 0;
+    }
+    uint32_t *w = s->batch_block;
+    rs__batch *b = &s->batch;
+    b->tri = w;
+    w += cs;
+    for (int k = 0; k < 9; k++, w += cs) b->l[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += cs) b->len[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += cs) b->pu[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += cs) b->pv[k] = (float *)w;
+    b->c2max = (float *)w;
+    w += cs;
+    for (int k = 0; k < 4; k++, w += cs) b->rect[k] = (int32_t *)w;
+    b->crossing = (int32_t *)w;
+    return 1;
+}
+
+static int rs__scratch_reserve(rs_para_context *ctx, uint32_t count)
+{
+    if (count <= ctx->scratch_count) return 1;
+    rs__scratch **grown = realloc(ctx->scratch, count * sizeof(rs__scratch *));
+    if (!grown) return 0;
+    ctx->scratch = grown;
+    for (uint32_t k = ctx->scratch_count; k < count; k++) {
+        rs__scratch *sc = aligned_alloc(64, sizeof(rs__scratch)); /* sizeof is a multiple of 64 */
+        if (!sc) return 0;
+        if (!rs__scratch_init(sc, ctx)) {
+            free(sc);
+            return 0;
+        }
+        ctx->scratch[k] = sc;
+        ctx->scratch_count = k + 1;
+    }
+    return 1;
+}
+
+static rs_simd rs__simd_supported(rs_simd want)
+{
+#if RS__HAVE_X86
+    pf_isa isa = pf_isa_detect();
+    if (want == RS_SIMD_AVX512 && isa >= PF_ISA_AVX512) return RS_SIMD_AVX512;
+    if (want >= RS_SIMD_AVX2 && isa >= PF_ISA_AVX2) return RS_SIMD_AVX2;
+#else
+    (void)want;
+#endif
+    return RS_SIMD_SCALAR;
+}
+
+pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, const rs_para_options *opts,
+                                 pf_error *err)
+{
+    *out = NULL;
+    rs_para_options o = {0};
+    if (opts) o = *opts;
+    if (o.resolution == 0) o.resolution = RS_PARA_DEFAULT_RES;
+    if (o.cluster_size == 0) o.cluster_size = RS_PARA_DEFAULT_CLUSTER;
+    if (o.resolution < RS_PARA_MIN_RES || o.resolution > RS_PARA_MAX_RES)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid map resolution %u is outside %u..%u", o.resolution,
+                            RS_PARA_MIN_RES, RS_PARA_MAX_RES);
+    if (o.cluster_size < RS__LANES || o.cluster_size > 1024 || o.cluster_size % RS__LANES)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid cluster size %u is not a multiple of %u in %u..1024",
+                            o.cluster_size, RS__LANES, RS__LANES);
+    if (!scene || scene->tri_count == 0)
+        return pf_error_set(err, PF_ERR_NO_TRIANGLES, "paraboloid maps: the scene has no triangles");
+
+    rs_para_context *ctx = calloc(1, sizeof *ctx);
+    if (!ctx) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "paraboloid maps: out of memory");
+    uint32_t R = o.resolution;
+    ctx->res = R;
+    ctx->tiles = (R + RS__TILE - 1) / RS__TILE;
+    ctx->tri_count = scene->tri_count;
+    ctx->cluster_size = o.cluster_size;
+    ctx->cluster_count = (scene->tri_count + o.cluster_size - 1) / o.cluster_size;
+    ctx->tri_padded = ctx->cluster_count * o.cluster_size;
+    ctx->simd = o.force_scalar ? RS_SIMD_SCALAR : rs__simd_supported(RS_SIMD_AVX512);
+
+    ctx->soa_block = aligned_alloc(64, (size_t)13 * ctx->tri_padded * sizeof(float));
+    ctx->clusters = calloc(ctx->cluster_count, sizeof(rs__cluster));
+    ctx->u = malloc(R * sizeof(float));
+    ctx->d2 = malloc(R * sizeof(float));
+    ctx->dz = malloc((size_t)R * R * sizeof(float));
+    ctx->w = malloc((size_t)R * R * sizeof(float));
+    ctx->row_lo = malloc(R * sizeof(int32_t));
+    ctx->row_hi = malloc(R * sizeof(int32_t));
+    if (!ctx->soa_block || !ctx->clusters || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
+        !ctx->row_hi) {
+        rs_para_context_destroy(ctx);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "paraboloid maps: out of memory");
+    }
+
+    /* Triangles in scene order, structure of arrays, zero padding (padding
+     * lanes are masked off), with the plane normal (B - A) x (C - A) made in
+     * double and rounded once. */
+    memset(ctx->soa_block, 0, (size_t)13 * ctx->tri_padded * sizeof(float));
+    for (int k = 0; k < 13; k++) ctx->soa[k] = ctx->soa_block + (size_t)k * ctx->tri_padded;
+    for (uint32_t t = 0; t < scene->tri_count; t++) {
+        double p[3][3];
+        for (int v = 0; v < 3; v++) {
+            pf_vec3 q = scene->positions[scene->indices[3 * t + v]];
+            ctx->soa[3 * v + 0][t] = q.x;
+            ctx->soa[3 * v + 1][t] = q.y;
+            ctx->soa[3 * v + 2][t] = q.z;
+            p[v][0] = q.x;
+            p[v][1] = q.y;
+            p[v][2] = q.z;
+        }
+        double ab[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        double ac[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        ctx->soa[9][t] = (float)(ab[1] * ac[2] - ab[2] * ac[1]);
+        ctx->soa[10][t] = (float)(ab[2] * ac[0] - ab[0] * ac[2]);
+        ctx->soa[11][t] = (float)(ab[0] * ac[1] - ab[1] * ac[0]);
+        /* longest edge, rounded up: every point of the triangle lies within
+         * it of each vertex */
+        double bc[3] = {p[2][0] - p[1][0], p[2][1] - p[1][1], p[2][2] - p[1][2]};
+        double e2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+        double e2b = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2], e2c = bc[0] * bc[0] + bc[1] * bc[1] + bc[2] * bc[2];
+        e2 = e2b > e2 ? e2b : e2;
+        e2 = e2c > e2 ? e2c : e2;
+        ctx->soa[12][t] = nextafterf((float)(sqrt(e2) * (1.0 + 1e-6)), INFINITY);
+    }
+
+    /* Clusters: bounding sphere around the box centre, radius measured in
+     * double and rounded up. */
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
+        rs__cluster *cl = &ctx->clusters[c];
+        cl->first = c * o.cluster_size;
+        cl->count = scene->tri_count - cl->first < o.cluster_size ? scene->tri_count - cl->first : o.cluster_size;
+        float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+        for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
+            for (int v = 0; v < 3; v++)
+                for (int a = 0; a < 3; a++) {
+                    float x = ctx->soa[3 * v + a][t];
+                    lo[a] = x < lo[a] ? x : lo[a];
+                    hi[a] = x > hi[a] ? x : hi[a];
+                }
+        cl->cx = 0.5f * (lo[0] + hi[0]);
+        cl->cy = 0.5f * (lo[1] + hi[1]);
+        cl->cz = 0.5f * (lo[2] + hi[2]);
+        double r2 = 0.0;
+        for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
+            for (int v = 0; v < 3; v++) {
+                double dx = (double)ctx->soa[3 * v][t] - cl->cx, dy = (double)ctx->soa[3 * v + 1][t] - cl->cy,
+                       dz = (double)ctx->soa[3 * v + 2][t] - cl->cz;
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 > r2) r2 = d2;
+            }
+        cl->r = nextafterf((float)(sqrt(r2) * (1.0 + 1e-6)), INFINITY);
+    }
+
+    /* Texel tables. */
+    for (uint32_t i = 0; i < R; i++) {
+        ctx->u[i] = rs__texel_centre(R, i);
+        ctx->d2[i] = 2.0f * ctx->u[i];
+    }
+    for (uint32_t j = 0; j < R; j++) {
+        int32_t lo = (int32_t)R, hi = -1;
+        for (uint32_t i = 0; i < R; i++) {
+            float s = ctx->u[i] * ctx->u[i] + ctx->u[j] * ctx->u[j];
+            ctx->dz[(size_t)j * R + i] = 1.0f - s;
+            ctx->w[(size_t)j * R + i] = 1.0f + s;
+            if (rs_para_texel_inside(R, i, j)) {
+                if ((int32_t)i < lo) lo = (int32_t)i;
+                hi = (int32_t)i;
+            }
+        }
+        ctx->row_lo[j] = lo;
+        ctx->row_hi[j] = hi;
+    }
+    *out = ctx;
+    return PF_OK;
+}
+
+void rs_para_context_destroy(rs_para_context *ctx)
+{
+    if (!ctx) return;
+    for (uint32_t k = 0; k < ctx->scratch_count; k++) {
+        rs__scratch_free(ctx->scratch[k]);
+        free(ctx->scratch[k]);
+    }
+    free(ctx->scratch);
+    free(ctx->soa_block);
+    free(ctx->clusters);
+    free(ctx->u);
+    free(ctx->d2);
+    free(ctx->dz);
+    free(ctx->w);
+    free(ctx->row_lo);
+    free(ctx->row_hi);
+    free(ctx);
+}
+
+uint32_t rs_para_resolution(const rs_para_context *ctx) { return ctx->res; }
+rs_simd rs_para_simd(const rs_para_context *ctx) { return ctx->simd; }
+void rs_para_set_simd(rs_para_context *ctx, rs_simd simd) { ctx->simd = rs__simd_supported(simd); }
+
+/* ------------------------------------------------------------------ bounds */
+
+static inline float rs__minf(float a, float b) { return a < b ? a : b; }
+static inline float rs__maxf(float a, float b) { return a > b ? a : b; }
+
+/* (u, v) interval -> inclusive texel range: centre u_i = (2i+1-R)/R >= lo
+ * <=> i >= (lo + 1) R/2 - 1/2. Written as the SIMD front end computes it. */
+static inline void rs__uv_to_texels(float lo, float hi, uint32_t res, int32_t *a, int32_t *b)
+{
+    float h = 0.5f * (float)res, top = (float)res - 1.0f;
+    float fa = ceilf((lo + 1.0f) * h - 0.5f), fb = floorf((hi + 1.0f) * h - 0.5f);
+    fa = rs__maxf(fa, 0.0f);
+    fb = rs__minf(fb, top);
+    if (!(fa <= fb)) { /* empty (or NaN) */
+        *a = 1;
+        *b = 0;
+        return;
+    }
+    *a = (int32_t)fa;
+    *b = (int32_t)fb;
+}
+
+static inline rs__rect rs__uv_rect(float umin, float umax, float vmin, float vmax, uint32_t res)
+{
+    rs__rect r;
+    rs__uv_to_texels(umin, umax, res, &r.i0, &r.i1);
+    rs__uv_to_texels(vmin, vmax, res, &r.j0, &r.j1);
+    return r;
+}
+
+static inline int rs__rect_empty(rs__rect r) { return r.i0 > r.i1 || r.j0 > r.j1; }
+
+static inline rs__rect rs__rect_meet(rs__rect a, rs__rect b)
+{
+    rs__rect r = {a.i0 > b.i0 ? a.i0 : b.i0, a.i1 < b.i1 ? a.i1 : b.i1, a.j0 > b.j0 ? a.j0 : b.j0,
+                  a.j1 < b.j1 ? a.j1 : b.j1};
+    return r;
+}
+
+/* Local coordinates in float (the front end, every path) ... */
+static inline void rs__local_f(const rs_para_frame *f, float x, float y, float z, float out[3])
+{
+    float px = x - f->o.x, py = y - f->o.y, pz = z - f->o.z;
+    out[0] = (px * f->t.x + py * f->t.y) + pz * f->t.z;
+    out[1] = (px * f->b.x + py * f->b.y) + pz * f->b.z;
+    out[2] = (px * f->n.x + py * f->n.y) + pz * f->n.z;
+}
+
+/* ... and in double (clipping and the exact fallback; differences of float
+ * world coordinates are exact in double). */
+static inline void rs__local_d(const rs_para_frame *f, float x, float y, float z, double out[3])
+{
+    double px = (double)x - (double)f->o.x, py = (double)y - (double)f->o.y, pz = (double)z - (double)f->o.z;
+    out[0] = (px * f->t.x + py * f->t.y) + pz * f->t.z;
+    out[1] = (px * f->b.x + py * f->b.y) + pz * f->b.z;
+    out[2] = (px * f->n.x + py * f->n.y) + pz * f->n.z;
+}
+
+static inline void rs__tri_local_d(const rs_para_context *ctx, const rs_para_frame *f, uint32_t t, double a[3][3])
+{
+    for (int v = 0; v < 3; v++)
+        rs__local_d(f, ctx->soa[3 * v][t], ctx->soa[3 * v + 1][t], ctx->soa[3 * v + 2][t], a[v]);
+}
+
+/* Bound of a triangle crossing the tangent plane, in double: the polygon
+ * clipped to z >= 0, its vertices projected (clip points land on the unit
+ * circle), grown by the c^2/4 sagitta bound of each arc. */
+static rs__rect rs__crossing_rect(const rs_para_context *ctx, const double a[3][3])
+{
+    double pu[4], pv[4];
+    int n = 0, degenerate = 0;
+    for (int k = 0; k < 3; k++) {
+        int l = k == 2 ? 0 : k + 1;
+        const double *p = a[k], *q = a[l];
+        if (p[2] > 0.0) {
+            double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            pu[n] = p[0] / (len + p[2]);
+            pv[n] = p[1] / (len + p[2]);
+            n++;
+        }
+        if ((p[2] > 0.0) != (q[2] > 0.0)) {
+            double s = p[2] / (p[2] - q[2]);
+            double x = p[0] + s * (q[0] - p[0]), y = p[1] + s * (q[1] - p[1]);
+            double len = sqrt(x * x + y * y);
+            if (!(len > 0.0)) {
+                degenerate = 1;
+                break;
+            }
+            pu[n] = x / len;
+            pv[n] = y / len;
+            n++;
+        }
+    }
+    if (degenerate || n < 2) return rs__uv_rect(-1.0f, 1.0f, -1.0f, 1.0f, ctx->res);
+    double umin = 1e30, umax = -1e30, vmin = 1e30, vmax = -1e30, c2max = 0.0;
+    for (int k = 0; k < n; k++) {
+        int l = k == n - 1 ? 0 : k + 1;
+        double du = pu[l] - pu[k], dv = pv[l] - pv[k];
+        double c2 = du * du + dv * dv;
+        c2max = c2 > c2max ? c2 : c2max;
+        umin = pu[k] < umin ? pu[k] : umin;
+        umax = pu[k] > umax ? pu[k] : umax;
+        vmin = pv[k] < vmin ? pv[k] : vmin;
+        vmax = pv[k] > vmax ? pv[k] : vmax;
+    }
+    double m = c2max * 0.25 + RS__UV_EPS;
+    return rs__uv_rect((float)(umin - m), (float)(umax + m), (float)(vmin - m), (float)(vmax + m), ctx->res);
+}
+
+/* ------------------------------------------------------------------ front end */
+
+/* Front end of triangle t (scalar reference; rs__front_avx512 computes the
+ * same bits 16 at a time): appends survivors to the batch. */
+static void rs__front_one(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f, uint32_t t)
+{
+    /* rs__local_f, z first: most rejected triangles need nothing else */
+    float a[3][3], p[3][3];
+    for (int v = 0; v < 3; v++) {
+        p[v][0] = ctx->soa[3 * v][t] - f->o.x;
+        p[v][1] = ctx->soa[3 * v + 1][t] - f->o.y;
+        p[v][2] = ctx->soa[3 * v + 2][t] - f->o.z;
+        a[v][2] = (p[v][0] * f->n.x + p[v][1] * f->n.y) + p[v][2] * f->n.z;
+    }
+    int above = (a[0][2] > 0.0f) + (a[1][2] > 0.0f) + (a[2][2] > 0.0f);
+    if (above == 0) {
+        sc->stats.triangles_behind++;
+        return;
+    }
+    float len[3], pu[3], pv[3];
+    for (int v = 0; v < 3; v++) {
+        a[v][0] = (p[v][0] * f->t.x + p[v][1] * f->t.y) + p[v][2] * f->t.z;
+        a[v][1] = (p[v][0] * f->b.x + p[v][1] * f->b.y) + p[v][2] * f->b.z;
+        len[v] = sqrtf((a[v][0] * a[v][0] + a[v][1] * a[v][1]) + a[v][2] * a[v][2]);
+        /* one division per vertex (the SIMD paths do the same): 1 ulp more
+         * error than two divisions, far inside RS__UV_EPS */
+        float inv = 1.0f / (len[v] + a[v][2]);
+        pu[v] = a[v][0] * inv;
+        pv[v] = a[v][1] * inv;
+    }
+    rs__batch *b = &sc->batch;
+    uint32_t n = b->n;
+    if (above == 3) {
+        float c2max = 0.0f;
+        for (int k = 0; k < 3; k++) {
+            int l = k == 2 ? 0 : k + 1;
+            float du = pu[l] - pu[k], dv = pv[l] - pv[k];
+            c2max = rs__maxf(c2max, du * du + dv * dv);
+        }
+        float m = c2max * 0.25f + RS__UV_EPS;
+        float umin = rs__minf(rs__minf(pu[0], pu[1]), pu[2]) - m, umax = rs__maxf(rs__maxf(pu[0], pu[1]), pu[2]) + m;
+        float vmin = rs__minf(rs__minf(pv[0], pv[1]), pv[2]) - m, vmax = rs__maxf(rs__maxf(pv[0], pv[1]), pv[2]) + m;
+        rs__rect r = rs__uv_rect(umin, umax, vmin, vmax, ctx->res);
+        if (rs__rect_empty(r)) {
+            sc->stats.triangles_between_texels++;
+            return;
+        }
+        b->rect[0][n] = r.i0;
+        b->rect[1][n] = r.i1;
+        b->rect[2][n] = r.j0;
+        b->rect[3][n] = r.j1;
+        b->c2max[n] = c2max;
+        b->crossing[n] = 0;
+    } else {
+        b->crossing[n] = 1;
+    }
+    b->tri[n] = t;
+    for (int v = 0; v < 3; v++) {
+        for (int c = 0; c < 3; c++) b->l[3 * v + c][n] = a[v][c];
+        b->len[v][n] = len[v];
+        b->pu[v][n] = pu[v];
+        b->pv[v][n] = pv[v];
+    }
+    b->n = n + 1;
+}
+
+static void rs__front_scalar(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
+                             const rs__cluster *cl)
+{
+    for (uint32_t t = cl->first; t < cl->first + cl->count; t++) rs__front_one(ctx, sc, f, t);
+}
+
+#if RS__HAVE_X86
+#define RS__AVX512 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl")))
+
+/* Texel range of 16 uv intervals, as rs__uv_to_texels. Returns the mask of
+ * non-empty ranges. */
+RS__AVX512 static inline __mmask16 rs__uv_to_texels16(__m512 lo, __m512 hi, uint32_t res, __m512i *a, __m512i *b)
+{
+    const __m512 h = _mm512_set1_ps(0.5f * (float)res), top = _mm512_set1_ps((float)res - 1.0f);
+    const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f);
+    __m512 fa = _mm512_roundscale_ps(_mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(lo, one), h), half),
+                                     _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+    __m512 fb = _mm512_roundscale_ps(_mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(hi, one), h), half),
+                                     _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    /* rs__maxf(fa, 0) = fa > 0 ? fa : 0, which _mm512_max_ps(fa, 0) is for
+     * every non-NaN fa (NaN lanes fail the fa <= fb test below either way) */
+    fa = _mm512_max_ps(fa, _mm512_setzero_ps());
+    fb = _mm512_min_ps(fb, top);
+    __mmask16 ok = _mm512_cmp_ps_mask(fa, fb, _CMP_LE_OQ);
+    *a = _mm512_cvttps_epi32(fa);
+    *b = _mm512_cvttps_epi32(fb);
+    return ok;
+}
+
+/* The front end, 16 triangles at a time: the same float operations as
+ * rs__front_one lane by lane, survivors compress-stored in triangle order. */
+RS__AVX512 static void rs__front_avx512(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
+                                        const rs__cluster *cl)
+{
+    const __m512 ox = _mm512_set1_ps(f->o.x), oy = _mm512_set1_ps(f->o.y), oz = _mm512_set1_ps(f->o.z);
+    const __m512 tx = _mm512_set1_ps(f->t.x), ty = _mm512_set1_ps(f->t.y), tz = _mm512_set1_ps(f->t.z);
+    const __m512 bx = _mm512_set1_ps(f->b.x), by = _mm512_set1_ps(f->b.y), bz = _mm512_set1_ps(f->b.z);
+    const __m512 nx = _mm512_set1_ps(f->n.x), ny = _mm512_set1_ps(f->n.y), nz = _mm512_set1_ps(f->n.z);
+    const __m512 zero = _mm512_setzero_ps(), quarter = _mm512_set1_ps(0.25f), eps = _mm512_set1_ps(RS__UV_EPS);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    rs__batch *b = &sc->batch;
+    for (uint32_t base = cl->first; base < cl->first + cl->count; base += 16) {
+        uint32_t left = cl->first + cl->count - base;
+        __mmask16 valid = left >= 16 ? (__mmask16)0xFFFF : (__mmask16)((1u << left) - 1u);
+        __m512 l[3][3], len[3], pu[3], pv[3];
+        __mmask16 above[3];
+        for (int v = 0; v < 3; v++) {
+            __m512 px = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v] + base), ox);
+            __m512 py = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v + 1] + base), oy);
+            __m512 pz = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v + 2] + base), oz);
+            l[v][0] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, tx), _mm512_mul_ps(py, ty)), _mm512_mul_ps(pz, tz));
+            l[v][1] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, bx), _mm512_mul_ps(py, by)), _mm512_mul_ps(pz, bz));
+            l[v][2] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, nx), _mm512_mul_ps(py, ny)), _mm512_mul_ps(pz, nz));
+            above[v] = _mm512_cmp_ps_mask(l[v][2], zero, _CMP_GT_OQ);
+        }
+        __mmask16 any = valid & (above[0] | above[1] | above[2]);
+        __mmask16 all = valid & above[0] & above[1] & above[2];
+        sc->stats.triangles_behind += (uint64_t)__builtin_popcount(valid & ~any);
+        if (!any) continue;
+        for (int v = 0; v < 3; v++) {
+            len[v] = _mm512_sqrt_ps(_mm512_add_ps(
+                _mm512_add_ps(_mm512_mul_ps(l[v][0], l[v][0]), _mm512_mul_ps(l[v][1], l[v][1])),
+                _mm512_mul_ps(l[v][2], l[v][2])));
+            __m512 inv = _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_add_ps(len[v], l[v][2]));
+            pu[v] = _mm512_mul_ps(l[v][0], inv);
+            pv[v] = _mm512_mul_ps(l[v][1], inv);
+        }
+        __m512 c2max = zero;
+        for (int k = 0; k < 3; k++) {
+            int m = k == 2 ? 0 : k + 1;
+            __m512 du = _mm512_sub_ps(pu[m], pu[k]), dv = _mm512_sub_ps(pv[m], pv[k]);
+            /* rs__maxf(c2max, c2) = c2max > c2 ? c2max : c2: vmaxps(c2max, c2) returns its second operand
+             * unless the first is greater, the same for non-NaN values */
+            c2max = _mm512_max_ps(c2max, _mm512_add_ps(_mm512_mul_ps(du, du), _mm512_mul_ps(dv, dv)));
+        }
+        __m512 mg = _mm512_add_ps(_mm512_mul_ps(c2max, quarter), eps);
+        __m512 umin = _mm512_sub_ps(_mm512_min_ps(_mm512_min_ps(pu[0], pu[1]), pu[2]), mg);
+        __m512 umax = _mm512_add_ps(_mm512_max_ps(_mm512_max_ps(pu[0], pu[1]), pu[2]), mg);
+        __m512 vmin = _mm512_sub_ps(_mm512_min_ps(_mm512_min_ps(pv[0], pv[1]), pv[2]), mg);
+        __m512 vmax = _mm512_add_ps(_mm512_max_ps(_mm512_max_ps(pv[0], pv[1]), pv[2]), mg);
+        __m512i i0, i1, j0, j1;
+        __mmask16 okx = rs__uv_to_texels16(umin, umax, ctx->res, &i0, &i1);
+        __mmask16 oky = rs__uv_to_texels16(vmin, vmax, ctx->res, &j0, &j1);
+        __mmask16 drawn = all & okx & oky;
+        __mmask16 crossing = any & ~all;
+        sc->stats.triangles_between_texels += (uint64_t)__builtin_popcount(all & ~drawn);
+        __mmask16 keep = drawn | crossing;
+        if (!keep) continue;
+        uint32_t n = b->n;
+        _mm512_mask_compressstoreu_epi32(b->tri + n, keep, _mm512_add_epi32(_mm512_set1_epi32((int)base), lane));
+        for (int v = 0; v < 3; v++) {
+            for (int c = 0; c < 3; c++) _mm512_mask_compressstoreu_ps(b->l[3 * v + c] + n, keep, l[v][c]);
+            _mm512_mask_compressstoreu_ps(b->len[v] + n, keep, len[v]);
+            _mm512_mask_compressstoreu_ps(b->pu[v] + n, keep, pu[v]);
+            _mm512_mask_compressstoreu_ps(b->pv[v] + n, keep, pv[v]);
+        }
+        _mm512_mask_compressstoreu_ps(b->c2max + n, keep, c2max);
+        _mm512_mask_compressstoreu_epi32(b->rect[0] + n, keep, i0);
+        _mm512_mask_compressstoreu_epi32(b->rect[1] + n, keep, i1);
+        _mm512_mask_compressstoreu_epi32(b->rect[2] + n, keep, j0);
+        _mm512_mask_compressstoreu_epi32(b->rect[3] + n, keep, j1);
+        _mm512_mask_compressstoreu_epi32(b->crossing + n, keep,
+                                         _mm512_maskz_mov_epi32(crossing, _mm512_set1_epi32(1)));
+        b->n = n + (uint32_t)__builtin_popcount(keep);
+    }
+}
+
+#define RS__AVX2 __attribute__((target("avx2")))
+
+/* rs__uv_to_texels for 8 intervals; returns the bit mask of non-empty ones. */
+RS__AVX2 static inline int rs__uv_to_texels8(__m256 lo, __m256 hi, uint32_t res, __m256i *a, __m256i *b)
+{
+    const __m256 h = _mm256_set1_ps(0.5f * (float)res), top = _mm256_set1_ps((float)res - 1.0f);
+    const __m256 one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
+    __m256 fa = _mm256_round_ps(_mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(lo, one), h), half),
+                                _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+    __m256 fb = _mm256_round_ps(_mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(hi, one), h), half),
+                                _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    fa = _mm256_max_ps(fa, _mm256_setzero_ps());
+    fb = _mm256_min_ps(fb, top);
+    int ok = _mm256_movemask_ps(_mm256_cmp_ps(fa, fb, _CMP_LE_OQ));
+    *a = _mm256_cvttps_epi32(fa);
+    *b = _mm256_cvttps_epi32(fb);
+    return ok;
+}
+
+/* The front end 8 triangles at a time (AVX2): rs__front_avx512 at half the
+ * width; survivors are copied out lane by lane (AVX2 has no compress). */
+RS__AVX2 static void rs__front_avx2(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
+                                    const rs__cluster *cl)
+{
+    const __m256 ox = _mm256_set1_ps(f->o.x), oy = _mm256_set1_ps(f->o.y), oz = _mm256_set1_ps(f->o.z);
+    const __m256 tx = _mm256_set1_ps(f->t.x), ty = _mm256_set1_ps(f->t.y), tz = _mm256_set1_ps(f->t.z);
+    const __m256 bx = _mm256_set1_ps(f->b.x), by = _mm256_set1_ps(f->b.y), bz = _mm256_set1_ps(f->b.z);
+    const __m256 nx = _mm256_set1_ps(f->n.x), ny = _mm256_set1_ps(f->n.y), nz = _mm256_set1_ps(f->n.z);
+    const __m256 zero = _mm256_setzero_ps(), quarter = _mm256_set1_ps(0.25f), eps = _mm256_set1_ps(RS__UV_EPS);
+    rs__batch *b = &sc->batch;
+    for (uint32_t base = cl->first; base < cl->first + cl->count; base += 8) {
+        uint32_t left = cl->first + cl->count - base;
+        int valid = left >= 8 ? 0xFF : (int)((1u << left) - 1u);
+        __m256 l[3][3], len[3], pu[3], pv[3];
+        int above[3];
+        for (int v = 0; v < 3; v++) {
+            __m256 px = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v] + base), ox);
+            __m256 py = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v + 1] + base), oy);
+            __m256 pz = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v + 2] + base), oz);
+            l[v][0] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, tx), _mm256_mul_ps(py, ty)), _mm256_mul_ps(pz, tz));
+            l[v][1] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, bx), _mm256_mul_ps(py, by)), _mm256_mul_ps(pz, bz));
+            l[v][2] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, nx), _mm256_mul_ps(py, ny)), _mm256_mul_ps(pz, nz));
+            above[v] = _mm256_movemask_ps(_mm256_cmp_ps(l[v][2], zero, _CMP_GT_OQ));
+        }
+        int any = valid & (above[0] | above[1] | above[2]);
+        int all = valid & above[0] & above[1] & above[2];
+        sc->stats.triangles_behind += (uint64_t)__builtin_popcount(valid & ~any);
+        if (!any) continue;
+        for (int v = 0; v < 3; v++) {
+            len[v] = _mm256_sqrt_ps(_mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(l[v][0], l[v][0]), _mm256_mul_ps(l[v][1], l[v][1])),
+                _mm256_mul_ps(l[v][2], l[v][2])));
+            __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_add_ps(len[v], l[v][2]));
+            pu[v] = _mm256_mul_ps(l[v][0], inv);
+            pv[v] = _mm256_mul_ps(l[v][1], inv);
+        }
+        __m256 c2max = zero;
+        for (int k = 0; k < 3; k++) {
+            int m = k == 2 ? 0 : k + 1;
+            __m256 du = _mm256_sub_ps(pu[m], pu[k]), dv = _mm256_sub_ps(pv[m], pv[k]);
+            c2max = _mm256_max_ps(c2max, _mm256_add_ps(_mm256_mul_ps(du, du), _mm256_mul_ps(dv, dv)));
+        }
+        __m256 mg = _mm256_add_ps(_mm256_mul_ps(c2max, quarter), eps);
+        __m256 umin = _mm256_sub_ps(_mm256_min_ps(_mm256_min_ps(pu[0], pu[1]), pu[2]), mg);
+        __m256 umax = _mm256_add_ps(_mm256_max_ps(_mm256_max_ps(pu[0], pu[1]), pu[2]), mg);
+        __m256 vmin = _mm256_sub_ps(_mm256_min_ps(_mm256_min_ps(pv[0], pv[1]), pv[2]), mg);
+        __m256 vmax = _mm256_add_ps(_mm256_max_ps(_mm256_max_ps(pv[0], pv[1]), pv[2]), mg);
+        __m256i i0, i1, j0, j1;
+        int okx = rs__uv_to_texels8(umin, umax, ctx->res, &i0, &i1);
+        int oky = rs__uv_to_texels8(vmin, vmax, ctx->res, &j0, &j1);
+        int drawn = all & okx & oky;
+        int crossing = any & ~all;
+        sc->stats.triangles_between_texels += (uint64_t)__builtin_popcount(all & ~drawn);
+        int keep = drawn | crossing;
+        if (!keep) continue;
+        float lv[3][3][8], lenv[3][8], puv[3][8], pvv[3][8], c2v[8];
+        int32_t rv[4][8];
+        for (int v = 0; v < 3; v++) {
+            for (int c = 0; c < 3; c++) _mm256_storeu_ps(lv[v][c], l[v][c]);
+            _mm256_storeu_ps(lenv[v], len[v]);
+            _mm256_storeu_ps(puv[v], pu[v]);
+            _mm256_storeu_ps(pvv[v], pv[v]);
+        }
+        _mm256_storeu_ps(c2v, c2max);
+        _mm256_storeu_si256((__m256i *)rv[0], i0);
+        _mm256_storeu_si256((__m256i *)rv[1], i1);
+        _mm256_storeu_si256((__m256i *)rv[2], j0);
+        _mm256_storeu_si256((__m256i *)rv[3], j1);
+        uint32_t n = b->n;
+        for (int m = keep; m; m &= m - 1, n++) {
+            int q = __builtin_ctz((unsigned)m);
+            b->tri[n] = base + (uint32_t)q;
+            for (int v = 0; v < 3; v++) {
+                for (int c = 0; c < 3; c++) b->l[3 * v + c][n] = lv[v][c][q];
+                b->len[v][n] = lenv[v][q];
+                b->pu[v][n] = puv[v][q];
+                b->pv[v][n] = pvv[v][q];
+            }
+            b->c2max[n] = c2v[q];
+            for (int c = 0; c < 4; c++) b->rect[c][n] = rv[c][q];
+            b->crossing[n] = (crossing >> q) & 1;
+        }
+        b->n = n;
+    }
+}
+#endif
+
+/* ------------------------------------------------------------------ setup */
+
+/* The double path of triangle s->tri: oriented edge normals from double
+ * local coordinates. */
+static void rs__setup_double(rs__setup *s)
+{
+    double a[3][3];
+    rs__tri_local_d(s->ctx, s->f, s->tri, a);
+    for (int k = 0; k < 3; k++) {
+        const double *p = a[k], *q = a[k == 2 ? 0 : k + 1];
+        s->ed[k][0] = s->sgn * (p[1] * q[2] - p[2] * q[1]);
+        s->ed[k][1] = s->sgn * (p[2] * q[0] - p[0] * q[2]);
+        s->ed[k][2] = s->sgn * (p[0] * q[1] - p[1] * q[0]);
+    }
+    s->have_d = 1;
+}
+
+/* Setup of batch entry k (see the file comment). Returns 0 when the triangle
+ * cannot cover a texel centre (the VPL in its plane), else fills *s and *rect
+ * (the front end's rectangle tightened by each edge's exact sagitta, or the
+ * crossing bound). */
+static int rs__setup_triangle(const rs_para_context *ctx, const rs_para_frame *f, const rs__batch *b, uint32_t k,
+                              rs__setup *s, rs__rect *rect)
+{
+    const uint32_t t = b->tri[k];
+    float a[3][3], len[3];
+    for (int v = 0; v < 3; v++) {
+        for (int c = 0; c < 3; c++) a[v][c] = b->l[3 * v + c][k];
+        len[v] = b->len[v][k];
+    }
+    s->ctx = ctx;
+    s->f = f;
+    s->tri = t;
+    s->have_d = 0;
+
+    /* orientation: det = A . N with N rotated from world space */
+    float nw[3] = {ctx->soa[9][t], ctx->soa[10][t], ctx->soa[11][t]};
+    float n[3] = {(nw[0] * f->t.x + nw[1] * f->t.y) + nw[2] * f->t.z,
+                  (nw[0] * f->b.x + nw[1] * f->b.y) + nw[2] * f->b.z,
+                  (nw[0] * f->n.x + nw[1] * f->n.y) + nw[2] * f->n.z};
+    float det = (a[0][0] * n[0] + a[0][1] * n[1]) + a[0][2] * n[2];
+    float detb = RS__FILTER * (len[0] * ((fabsf(nw[0]) + fabsf(nw[1])) + fabsf(nw[2])));
+    float sgn;
+    if (det > detb) {
+        sgn = 1.0f;
+    } else if (det < -detb) {
+        sgn = -1.0f;
+    } else {
+        double ad[3][3];
+        rs__tri_local_d(ctx, f, t, ad);
+        double bc[3] = {ad[1][1] * ad[2][2] - ad[1][2] * ad[2][1], ad[1][2] * ad[2][0] - ad[1][0] * ad[2][2],
+                        ad[1][0] * ad[2][1] - ad[1][1] * ad[2][0]};
+        double dd = ad[0][0] * bc[0] + ad[0][1] * bc[1] + ad[0][2] * bc[2];
+        if (dd == 0.0) return 0;
+        sgn = dd > 0.0 ? 1.0f : -1.0f;
+    }
+    s->sgn = sgn;
+    s->det = sgn * det;
+    if (!(s->det > 0.0f)) return 0; /* nearly edge-on: no texel centre is met in front */
+    for (int c = 0; c < 3; c++) s->nf[c] = sgn * n[c];
+    for (int e = 0; e < 3; e++) {
+        const float *p = a[e], *q = a[e == 2 ? 0 : e + 1];
+        s->e[e][0] = sgn * (p[1] * q[2] - p[2] * q[1]);
+        s->e[e][1] = sgn * (p[2] * q[0] - p[0] * q[2]);
+        s->e[e][2] = sgn * (p[0] * q[1] - p[1] * q[0]);
+        s->bound[e] = RS__FILTER * (len[e] * len[e == 2 ? 0 : e + 1]);
+    }
+
+    if (b->crossing[k]) {
+        double ad[3][3];
+        rs__tri_local_d(ctx, f, t, ad);
+        *rect = rs__crossing_rect(ctx, ad);
+        return 1;
+    }
+    rs__rect r = {b->rect[0][k], b->rect[1][k], b->rect[2][k], b->rect[3][k]};
+    *rect = r;
+    /* Tighten when the c^2/4 margin exceeds 1/8 texel: each edge's chord box
+     * grown by its own sagitta h = (c^2/4) |e.z| / (|e| + sqrt(|e|^2 -
+     * (c^2/4) e.z^2)) (r = |e| / |e.z|), inflated by 1e-3 against the float
+     * error of e. */
+    if (b->c2max[k] * 0.25f > 0.25f / (float)ctx->res) {
+        float umin = FLT_MAX, umax = -FLT_MAX, vmin = FLT_MAX, vmax = -FLT_MAX;
+        for (int e = 0; e < 3; e++) {
+            int l = e == 2 ? 0 : e + 1;
+            float pu0 = b->pu[e][k], pu1 = b->pu[l][k], pv0 = b->pv[e][k], pv1 = b->pv[l][k];
+            float du = pu1 - pu0, dv = pv1 - pv0;
+            float q = 0.25f * (du * du + dv * dv);
+            const float *ek = s->e[e];
+            float ee = (ek[0] * ek[0] + ek[1] * ek[1]) + ek[2] * ek[2];
+            float ez = fabsf(ek[2]);
+            float h = ee > 0.0f ? q * ez / (sqrtf(ee) + sqrtf(rs__maxf(0.0f, ee - q * ez * ez))) : q;
+            h = h * 1.001f + RS__UV_EPS;
+            umin = rs__minf(umin, rs__minf(pu0, pu1) - h);
+            umax = rs__maxf(umax, rs__maxf(pu0, pu1) + h);
+            vmin = rs__minf(vmin, rs__minf(pv0, pv1) - h);
+            vmax = rs__maxf(vmax, rs__maxf(pv0, pv1) + h);
+        }
+        *rect = rs__rect_meet(*rect, rs__uv_rect(umin, umax, vmin, vmax, ctx->res));
+    }
+    return 1;
+}
+
+/* ------------------------------------------------------------------ texel test */
+
+/* Texel with direction (dx, dy, dz) given its three float edge values: 1 if
+ * covered. Shared by every path (the SIMD scan calls it for the lanes the
+ * filter left undecided). */
+static int rs__resolve(rs__setup *s, const float g[3], float dx, float dy, float dz, uint64_t *fallbacks)
+{
+    for (int k = 0; k < 3; k++)
+        if (g[k] < -s->bound[k]) return 0;
+    for (int k = 0; k < 3; k++) {
+        if (g[k] > s->bound[k]) continue;
+        (*fallbacks)++;
+        if (!s->have_d) rs__setup_double(s);
+        const double *e = s->ed[k];
+        double gd = ((double)dx * e[0] + (double)dy * e[1]) + (double)dz * e[2];
+        /* SoS: on the plane, the first nonzero component of e' decides */
+        int in = gd != 0.0 ? gd > 0.0 : e[0] != 0.0 ? e[0] > 0.0 : e[1] != 0.0 ? e[1] > 0.0 : e[2] > 0.0;
+        if (!in) return 0;
+    }
+    return 1;
+}
+
+/* Scalar texel loop over rect (the reference). Returns texels tested. */
+static uint64_t rs__scan_scalar(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
+{
+    const uint32_t R = ctx->res;
+    uint64_t tested = 0;
+    for (int32_t j = r.j0; j <= r.j1; j++) {
+        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
+        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
+        float dy = ctx->d2[j];
+        float ry[3] = {dy * s->e[0][1], dy * s->e[1][1], dy * s->e[2][1]};
+        float ny = dy * s->nf[1];
+        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
+        float *depth = sc->depth + (size_t)j * R;
+        for (int32_t i = lo; i <= hi; i++) {
+            float dx = ctx->d2[i], dz = dzr[i];
+            float g[3];
+            for (int k = 0; k < 3; k++) g[k] = (dx * s->e[k][0] + ry[k]) + dz * s->e[k][2];
+            tested++;
+            if (g[0] < -s->bound[0] || g[1] < -s->bound[1] || g[2] < -s->bound[2]) continue; /* certainly out */
+            int in = g[0] > s->bound[0] && g[1] > s->bound[1] && g[2] > s->bound[2];
+            if (!in && !rs__resolve(s, g, dx, dy, dz, &sc->stats.texels_exact_fallback)) continue;
+            float dn = (dx * s->nf[0] + ny) + dz * s->nf[2];
+            float t = (s->det * wr[i]) / dn;
+            if (t > 0.0f && t < depth[i]) depth[i] = t;
+        }
+    }
+    return tested;
+}
+
+#if RS__HAVE_X86
+/* The texel loop 16 texels at a time: the same float expressions lane by
+ * lane; lanes the filter leaves undecided go through rs__resolve. */
+RS__AVX512 static uint64_t rs__scan_avx512(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
+{
+    const uint32_t R = ctx->res;
+    uint64_t tested = 0;
+    __m512 ex[3], ez[3], bp[3], bn[3];
+    for (int k = 0; k < 3; k++) {
+        ex[k] = _mm512_set1_ps(s->e[k][0]);
+        ez[k] = _mm512_set1_ps(s->e[k][2]);
+        bp[k] = _mm512_set1_ps(s->bound[k]);
+        bn[k] = _mm512_set1_ps(-s->bound[k]);
+    }
+    const __m512 nx = _mm512_set1_ps(s->nf[0]), nz = _mm512_set1_ps(s->nf[2]), det = _mm512_set1_ps(s->det);
+    const __m512 zero = _mm512_setzero_ps();
+    for (int32_t j = r.j0; j <= r.j1; j++) {
+        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
+        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
+        if (lo > hi) continue;
+        float dy = ctx->d2[j];
+        __m512 ry[3];
+        for (int k = 0; k < 3; k++) ry[k] = _mm512_set1_ps(dy * s->e[k][1]);
+        const __m512 ny = _mm512_set1_ps(dy * s->nf[1]);
+        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
+        float *depth = sc->depth + (size_t)j * R;
+        for (int32_t i = lo; i <= hi; i += 16) {
+            int32_t cnt = hi - i + 1;
+            __mmask16 valid = cnt >= 16 ? (__mmask16)0xFFFF : (__mmask16)((1u << cnt) - 1u);
+            tested += (uint64_t)__builtin_popcount(valid);
+            __m512 dx = _mm512_maskz_loadu_ps(valid, ctx->d2 + i), dz = _mm512_maskz_loadu_ps(valid, dzr + i);
+            __m512 g[3];
+            __mmask16 in = valid, out = 0;
+            for (int k = 0; k < 3; k++) {
+                g[k] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, ex[k]), ry[k]), _mm512_mul_ps(dz, ez[k]));
+                in &= _mm512_cmp_ps_mask(g[k], bp[k], _CMP_GT_OQ);
+                out |= _mm512_cmp_ps_mask(g[k], bn[k], _CMP_LT_OQ);
+            }
+            __mmask16 unsure = valid & ~in & ~out;
+            if (unsure) {
+                float gl[3][16], dxl[16], dzl[16];
+                for (int k = 0; k < 3; k++) _mm512_storeu_ps(gl[k], g[k]);
+                _mm512_storeu_ps(dxl, dx);
+                _mm512_storeu_ps(dzl, dz);
+                for (uint32_t m = unsure; m; m &= m - 1) {
+                    int q = __builtin_ctz(m);
+                    float gq[3] = {gl[0][q], gl[1][q], gl[2][q]};
+                    if (rs__resolve(s, gq, dxl[q], dy, dzl[q], &sc->stats.texels_exact_fallback))
+                        in |= (__mmask16)(1u << q);
+                }
+            }
+            if (!in) continue;
+            __m512 w = _mm512_maskz_loadu_ps(in, wr + i);
+            __m512 dn = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, nx), ny), _mm512_mul_ps(dz, nz));
+            __m512 t = _mm512_div_ps(_mm512_mul_ps(det, w), dn);
+            __m512 old = _mm512_maskz_loadu_ps(in, depth + i);
+            __mmask16 upd = in & _mm512_cmp_ps_mask(t, zero, _CMP_GT_OQ) & _mm512_cmp_ps_mask(t, old, _CMP_LT_OQ);
+            _mm512_mask_storeu_ps(depth + i, upd, t);
+        }
+    }
+    return tested;
+}
+
+/* The texel loop 8 texels at a time (AVX2), as rs__scan_avx512. */
+RS__AVX2 static uint64_t rs__scan_avx2(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
+{
+    const uint32_t R = ctx->res;
+    uint64_t tested = 0;
+    __m256 ex[3], ez[3], bp[3], bn[3];
+    for (int k = 0; k < 3; k++) {
+        ex[k] = _mm256_set1_ps(s->e[k][0]);
+        ez[k] = _mm256_set1_ps(s->e[k][2]);
+        bp[k] = _mm256_set1_ps(s->bound[k]);
+        bn[k] = _mm256_set1_ps(-s->bound[k]);
+    }
+    const __m256 nx = _mm256_set1_ps(s->nf[0]), nz = _mm256_set1_ps(s->nf[2]), det = _mm256_set1_ps(s->det);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (int32_t j = r.j0; j <= r.j1; j++) {
+        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
+        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
+        if (lo > hi) continue;
+        float dy = ctx->d2[j];
+        __m256 ry[3];
+        for (int k = 0; k < 3; k++) ry[k] = _mm256_set1_ps(dy * s->e[k][1]);
+        const __m256 ny = _mm256_set1_ps(dy * s->nf[1]);
+        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
+        float *depth = sc->depth + (size_t)j * R;
+        for (int32_t i = lo; i <= hi; i += 8) {
+            int32_t cnt = hi - i + 1;
+            __m256i vmask = _mm256_cmpgt_epi32(_mm256_set1_epi32(cnt), lane);
+            int valid = _mm256_movemask_ps(_mm256_castsi256_ps(vmask));
+            tested += (uint64_t)__builtin_popcount(valid);
+            __m256 dx = _mm256_maskload_ps(ctx->d2 + i, vmask), dz = _mm256_maskload_ps(dzr + i, vmask);
+            __m256 g[3];
+            int in = valid, out = 0;
+            for (int k = 0; k < 3; k++) {
+                g[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, ex[k]), ry[k]), _mm256_mul_ps(dz, ez[k]));
+                in &= _mm256_movemask_ps(_mm256_cmp_ps(g[k], bp[k], _CMP_GT_OQ));
+                out |= _mm256_movemask_ps(_mm256_cmp_ps(g[k], bn[k], _CMP_LT_OQ));
+            }
+            int unsure = valid & ~in & ~out;
+            if (unsure) {
+                float gl[3][8], dxl[8], dzl[8];
+                for (int k = 0; k < 3; k++) _mm256_storeu_ps(gl[k], g[k]);
+                _mm256_storeu_ps(dxl, dx);
+                _mm256_storeu_ps(dzl, dz);
+                for (int m = unsure; m; m &= m - 1) {
+                    int q = __builtin_ctz((unsigned)m);
+                    float gq[3] = {gl[0][q], gl[1][q], gl[2][q]};
+                    if (rs__resolve(s, gq, dxl[q], dy, dzl[q], &sc->stats.texels_exact_fallback)) in |= 1 << q;
+                }
+            }
+            if (!in) continue;
+            __m256 w = _mm256_maskload_ps(wr + i, vmask);
+            __m256 dn = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, nx), ny), _mm256_mul_ps(dz, nz));
+            __m256 t = _mm256_div_ps(_mm256_mul_ps(det, w), dn);
+            __m256 old = _mm256_maskload_ps(depth + i, vmask);
+            int upd = in & _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ),
+                                                             _mm256_cmp_ps(t, old, _CMP_LT_OQ)));
+            __m256i umask = _mm256_cmpgt_epi32(
+                _mm256_and_si256(_mm256_set1_epi32(upd), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                _mm256_setzero_si256());
+            _mm256_maskstore_ps(depth + i, umask, t);
+        }
+    }
+    return tested;
+}
+#endif
+
+/* ------------------------------------------------------------------ per map */
+
+/* Cluster cap -> texel rectangle and nearest distance; 0 = nothing to draw
+ * (behind the tangent plane, or no texel centre in the cap's image). */
+static int rs__cluster_bound(const rs_para_context *ctx, const rs_para_frame *f, const rs__cluster *cl,
+                             rs__rect *rect, float *near)
+{
+    float c[3];
+    rs__local_f(f, cl->cx, cl->cy, cl->cz, c);
+    float rho2 = c[0] * c[0] + c[1] * c[1];
+    float dist = sqrtf(rho2 + c[2] * c[2]);
+    /* Wholly behind the tangent plane (float error of c[2] is below
+     * 4 u dist; the margin is 1e-6 dist). */
+    if (c[2] + cl->r < -1e-6f * dist) return 0;
+    float sa = cl->r / dist * 1.00001f;
+    if (!(dist > 0.0f) || !(sa < 1.0f)) { /* the VPL is inside the sphere */
+        *near = 0.0f;
+        *rect = rs__uv_rect(-1.0f, 1.0f, -1.0f, 1.0f, ctx->res);
+        return 1;
+    }
+    *near = (dist - cl->r) - 1e-4f * dist; /* the margin: see rs__draw_cluster */
+    float ca = sqrtf(1.0f - sa * sa);
+    float sxy = sqrtf(rho2);
+    float sphi = sxy / dist, cphi = c[2] / dist;
+    float s_lo = sphi * ca - cphi * sa, c_lo = cphi * ca + sphi * sa; /* phi - alpha */
+    float s_hi = sphi * ca + cphi * sa, c_hi = cphi * ca - sphi * sa; /* phi + alpha */
+    /* phi + alpha >= pi (sin <= 0): the cap holds the south pole -n, whose
+     * image is at infinity; the part above the horizon may be anywhere. */
+    if (!(s_hi > 0.0f) || !(1.0f + c_hi > 1e-3f)) {
+        *rect = rs__uv_rect(-1.0f, 1.0f, -1.0f, 1.0f, ctx->res);
+        return 1;
+    }
+    float r_lo = s_lo / (1.0f + c_lo), r_hi = s_hi / (1.0f + c_hi);
+    float mid = 0.5f * (r_lo + r_hi), rad = 0.5f * (r_hi - r_lo) * 1.0001f + 1e-5f;
+    float cx = sxy > 0.0f ? c[0] / sxy : 1.0f, cy = sxy > 0.0f ? c[1] / sxy : 0.0f;
+    float mu = mid * cx, mv = mid * cy;
+    *rect = rs__uv_rect(rs__maxf(mu - rad, -1.0f), rs__minf(mu + rad, 1.0f), rs__maxf(mv - rad, -1.0f),
+                        rs__minf(mv + rad, 1.0f), ctx->res);
+    return !rs__rect_empty(*rect);
+}
+
+/* Maximum depth over tile (ti, tj)'s inside texels (-INFINITY: none). */
+static float rs__tile_max(const rs_para_context *ctx, const rs__scratch *sc, int32_t ti, int32_t tj)
+{
+    const uint32_t R = ctx->res;
+    float m = -INFINITY;
+    int32_t jend = (tj + 1) * RS__TILE < (int32_t)R ? (tj + 1) * RS__TILE : (int32_t)R;
+    for (int32_t j = tj * RS__TILE; j < jend; j++) {
+        int32_t lo = ti * RS__TILE > ctx->row_lo[j] ? ti * RS__TILE : ctx->row_lo[j];
+        int32_t hi = (ti + 1) * RS__TILE - 1 < ctx->row_hi[j] ? (ti + 1) * RS__TILE - 1 : ctx->row_hi[j];
+        const float *d = sc->depth + (size_t)j * R;
+        for (int32_t i = lo; i <= hi; i++) m = d[i] > m ? d[i] : m;
+    }
+    return m;
+}
+
+/* Marks the tiles the texel rectangle r touched: their maxima are
+ * recomputed when an occlusion test next reads them. */
+static void rs__dirty_tiles(const rs_para_context *ctx, rs__scratch *sc, rs__rect r)
+{
+    for (int32_t tj = r.j0 / RS__TILE; tj <= r.j1 / RS__TILE; tj++)
+        for (int32_t ti = r.i0 / RS__TILE; ti <= r.i1 / RS__TILE; ti++) sc->tile_dirty[tj * ctx->tiles + ti] = 1;
+}
+
+/* 1 if every tile r touches holds only depths nearer than `near` (so nothing
+ * at distance >= near can change the map there). Stops at the first tile that
+ * does not. */
+static int rs__occluded(const rs_para_context *ctx, rs__scratch *sc, rs__rect r, float near)
+{
+    for (int32_t tj = r.j0 / RS__TILE; tj <= r.j1 / RS__TILE; tj++)
+        for (int32_t ti = r.i0 / RS__TILE; ti <= r.i1 / RS__TILE; ti++) {
+            uint32_t t = tj * ctx->tiles + ti;
+            if (sc->tile_dirty[t]) {
+                sc->tile_max[t] = rs__tile_max(ctx, sc, ti, tj);
+                sc->tile_dirty[t] = 0;
+            }
+            if (!(near > sc->tile_max[t])) return 0;
+        }
+    return 1;
+}
+
+/* Stable LSD radix sort of order[0..n) by key (two 8-bit passes; the result
+ * is back in sc->order). */
+static void rs__sort_clusters(rs__scratch *sc, uint32_t n)
+{
+    uint32_t *src = sc->order, *dst = sc->order_tmp;
+    for (int pass = 0; pass < 2; pass++) {
+        uint32_t count[257] = {0};
+        int shift = 8 * pass;
+        for (uint32_t k = 0; k < n; k++) count[((sc->key[src[k]] >> shift) & 255) + 1]++;
+        for (int b = 0; b < 256; b++) count[b + 1] += count[b];
+        for (uint32_t k = 0; k < n; k++) dst[count[(sc->key[src[k]] >> shift) & 255]++] = src[k];
+        uint32_t *tmp = src;
+        src = dst;
+        dst = tmp;
+    }
+}
+
+/* Draws one cluster: front end, then setup and scan of every survivor.
+ * Returns the texel rectangle written to (for the tile maxima). */
+static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
+                                 const rs__cluster *cl)
+{
+    rs__rect dirty = {(int32_t)ctx->res, -1, (int32_t)ctx->res, -1};
+    rs__batch *b = &sc->batch;
+    b->n = 0;
+#if RS__HAVE_X86
+    if (ctx->simd == RS_SIMD_AVX512)
+        rs__front_avx512(ctx, sc, f, cl);
+    else if (ctx->simd == RS_SIMD_AVX2)
+        rs__front_avx2(ctx, sc, f, cl);
+    else
+#endif
+        rs__front_scalar(ctx, sc, f, cl);
+    for (uint32_t k = 0; k < b->n; k++) {
+        rs__setup s;
+        rs__rect rect;
+        if (!b->crossing[k]) {
+            /* Occluded already? Every point of the triangle is at least
+             * min |vertex| - longest edge from the VPL; if that is beyond
+             * every depth in the tiles its rectangle touches, it cannot
+             * change the map. Tiles written earlier in this cluster keep
+             * maxima that may be too large (they are marked dirty only after
+             * the cluster), which only culls less. The margin, 1e-4 of the
+             * distance (also for clusters), covers the float error of the
+             * lengths (~3e-7) and of the hit distances t the scan would
+             * compute, except at incidences within ~0.1 degree of grazing,
+             * where t itself is that uncertain (several codes). */
+            float lmin = rs__minf(rs__minf(b->len[0][k], b->len[1][k]), b->len[2][k]);
+            float near = (lmin - ctx->soa[12][b->tri[k]]) - 1e-4f * lmin;
+            rs__rect r = {b->rect[0][k], b->rect[1][k], b->rect[2][k], b->rect[3][k]};
+            if (near > 0.0f && rs__occluded(ctx, sc, r, near)) {
+                sc->stats.triangles_occluded++;
+                continue;
+            }
+        }
+        if (!rs__setup_triangle(ctx, f, b, k, &s, &rect) || rs__rect_empty(rect)) continue;
+        sc->stats.triangles_drawn++;
+#if RS__HAVE_X86
+        if (ctx->simd == RS_SIMD_AVX512)
+            sc->stats.texels_tested += rs__scan_avx512(ctx, sc, &s, rect);
+        else if (ctx->simd == RS_SIMD_AVX2)
+            sc->stats.texels_tested += rs__scan_avx2(ctx, sc, &s, rect);
+        else
+#endif
+            sc->stats.texels_tested += rs__scan_scalar(ctx, sc, &s, rect);
+        dirty = (rs__rect){rect.i0 < dirty.i0 ? rect.i0 : dirty.i0, rect.i1 > dirty.i1 ? rect.i1 : dirty.i1,
+                           rect.j0 < dirty.j0 ? rect.j0 : dirty.j0, rect.j1 > dirty.j1 ? rect.j1 : dirty.j1};
+    }
+    return dirty;
+}
+
+static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, pf_vec3 nrm, float range,
+                           uint16_t *out)
+{
+    const uint32_t R = ctx->res;
+    rs_para_frame f = rs_para_frame_make(pos, nrm);
+    for (size_t k = 0; k < (size_t)R * R; k++) sc->depth[k] = INFINITY;
+    for (uint32_t k = 0; k < ctx->tiles * ctx->tiles; k++) {
+        sc->tile_max[k] = INFINITY;
+        sc->tile_dirty[k] = 0;
+    }
+    sc->stats.maps++;
+
+    /* 1. cull clusters, bound the rest */
+    uint32_t n = 0;
+    float key_scale = 65535.0f / range;
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
+        sc->stats.clusters_in++;
+        if (!rs__cluster_bound(ctx, &f, &ctx->clusters[c], &sc->crect[c], &sc->cnear[c])) {
+            sc->stats.clusters_behind++;
+            continue;
+        }
+        float k = sc->cnear[c] * key_scale;
+        sc->key[c] = k < 65535.0f ? (uint16_t)k : 65535;
+        sc->order[n++] = c;
+    }
+    /* 2. front to back */
+    rs__sort_clusters(sc, n);
+
+    /* 3. draw, skipping clusters behind what is drawn already */
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t c = sc->order[k];
+        if (rs__occluded(ctx, sc, sc->crect[c], sc->cnear[c])) {
+            sc->stats.clusters_occluded++;
+            continue;
+        }
+        const rs__cluster *cl = &ctx->clusters[c];
+        sc->stats.triangles_in += cl->count;
+        rs__rect dirty = rs__draw_cluster(ctx, sc, &f, cl);
+        if (!rs__rect_empty(dirty)) rs__dirty_tiles(ctx, sc, dirty);
+    }
+
+    /* 4. quantise */
+    float scale = RS_PARA_CODES / range;
+    for (uint32_t j = 0; j < R; j++)
+        for (uint32_t i = 0; i < R; i++) {
+            size_t idx = (size_t)j * R + i;
+            int inside = (int32_t)i >= ctx->row_lo[j] && (int32_t)i <= ctx->row_hi[j];
+            out[idx] = inside ? rs__quantise_one(sc->depth[idx], scale) : RS_PARA_OUTSIDE;
+        }
+}
+
+/* ------------------------------------------------------------------ render calls */
+
+typedef struct rs__job {
+    rs_para_context *ctx;
+    uint16_t *atlas;
+    const pf_vec3 *positions, *normals;
+    float range;
+} rs__job;
+
+static void rs__map_job(void *p, uint32_t item, uint32_t worker)
+{
+    rs__job *job = p;
+    size_t texels = (size_t)job->ctx->res * job->ctx->res;
+    rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
+                   job->atlas + texels * item);
+}
+
+void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                    const pf_vec3 *normals, uint32_t count, float range, rs_para_stats *stats)
+{
+    assert(range > 0.0f);
+    uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
+    if (!rs__scratch_reserve(ctx, threads)) {
+        /* Out of memory growing the scratch: fall back to the scratch we have
+         * (at least one is needed). */
+        assert(ctx->scratch_count > 0);
+        jobs = NULL;
+    }
+    for (uint32_t k = 0; k < ctx->scratch_count; k++) memset(&ctx->scratch[k]->stats, 0, sizeof(rs_para_stats));
+    rs__job job = {ctx, atlas, positions, normals, range};
+    if (jobs)
+        pf_jobs_parallel_for(jobs, rs__map_job, &job, count, 1);
+    else
+        for (uint32_t k = 0; k < count; k++) rs__map_job(&job, k, 0);
+    if (stats) {
+        memset(stats, 0, sizeof *stats);
+        for (uint32_t k = 0; k < ctx->scratch_count; k++) {
+            const rs_para_stats *s = &ctx->scratch[k]->stats;
+            stats->maps += s->maps;
+            stats->clusters_in += s->clusters_in;
+            stats->clusters_behind += s->clusters_behind;
+            stats->clusters_occluded += s->clusters_occluded;
+            stats->triangles_in += s->triangles_in;
+            stats->triangles_behind += s->triangles_behind;
+            stats->triangles_between_texels += s->triangles_between_texels;
+            stats->triangles_occluded += s->triangles_occluded;
+            stats->triangles_drawn += s->triangles_drawn;
+            stats->texels_tested += s->texels_tested;
+            stats->texels_exact_fallback += s->texels_exact_fallback;
+        }
+    }
+}
+
+/* The Embree reference. */
+typedef struct rs__traced_job {
+    uint16_t *atlas;
+    uint32_t res;
+    const pf_rt *rt;
+    const pf_vec3 *positions, *normals;
+    float range;
+    pf_ray *rays;   /* per worker: res*res */
+    pf_hit *hits;   /* per worker: res*res */
+    uint32_t *idx;  /* per worker: res*res */
+} rs__traced_job;
+
+static void rs__traced_map(void *p, uint32_t item, uint32_t worker)
+{
+    rs__traced_job *job = p;
+    const uint32_t R = job->res;
+    size_t texels = (size_t)R * R;
+    pf_ray *rays = job->rays + texels * worker;
+    pf_hit *hits = job->hits + texels * worker;
+    uint32_t *idx = job->idx + texels * worker;
+    uint16_t *out = job->atlas + texels * item;
+    rs_para_frame f = rs_para_frame_make(job->positions[item], job->normals[item]);
+    uint32_t n = 0;
+    for (uint32_t j = 0; j < R; j++)
+        for (uint32_t i = 0; i < R; i++) {
+            if (!rs_para_texel_inside(R, i, j)) {
+                out[(size_t)j * R + i] = RS_PARA_OUTSIDE;
+                continue;
+            }
+            /* the same float direction the rasterizer tests, D / |D| */
+            float u = rs__texel_centre(R, i), v = rs__texel_centre(R, j);
+            float s = u * u + v * v;
+            float dx = 2.0f * u, dy = 2.0f * v, dz = 1.0f - s, w = 1.0f + s;
+            pf_vec3 d = pf_v3((f.t.x * dx + f.b.x * dy) + f.n.x * dz, (f.t.y * dx + f.b.y * dy) + f.n.y * dz,
+                              (f.t.z * dx + f.b.z * dy) + f.n.z * dz);
+            pf_ray ray = {f.o, 0.0f, pf_v3_scale(d, 1.0f / w), INFINITY};
+            rays[n] = ray;
+            idx[n++] = j * R + i;
+        }
+    pf_rt_intersect(job->rt, rays, hits, n);
+    float scale = RS_PARA_CODES / job->range;
+    for (uint32_t k = 0; k < n; k++)
+        out[idx[k]] = hits[k].prim == PF_RT_MISS ? RS_PARA_EMPTY : rs__quantise_one(hits[k].t, scale);
+}
+
+void rs_para_render_traced(uint16_t *atlas, uint32_t resolution, const pf_rt *rt, pf_jobs *jobs,
+                           const pf_vec3 *positions, const pf_vec3 *normals, uint32_t count, float range)
+{
+    uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
+    size_t texels = (size_t)resolution * resolution;
+    rs__traced_job job = {atlas, resolution, rt, positions, normals, range, NULL, NULL, NULL};
+    job.rays = malloc(texels * threads * sizeof(pf_ray));
+    job.hits = malloc(texels * threads * sizeof(pf_hit));
+    job.idx = malloc(texels * threads * sizeof(uint32_t));
+    if (!job.rays || !job.hits || !job.idx) {
+        /* tests and the bench only: report by leaving maps empty */
+        for (size_t k = 0; k < texels * count; k++) atlas[k] = RS_PARA_EMPTY;
+    } else if (jobs) {
+        pf_jobs_parallel_for(jobs, rs__traced_map, &job, count, 1);
+    } else {
+        for (uint32_t k = 0; k < count; k++) rs__traced_map(&job, k, 0);
+    }
+    free(job.rays);
+    free(job.hits);
+    free(job.idx);
+}

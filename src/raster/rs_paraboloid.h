@@ -1,0 +1,225 @@
+/* rs_paraboloid: exact paraboloid shadow maps for virtual point lights.
+ *
+ * This work is based on:
+ * - Brabec, Annen, Seidel: Shadow mapping for hemispherical and
+ *   omnidirectional light sources (CGI 2002): the paraboloid mapping.
+ * - Laine, Saransaari, Kontkanen, Lehtinen, Aila: Incremental Instant
+ *   Radiosity for Real-Time Indirect Illumination (EGSR 2007), Sec. 4.6 (one
+ *   paraboloid shadow map per new VPL) and Sec. 6 (256x256 maps, 16-bit
+ *   depth; the scene had to be tessellated because the paraboloid projection
+ *   bends straight edges).
+ * - Hedman, Karras, Lehtinen: Sequential Monte Carlo Instant Radiosity (TVCG
+ *   2017), Sec. 4 (128x128 maps, resampled from cube maps to avoid the
+ *   tessellation) and Sec. 5.4 (memory: 2048 maps).
+ *
+ * softgi needs neither tessellation nor resampling: every texel is decided
+ * exactly. Per texel the ray from the VPL along the texel centre's direction
+ * is intersected with each triangle whose conservative image bound contains
+ * the centre (edge tests in the ray's space, watertight, see rs_paraboloid.c),
+ * and the nearest distance is kept. The result is the map a ray tracer shoots
+ * through the texel centres, bit for bit up to float rounding at edges.
+ *
+ * Mapping (the VPL frame: normal n is +z, tangents t = x, b = y from
+ * pf_v3_basis(n); local p = ((q-o).t, (q-o).b, (q-o).n)):
+ *   direction d (unit, d.z >= 0)  ->  (u, v) = (d.x, d.y) / (1 + d.z)
+ *   (u, v) in the unit disc       ->  d = (2u, 2v, 1 - u^2 - v^2) / (1 + u^2 + v^2)
+ * This is the stereographic projection from -n: the hemisphere maps onto the
+ * unit disc, great circles (the images of straight edges) onto circles.
+ * Texel (i, j) of an R x R map covers [-1, 1]^2 with its centre at
+ *   u_i = (2i + 1 - R) / R,  v_j = (2j + 1 - R) / R,
+ * stored at map[j * R + i] (row j = v, column i = u). A texel is inside iff
+ * its centre is inside the unit disc, decided in integers:
+ * (2i+1-R)^2 + (2j+1-R)^2 <= R^2 (never equal). About pi/4 of the texels
+ * are inside; the others hold RS_PARA_OUTSIDE.
+ *
+ * Storage: one uint16 per texel, nothing else per map (a 128x128 map is
+ * 32 KiB, so 2048 maps are exactly 64 MiB). Codes:
+ *   0 .. RS_PARA_MAX_CODE  distance t from the VPL, quantised with the
+ *                          call's `range`: code = min(floor(t * S), MAX_CODE),
+ *                          S = RS_PARA_CODES / range. The code brackets the
+ *                          distance: code/S <= t < (code+1)/S (one step =
+ *                          range / 65534; hits beyond `range` clamp to
+ *                          MAX_CODE and read back as nearer than they are);
+ *   RS_PARA_EMPTY          inside the disc, nothing hit;
+ *   RS_PARA_OUTSIDE        texel centre outside the unit disc.
+ * rs_para_default_range gives the scene's bounding-box diagonal (times 1.01),
+ * so no hit between two points of the scene clamps.
+ *
+ * Lookup (rs_para_visible): the texel whose square contains the point's
+ * (u, v) (nearest texel centre; points whose texel is outside the disc use
+ * the nearest inside texel along the same radius). The point is visible iff
+ *   |p - o| <= (code + 1) / S + bias,
+ * i.e. it is compared with the upper end of the code's interval, so the
+ * quantisation never shadows a surface by itself; it can let light through
+ * an occluder closer than one step (range / 65534: 0.8 mm on Sibenik, 0.05
+ * units = 0.15 mm on the conference room) behind the point. The bias must
+ * cover the texel footprint: a receiver at distance d is compared with the
+ * depth of the texel centre's ray, which sees the receiver's plane up to
+ * w * tan(theta) away (w = rs_para_texel_world_size, theta = angle between
+ * the receiver's normal and the direction to the VPL); a bias of
+ * w * (1 + tan(theta)) (theta clamped as rs_shadow does) is the usual choice
+ * (rs_para_bias). The tests compare rendered maps texel by texel (same
+ * directions), where the codes of two correct maps differ by at most 1.
+ *
+ * Determinism: every map is written by one job item from read-only inputs;
+ * the depth kept per texel is the minimum over triangles (order-free); the
+ * SIMD paths (AVX-512: 16 lanes, AVX2: 8) evaluate the same float
+ * expressions as the scalar path (no FMA, IEEE sqrt and division), so the
+ * bytes are the same for any thread count and SIMD path (tested). Release
+ * and Debug builds give the same bytes too (the golden hash test runs in
+ * both).
+ *
+ * Speed (tests/test_paraboloid.c, SOFTGI_PARA_BENCH=1; one 128x128 map,
+ * 1 thread, mean over 64 VPLs; Embree traces one ray per texel in 8-wide
+ * packets): Sibenik 1.14 ms (AVX-512) / 1.26 ms (AVX2) / 2.8 ms (scalar)
+ * vs Embree 2.3 ms (AVX-512) / 2.45 ms (AVX2); conference room 0.81 / 0.92 /
+ * 2.4 ms vs 2.0 / 2.3 ms. The SIMD paths are 2-2.5x faster than Embree at
+ * the same ISA; the scalar reference is 1.2x slower than Embree.
+ *
+ * Geometry: all triangles are two-sided occluders, alpha masks are ignored
+ * (shadow geometry only; the Embree reference honours them, so compare on
+ * opaque scenes). Triangles through the VPL (VPL in their plane) cast
+ * nothing. */
+#ifndef RS_PARABOLOID_H
+#define RS_PARABOLOID_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "pf_jobs.h"
+#include "pf_result.h"
+#include "pf_rt.h"
+#include "pf_scene.h"
+#include "rs_raster.h"
+
+#define RS_PARA_DEFAULT_RES 128u
+#define RS_PARA_MIN_RES 4u
+#define RS_PARA_MAX_RES 4096u
+#define RS_PARA_DEFAULT_CLUSTER 64u
+#define RS_PARA_EMPTY 0xFFFFu
+#define RS_PARA_OUTSIDE 0xFFFEu
+#define RS_PARA_MAX_CODE 0xFFFDu
+/* Number of distance codes; one step is range / RS_PARA_CODES. */
+#define RS_PARA_CODES 65534.0f
+/* rs_para_bias: tan(theta) is clamped here (grazing receivers). */
+#define RS_PARA_TAN_MAX 8.0f
+
+/* Zero-initialised means defaults. */
+typedef struct rs_para_options {
+    uint32_t resolution;   /* texels per side (0: RS_PARA_DEFAULT_RES), RS_PARA_MIN_RES..RS_PARA_MAX_RES */
+    uint32_t cluster_size; /* triangles per cluster (0: RS_PARA_DEFAULT_CLUSTER), 16..1024, multiple of 16 */
+    int force_scalar;      /* 1: the scalar reference path, whatever the CPU has (0: the widest it has) */
+} rs_para_options;
+
+/* What a render call did, summed over its maps (integers: order-free). */
+typedef struct rs_para_stats {
+    uint64_t maps;
+    uint64_t clusters_in;              /* clusters x maps */
+    uint64_t clusters_behind;          /* wholly behind the tangent plane (or between texel centres) */
+    uint64_t clusters_occluded;        /* nearer geometry already covers their image */
+    uint64_t triangles_in;             /* triangles of the clusters drawn */
+    uint64_t triangles_behind;         /* all vertices at z <= 0 */
+    uint64_t triangles_between_texels; /* bound holds no texel centre */
+    uint64_t triangles_occluded;       /* nearer geometry already covers their bound */
+    uint64_t triangles_drawn;          /* set up exactly and scanned */
+    uint64_t texels_tested;            /* texel centres given the exact test */
+    uint64_t texels_exact_fallback;    /* edge tests that needed the double path */
+} rs_para_stats;
+
+typedef struct rs_para_context rs_para_context;
+
+/* Builds the scene-lifetime data: triangles copied in scene order (structure
+ * of arrays), clusters of cluster_size consecutive triangles with bounding
+ * spheres, the texel direction tables. `scene` may be freed afterwards; it may
+ * be a simplified copy (rs_simplify.h). Fails on an empty scene, bad options
+ * or out of memory. */
+pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, const rs_para_options *opts,
+                                 pf_error *err);
+void rs_para_context_destroy(rs_para_context *ctx);
+uint32_t rs_para_resolution(const rs_para_context *ctx);
+rs_simd rs_para_simd(const rs_para_context *ctx);
+/* Switches the path (tests compare paths on one context); a path the CPU
+ * lacks falls back to the next narrower one (AVX-512 -> AVX2 -> scalar). */
+void rs_para_set_simd(rs_para_context *ctx, rs_simd simd);
+
+/* Bytes of one map and of `count` maps (no per-map overhead). */
+static inline size_t rs_para_map_bytes(uint32_t resolution)
+{
+    return (size_t)resolution * resolution * sizeof(uint16_t);
+}
+static inline size_t rs_para_atlas_bytes(uint32_t resolution, uint32_t count)
+{
+    return rs_para_map_bytes(resolution) * count;
+}
+/* The scene's bounding-box diagonal times 1.01: the default `range`. */
+float rs_para_default_range(const pf_scene *scene);
+
+/* Renders maps[0..count): map k (R*R codes at atlas + k*R*R) for the VPL at
+ * positions[k] with normal normals[k] (any length > 0; normalised here),
+ * one job item per map over `jobs` (NULL: on the caller's thread), with
+ * per-worker scratch owned by the context (grown on first use, so the call
+ * is not reentrant on one context). range > 0: the quantisation range.
+ * stats may be NULL. */
+void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                    const pf_vec3 *normals, uint32_t count, float range, rs_para_stats *stats);
+
+/* The reference: the same maps traced with Embree, one ray per inside texel
+ * centre along its direction (pf_rt_intersect, 8-wide packets), quantised the
+ * same way. For tests and the bench. */
+void rs_para_render_traced(uint16_t *atlas, uint32_t resolution, const pf_rt *rt, pf_jobs *jobs,
+                           const pf_vec3 *positions, const pf_vec3 *normals, uint32_t count, float range);
+
+/* ---------------------------------------------------------------- mapping */
+
+/* The VPL frame: o = position, n = normalised normal, t and b from
+ * pf_v3_basis(n). */
+typedef struct rs_para_frame {
+    pf_vec3 o, t, b, n;
+} rs_para_frame;
+rs_para_frame rs_para_frame_make(pf_vec3 position, pf_vec3 normal);
+/* World point -> local coordinates (z along n). */
+pf_vec3 rs_para_to_local(const rs_para_frame *f, pf_vec3 p);
+
+/* Unit local direction (d.z >= 0) -> (u, v); d.z = -1 has no image. */
+static inline pf_vec2 rs_para_dir_to_uv(pf_vec3 d)
+{
+    float k = 1.0f / (1.0f + d.z);
+    pf_vec2 r = {d.x * k, d.y * k};
+    return r;
+}
+/* (u, v) -> unit local direction (d.z >= 0 inside the unit disc). */
+static inline pf_vec3 rs_para_uv_to_dir(pf_vec2 uv)
+{
+    float s = uv.x * uv.x + uv.y * uv.y;
+    float k = 1.0f / (1.0f + s);
+    return pf_v3(2.0f * uv.x * k, 2.0f * uv.y * k, (1.0f - s) * k);
+}
+/* Centre of texel (i, j) and whether it is inside the disc. */
+pf_vec2 rs_para_texel_uv(uint32_t resolution, uint32_t i, uint32_t j);
+int rs_para_texel_inside(uint32_t resolution, uint32_t i, uint32_t j);
+/* The inside texel a local direction (any length, z may be < 0: it is
+ * clamped to the horizon) is looked up in: its (u, v)'s texel, or the nearest
+ * inside texel on the same radius. */
+uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d_local);
+
+/* The code stored for local direction d (any length > 0). */
+uint16_t rs_para_fetch(const uint16_t *map, uint32_t resolution, pf_vec3 d_local);
+/* The distance that code stands for, the upper end of its interval
+ * ((code + 1) * range / RS_PARA_CODES); INFINITY for EMPTY and OUTSIDE. */
+float rs_para_decode(uint16_t code, float range);
+/* Distance at world direction `dir` from the VPL (INFINITY: nothing hit). */
+float rs_para_depth(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 dir);
+
+/* World size of one texel at distance `dist` along local direction d (unit):
+ * the angle a texel spans there is (2 / R) * 2 / (1 + u^2 + v^2) radians
+ * (d(theta) = 2 d(rho) / (1 + rho^2) for rho = tan(theta / 2)). */
+float rs_para_texel_world_size(uint32_t resolution, float dist, pf_vec3 d_local);
+/* The suggested bias for a receiver at p with geometric normal ng (either
+ * orientation): w * (1 + min(tan(theta), RS_PARA_TAN_MAX)) + 2 steps. */
+float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p, pf_vec3 ng);
+/* 1 if world point p is visible from the VPL: in front of its tangent plane
+ * and no nearer than the stored distance + bias (see the header). */
+int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
+                    float bias);
+
+#endif

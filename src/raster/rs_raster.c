@@ -50,9 +50,11 @@ typedef struct rs__tri {
     float iw0, diwdx, diwdy, u0, dudx, dudy, v0, dvdx, dvdy;
 } rs__tri;
 
-/* One setup chunk's output: triangles and their bins, sorted by tile. */
+/* One setup chunk's output: triangles and their bins, sorted by tile.
+ * Chunks are written by different threads, so each starts on its own cache
+ * line (its counters change for every triangle: false sharing otherwise). */
 typedef struct rs__chunk {
-    rs__tri *tris;
+    _Alignas(64) rs__tri *tris;
     uint32_t tri_count, tri_cap;
     uint64_t *entries; /* unsorted bin entries: tile << 32 | triangle index in this chunk */
     uint32_t entry_count, entry_cap;
@@ -186,7 +188,9 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
     s->clip = malloc(sizeof(float) * 4 * ((size_t)ctx->weld_count + 1));
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
     s->chunk_count = ctx->chunk_count;
-    s->chunks = calloc(ctx->chunk_count ? ctx->chunk_count : 1, sizeof *s->chunks);
+    size_t chunk_bytes = sizeof(rs__chunk) * (ctx->chunk_count ? ctx->chunk_count : 1);
+    s->chunks = aligned_alloc(64, (chunk_bytes + 63) / 64 * 64);
+    if (s->chunks) memset(s->chunks, 0, chunk_bytes);
     if (!s->clip || !s->cluster_visible || !s->chunks) {
         rs_scratch_destroy(s);
         return NULL;
@@ -990,8 +994,11 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
         }
 }
 
-static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *stats)
+static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_stats)
 {
+    rs_stats local; /* written back once: per-tile stats of neighbouring tiles share cache lines */
+    memset(&local, 0, sizeof local);
+    rs_stats *stats = &local;
     const rs_target *tg = st->t;
     int32_t tx0 = (int32_t)(tile % st->tiles_x) * RS_TILE, ty0 = (int32_t)(tile / st->tiles_x) * RS_TILE;
     int32_t tx1 = tx0 + RS_TILE - 1 < (int32_t)tg->width - 1 ? tx0 + RS_TILE - 1 : (int32_t)tg->width - 1;
@@ -1014,6 +1021,7 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *stats)
         for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++)
             rs__raster_tri(st, row, block, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
     }
+    out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }
 
 /* ------------------------------------------------------- the pass */

@@ -45,6 +45,14 @@ static void test_usage_errors(void **state)
     expect("--version", 0, "softgi ");
     expect("", 2, "no command given");
     expect("frobnicate", 2, "unknown command 'frobnicate'");
+    expect("render --indirect-only --direct-only", 2, "exclude each other");
+    expect("render --tiles 4", 2, "expected NxM");
+    expect("render --tiles 0x4", 2, "--tiles n");
+    expect("render --clamp -1", 2, "--clamp");
+    expect("render --filter gauss", 2, "--filter 'gauss'");
+    expect("render --visibility ism", 2, "--visibility 'ism'");
+    expect("render --vpls 0", 2, "--vpls");
+    expect("render --bounces 0", 2, "--bounces");
     expect("render --frob", 2, "unknown option '--frob'");
     expect("render a.gltf b.gltf", 2, "unexpected argument");
     expect("render --size", 2, "--size needs a value");

@@ -12,4 +12,11 @@ int app_render(const pf_options *opts);
  * Embree, as a table and one JSON line. Returns the exit status. */
 int app_bench_raster(const pf_options *opts);
 
+/* `softgi reference`: the path-traced reference (gi_reference). */
+int app_reference(const pf_options *opts);
+
+/* `softgi compare`: metrics between renders and references, with a plot.
+ * Parses its own arguments (argv[1] == "compare"). */
+int app_compare(int argc, char **argv);
+
 #endif

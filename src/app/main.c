@@ -10,6 +10,7 @@
 int main(int argc, char **argv)
 {
     pf_fpenv_set();
+    if (argc > 1 && !strcmp(argv[1], "compare")) return app_compare(argc, argv);
     pf_options opts;
     pf_error err;
     pf_result r = pf_cli_parse(&opts, argc, argv, &err);
@@ -26,5 +27,6 @@ int main(int argc, char **argv)
         return 0;
     }
     if (!strcmp(opts.command, "bench")) return app_bench_raster(&opts);
+    if (!strcmp(opts.command, "reference")) return app_reference(&opts);
     return app_render(&opts);
 }

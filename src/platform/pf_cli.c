@@ -9,6 +9,8 @@
 void pf_cli_usage(FILE *out)
 {
     fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
+          "       softgi reference [SCENE.gltf|SCENE.glb] [options]   (path-traced reference)\n"
+          "       softgi compare ...                                  (softgi compare --help)\n"
           "       softgi bench raster [--threads N] [--frames N] [--scenes DIR] [--isa ISA]\n"
           "\n"
           "Renders SCENE (default: the embedded Cornell box) to a PNG and a linear\n"
@@ -28,6 +30,17 @@ void pf_cli_usage(FILE *out)
           "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
           "                          lights given replace the scene's lights\n"
           "  --shadow-size N         direct-light shadow map resolution (default 1024)\n"
+          "  --indirect-only, --direct-only\n"
+          "  --vpls N                VPL budget (default 256)\n"
+          "  --method NAME           VPL method (default ir: Instant Radiosity)\n"
+          "  --bounces B             light bounces for VPLs / reference paths (default 3)\n"
+          "  --tiles NxM             interleaved tiles (default 4x4)\n"
+          "  --no-interleave         every pixel sees every VPL\n"
+          "  --clamp C               bounded geometry term b = C / diagonal^2 (default 400, 0 = off)\n"
+          "  --filter box|bilateral|none  indirect-light filter (default box, Laine 2007 Fig. 5)\n"
+          "  --visibility paraboloid|raytrace  VPL visibility (default paraboloid maps)\n"
+          "  --dump-stages DIR       write every stage's buffer as an image\n"
+          "  --spp N                 reference: samples per pixel (default 64)\n"
           "  --raytrace              Embree primary rays and shadow rays (the reference\n"
           "                          path) instead of the rasterized G-buffer and shadow maps\n"
           "  --hash                  print a 64-bit hash of the linear output\n"
@@ -186,7 +199,10 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         const char *val = NULL;
         static const char *const with_value[] = {"-o",       "--output", "--hdr",      "--size",
                                                  "--threads", "--isa",   "--camera",   "--light",
-                                                 "--exposure", "--frames", "--scenes", "--shadow-size"};
+                                                 "--exposure", "--frames", "--scenes", "--shadow-size",
+                                                 "--vpls",     "--tiles",  "--clamp",  "--method",
+                                                 "--bounces",  "--filter", "--visibility", "--dump-stages",
+                                                 "--spp"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -202,6 +218,38 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
         else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
         else if (!strcmp(a, "--shadow-size")) r = pf__uint(a, val, 16, 8192, &o->shadow_size, err);
+        else if (!strcmp(a, "--indirect-only")) o->indirect_only = 1;
+        else if (!strcmp(a, "--direct-only")) o->direct_only = 1;
+        else if (!strcmp(a, "--no-interleave")) o->no_interleave = 1;
+        else if (!strcmp(a, "--vpls")) r = pf__uint(a, val, 1, 1u << 20, &o->vpls, err);
+        else if (!strcmp(a, "--bounces")) r = pf__uint(a, val, 1, 64, &o->bounces, err);
+        else if (!strcmp(a, "--spp")) r = pf__uint(a, val, 1, 1u << 20, &o->spp, err);
+        else if (!strcmp(a, "--method")) o->method = val;
+        else if (!strcmp(a, "--dump-stages")) o->dump_dir = val;
+        else if (!strcmp(a, "--filter")) {
+            o->filter = val;
+            if (strcmp(val, "box") && strcmp(val, "bilateral") && strcmp(val, "none"))
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral or none", val);
+        } else if (!strcmp(a, "--visibility")) {
+            if (!strcmp(val, "raytrace")) o->visibility_raytrace = 1;
+            else if (strcmp(val, "paraboloid"))
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid or raytrace", val);
+        } else if (!strcmp(a, "--clamp")) {
+            if (!pf__float(val, strlen(val), &o->clamp) || o->clamp < 0.0f)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--clamp '%s': expected a number >= 0 (0 = off)", val);
+            o->clamp_set = 1;
+        } else if (!strcmp(a, "--tiles")) {
+            const char *x = strchr(val, 'x');
+            char nbuf[16];
+            if (!x || (size_t)(x - val) >= sizeof nbuf)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--tiles '%s': expected NxM, e.g. 4x4", val);
+            else {
+                memcpy(nbuf, val, (size_t)(x - val));
+                nbuf[x - val] = 0;
+                r = pf__uint("--tiles n", nbuf, 1, 16, &o->tiles_n, err);
+                if (r == PF_OK) r = pf__uint("--tiles m", x + 1, 1, 16, &o->tiles_m, err);
+            }
+        }
         else if (!strcmp(a, "--scenes")) o->scenes_dir = val;
         else if (!strcmp(a, "--isa")) r = pf_isa_parse(val, &o->isa, err);
         else if (!strcmp(a, "--exposure")) {
@@ -238,9 +286,12 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
     if (r != PF_OK) return r;
     if (!o->help && !o->version) {
         if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
-        if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "unknown command '%s' (softgi knows: render, bench)",
-                                o->command);
+        if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0 &&
+            strcmp(o->command, "reference") != 0)
+            return pf_error_set(err, PF_ERR_ARGUMENT,
+                                "unknown command '%s' (softgi knows: render, reference, bench, compare)", o->command);
+        if (o->indirect_only && o->direct_only)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
         if (!strcmp(o->command, "bench") && (!o->scene_path || strcmp(o->scene_path, "raster") != 0))
             return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster",
                                 o->scene_path ? o->scene_path : "");

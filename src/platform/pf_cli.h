@@ -22,11 +22,24 @@
 #define PF_CLI_MAX_LIGHTS 64
 
 typedef struct pf_options {
-    const char *command;    /* "render" or "bench" */
+    const char *command;    /* "render", "reference" or "bench" ("compare" parses its own arguments) */
     const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench */
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
     uint32_t frames;        /* bench: repetitions per measurement (0: default 15) */
     uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */
+    /* many-light frame (issue 4) and the reference path tracer */
+    int indirect_only, direct_only;
+    int no_interleave;       /* every pixel sees every VPL */
+    int visibility_raytrace; /* --visibility raytrace: Embree shadow rays to VPLs */
+    uint32_t vpls;           /* VPL budget (0: 256) */
+    uint32_t tiles_n, tiles_m; /* interleaved tiles (0: 4x4) */
+    float clamp;             /* bounded geometry term b = clamp / diag^2 (default 400); 0: off */
+    int clamp_set;           /* --clamp given */
+    const char *method;      /* VPL method (NULL: "ir") */
+    uint32_t bounces;        /* light bounces (0: 3) */
+    const char *filter;      /* "box" (default), "bilateral", "none" */
+    const char *dump_dir;    /* --dump-stages DIR */
+    uint32_t spp;            /* reference: samples per pixel (0: 64) */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */
     uint32_t width, height; /* 0: default 640x480 */

@@ -1,11 +1,207 @@
-/* app_reference: `softgi reference` — being written (issue 4). */
-#include <stdio.h>
+/* app_reference: `softgi reference` (issue 4), the path-traced reference
+ * image (gi_reference.h: estimator, bounces, random numbers).
+ *
+ * load scene -> apply --camera/--light overrides (exactly as `softgi render`,
+ * app_render.c) -> build the Embree scene -> path trace (--spp, --bounces,
+ * --indirect-only, --direct-only) with a progress bar -> write PNG + PFM
+ * (default out/<scene>-reference.png and .pfm), printing the time of every
+ * step and, with --hash, the hash of the linear image.
+ *
+ * The progress bar goes to stderr, only when stderr is a terminal and not
+ * --quiet; gi_reference calls it on this thread only (after every row this
+ * thread finishes), so it needs no locking. */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "app.h"
+#include "gi_reference.h"
+#include "pf_gltf.h"
+#include "pf_imageio.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
 
-int app_reference(const pf_options *opts)
+extern const unsigned char softgi_default_scene[];
+extern const unsigned long softgi_default_scene_size;
+
+static int app__fail(const pf_error *err)
 {
-    (void)opts;
-    fprintf(stderr, "softgi: reference: not implemented yet (issue 4)\n");
-    return 1;
+    fprintf(stderr, "softgi: %s\n", err->message);
+    return pf_result_exit_code(err->code);
+}
+
+/* "dir/name.gltf" -> "name" into buf. */
+static void app__stem(const char *path, char *buf, size_t size)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    snprintf(buf, size, "%s", base);
+    char *dot = strrchr(buf, '.');
+    if (dot && dot != buf) *dot = 0;
+}
+
+/* ---------------------------------------------------------------- progress bar */
+
+typedef struct app__progress {
+    double start, last_draw;
+    int drawn;
+} app__progress;
+
+/* "reference [==========>         ]  52%  10.4 s, ETA 9.6 s", redrawn in place
+ * at most 10 times a second. The ETA assumes the remaining rows cost what the
+ * finished ones did on average. */
+static void app__progress_draw(void *user, uint32_t done, uint32_t total)
+{
+    app__progress *p = user;
+    double now = pf_time_now();
+    if (done < total && p->drawn && now - p->last_draw < 0.1) return;
+    p->last_draw = now;
+    p->drawn = 1;
+    enum { BAR = 30 };
+    char bar[BAR + 1];
+    uint32_t fill = (uint32_t)((uint64_t)done * BAR / (total ? total : 1));
+    for (uint32_t i = 0; i < BAR; i++) bar[i] = i < fill ? '=' : (i == fill ? '>' : ' ');
+    bar[BAR] = 0;
+    double elapsed = now - p->start;
+    double frac = total ? (double)done / total : 1.0;
+    if (done > 0 && done < total)
+        fprintf(stderr, "\rreference [%s] %3.0f%%  %.1f s, ETA %.1f s   ", bar, 100.0 * frac, elapsed,
+                elapsed * (1.0 - frac) / frac);
+    else if (done == 0)
+        fprintf(stderr, "\rreference [%s] %3.0f%%  %.1f s, ETA ?        ", bar, 100.0 * frac, elapsed);
+    else
+        fprintf(stderr, "\rreference [%s] 100%%  %.1f s                 \n", bar, elapsed);
+    fflush(stderr);
+}
+
+/* ---------------------------------------------------------------- command */
+
+int app_reference(const pf_options *o)
+{
+    pf_error err;
+    pf_stage_times t;
+    memset(&t, 0, sizeof t);
+    uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
+    uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
+    pf_isa isa;
+    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app__fail(&err);
+    if (o->indirect_only && o->direct_only) {
+        pf_error_set(&err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
+        return app__fail(&err);
+    }
+    if (o->bounces > GI_REFERENCE_MAX_BOUNCES) {
+        pf_error_set(&err, PF_ERR_ARGUMENT, "--bounces: %u is too many (at most %u)", o->bounces,
+                     GI_REFERENCE_MAX_BOUNCES);
+        return app__fail(&err);
+    }
+
+    /* Scene (as app_render.c) */
+    double t0 = pf_time_now();
+    pf_scene scene;
+    pf_result r;
+    char stem[256];
+    if (o->scene_path) {
+        r = pf_gltf_load(&scene, o->scene_path, NULL, &err);
+        app__stem(o->scene_path, stem, sizeof stem);
+    } else {
+        r = pf_gltf_load_memory(&scene, softgi_default_scene, softgi_default_scene_size, NULL,
+                                "embedded scenes/cornell-box", NULL, &err);
+        snprintf(stem, sizeof stem, "cornell-box");
+    }
+    if (r != PF_OK) return app__fail(&err);
+    if (scene.warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", scene.warnings);
+
+    pf_camera camera;
+    if (o->has_camera) {
+        r = pf_camera_look_at(&camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), &err);
+    } else if (scene.camera_count > 0) {
+        camera = scene.cameras[0];
+    } else {
+        r = pf_error_set(&err, PF_ERR_NO_CAMERA,
+                         "%s has no camera; give one with --camera ex,ey,ez:tx,ty,tz:fovy_deg",
+                         o->scene_path ? o->scene_path : "the scene");
+    }
+    if (r == PF_OK && o->light_count > 0) {
+        scene.light_count = 0; /* given lights replace the file's */
+        for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(&scene, &o->lights[i], &err);
+    }
+    if (r == PF_OK) r = pf_scene_validate(&scene, &err);
+    if (r != PF_OK) {
+        pf_scene_free(&scene);
+        return app__fail(&err);
+    }
+    if (scene.light_count == 0 && !o->quiet)
+        fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    pf_stage_add(&t, "load scene", (pf_time_now() - t0) * 1e3);
+
+    /* Embree + jobs + the image */
+    t0 = pf_time_now();
+    pf_rt *rt;
+    if ((r = pf_rt_create(&rt, &scene, isa, threads, &err)) != PF_OK) {
+        pf_scene_free(&scene);
+        return app__fail(&err);
+    }
+    pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
+    pf_jobs *jobs = pf_jobs_create(threads);
+    float *image = malloc((size_t)width * height * 3 * sizeof(float));
+    if (!jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+    else if (!image) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "no memory for a %ux%u image", width, height);
+
+    /* Path trace */
+    gi_reference_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.spp = o->spp ? o->spp : GI_REFERENCE_DEFAULT_SPP;
+    ro.bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
+    ro.direct_only = o->direct_only;
+    ro.indirect_only = o->indirect_only;
+    app__progress prog = {pf_time_now(), 0.0, 0};
+    if (!o->quiet && isatty(STDERR_FILENO)) {
+        ro.progress = app__progress_draw;
+        ro.progress_user = &prog;
+    }
+    if (r == PF_OK) {
+        t0 = pf_time_now();
+        prog.start = t0;
+        r = gi_reference_render(image, &scene, rt, jobs, &camera, width, height, &ro, &err);
+        pf_stage_add(&t, "path trace", (pf_time_now() - t0) * 1e3);
+    }
+
+    /* Output */
+    char png[4096], pfm[4096];
+    if (r == PF_OK) {
+        t0 = pf_time_now();
+        if (o->out_path) snprintf(png, sizeof png, "%s", o->out_path);
+        else snprintf(png, sizeof png, "out/%s-reference.png", stem);
+        if (o->hdr_path) snprintf(pfm, sizeof pfm, "%s", o->hdr_path);
+        else {
+            snprintf(pfm, sizeof pfm, "%s", png);
+            char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
+            if (dot && (!slash || dot > slash)) *dot = 0;
+            strncat(pfm, ".pfm", sizeof pfm - strlen(pfm) - 1);
+        }
+        r = pf_imageio_write_png(png, image, width, height, o->exposure, &err);
+        if (r == PF_OK) r = pf_imageio_write_pfm(pfm, image, width, height, &err);
+        pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
+    }
+    int status = 0;
+    if (r != PF_OK) status = app__fail(&err);
+    else {
+        if (!o->quiet) {
+            uint32_t b = ro.direct_only ? 0u : ro.bounces;
+            printf("softgi reference: %s, %u triangles, %u lights, %ux%u, %u spp, %u bounces%s, %u threads, isa %s\n",
+                   stem, scene.tri_count, scene.light_count, width, height, ro.spp, b,
+                   ro.indirect_only ? " (indirect only)" : (ro.direct_only ? " (direct only)" : ""), threads,
+                   pf_isa_name(isa));
+            pf_stage_print(&t, stdout);
+            printf("wrote %s and %s\n", png, pfm);
+        }
+        if (o->print_hash)
+            printf("hash %016llx\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3));
+    }
+    free(image);
+    if (jobs) pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&scene);
+    return status;
 }

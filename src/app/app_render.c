@@ -100,6 +100,25 @@ int app_render(const pf_options *o)
         pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
     }
     if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, o->shadow_size, &err);
+    if (r == PF_OK && !o->direct_only) {
+        gi_indirect_options io;
+        memset(&io, 0, sizeof io);
+        io.method = gi_vpl_method_find(o->method);
+        if (!io.method)
+            r = pf_error_set(&err, PF_ERR_ARGUMENT, "--method '%s': softgi knows %s", o->method, gi_vpl_method_names());
+        io.vpls = o->vpls;
+        io.bounces = o->bounces;
+        io.tiles_n = o->tiles_n;
+        io.tiles_m = o->tiles_m;
+        io.no_interleave = o->no_interleave;
+        io.visibility_raytrace = o->visibility_raytrace;
+        io.clamp = o->clamp_set ? o->clamp : -1.0f;
+        io.filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
+                    : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
+                                                            : GI_FILTER_NONE;
+        if (r == PF_OK) r = gi_frame_enable_indirect(&frame, &io, o->indirect_only, &err);
+        if (r != PF_OK) gi_frame_free(&frame);
+    }
     if (r != PF_OK) {
         rs_context_destroy(raster);
         pf_jobs_destroy(jobs);
@@ -127,6 +146,7 @@ int app_render(const pf_options *o)
     }
     r = pf_imageio_write_png(png, frame.final, width, height, o->exposure, &err);
     if (r == PF_OK) r = pf_imageio_write_pfm(pfm, frame.final, width, height, &err);
+    if (r == PF_OK && o->dump_dir) r = gi_frame_dump_stages(&frame, o->dump_dir, &err);
     pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     int status = 0;
     if (r != PF_OK) status = app__fail(&err);
@@ -135,6 +155,10 @@ int app_render(const pf_options *o)
             printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", stem,
                    scene.tri_count, scene.light_count, width, height, threads, pf_isa_name(isa),
                    o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
+            if (frame.indirect)
+                printf("indirect: %s, %u VPLs (%u maps rendered), %ux%u tiles, clamp b = %g, visibility %s\n",
+                       frame.ind.opt.method->name, frame.ind.vpls.count, frame.ind.maps_rendered, frame.ind.n,
+                       frame.ind.m, (double)frame.ind.b, frame.ind.para ? "paraboloid maps" : "Embree rays");
             pf_stage_print(&t, stdout);
             printf("wrote %s and %s\n", png, pfm);
         }

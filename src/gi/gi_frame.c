@@ -6,7 +6,8 @@
 #include <string.h>
 
 static const char *const gi__buffer_names[GI_BUF_COUNT] = {
-    "depth", "position", "normal", "albedo", "prim", "direct", "final",
+    "depth", "position", "normal", "albedo", "prim", "direct", "vpls", "split", "accumulated", "combined", "filtered",
+    "final",
 };
 static const char *const gi__buffer_captions[GI_BUF_COUNT] = {
     "G-buffer depth: view-space distance of the visible surface (Laine 2007 Sec. 3, step 1)",
@@ -14,8 +15,13 @@ static const char *const gi__buffer_captions[GI_BUF_COUNT] = {
     "G-buffer shading normal, turned to face the camera",
     "G-buffer albedo: filtered baseColor, linear RGB",
     "G-buffer primitive id: which triangle each pixel sees",
-    "Direct light: every light with its shadow test, albedo E / pi",
-    "Final: emission + direct (+ indirect once the VPL stages land), linear RGB",
+    "Direct light: every light with its shadow test, albedo E / pi (Laine 2007 Sec. 3, step 5)",
+    "VPL set: each VPL drawn where it projects, coloured by its intensity (Laine 2007 Sec. 4; survey Sec. 4.1)",
+    "Split G-buffer: n x m interleaved tiles, each the image sub-sampled with its own offset (Laine 2007 Sec. 5.1)",
+    "Accumulated: each tile's irradiance from its share of the VPLs, bounded geometry term (Sec. 5.1; survey Sec. 5)",
+    "Combined: the tiles back in image layout; the n x m structured noise is visible (Laine 2007 Fig. 4a)",
+    "Filtered: geometry-aware n x m box filter (Laine 2007 Fig. 5) removes the pattern",
+    "Final: emission + direct + albedo / pi x filtered indirect, linear RGB",
 };
 
 const char *gi_buffer_name(gi_buffer_id id) { return (unsigned)id < GI_BUF_COUNT ? gi__buffer_names[id] : "?"; }
@@ -35,6 +41,7 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
     f->camera = *camera;
     f->width = width;
     f->height = height;
+    f->show_direct = 1;
     pf_result r = rs_gbuffer_init(&f->gbuf, width, height, err);
     if (r != PF_OK) return r;
     size_t n = (size_t)width * height * 3;
@@ -61,6 +68,7 @@ void gi_frame_free(gi_frame *f)
 {
     rs_gbuffer_free(&f->gbuf);
     rs_shadow_set_free(&f->shadows);
+    gi_indirect_free(&f->ind);
     free(f->direct);
     free(f->final);
     memset(f, 0, sizeof *f);
@@ -76,7 +84,8 @@ pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint
     return r;
 }
 
-/* Compose: emission of the visible surface + direct light. Misses are black. */
+/* Compose: emission of the visible surface + direct light + albedo / pi x
+ * the filtered indirect irradiance. Misses are black. */
 typedef struct gi__compose_ctx {
     gi_frame *f;
 } gi__compose_ctx;
@@ -89,8 +98,14 @@ static void gi__compose_rows(void *ctx, uint32_t row, uint32_t worker)
         size_t i = (size_t)row * f->width + x;
         uint32_t prim = f->gbuf.prim[i];
         float e[3] = {0, 0, 0};
-        if (prim != RS_GBUFFER_EMPTY) memcpy(e, f->scene->materials[f->scene->tri_material[prim]].emission, sizeof e);
-        for (int c = 0; c < 3; c++) f->final[3 * i + c] = e[c] + f->direct[3 * i + c];
+        if (prim != RS_GBUFFER_EMPTY && f->show_direct)
+            memcpy(e, f->scene->materials[f->scene->tri_material[prim]].emission, sizeof e);
+        const float alb[3] = {f->gbuf.alb_r[i], f->gbuf.alb_g[i], f->gbuf.alb_b[i]};
+        for (int c = 0; c < 3; c++) {
+            float v = e[c] + (f->show_direct ? f->direct[3 * i + c] : 0.0f);
+            if (f->indirect) v += alb[c] * PF_INV_PI * f->ind.filtered[3 * i + c];
+            f->final[3 * i + c] = v;
+        }
     }
 }
 
@@ -118,11 +133,34 @@ void gi_stage_gbuffer_raster(gi_frame *f)
 
 void gi_stage_gbuffer_resolve(gi_frame *f) { rs_gbuffer_resolve(&f->gbuf, f->scene, &f->camera, f->jobs); }
 
+pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err)
+{
+    pf_result r = gi_indirect_init(f, opt, err);
+    if (r != PF_OK) return r;
+    f->indirect = 1;
+    f->show_direct = !indirect_only;
+    return PF_OK;
+}
+
+/* Steps 3-9 (both frames). */
+static void gi__indirect_stages(gi_frame *f)
+{
+    if (!f->indirect) return;
+    gi__timed(f, "VPL update", gi_stage_vpl_update);
+    gi__timed(f, "VPL paraboloid maps", gi_stage_vpl_shadow_maps);
+    gi__timed(f, "split", gi_stage_split);
+    gi__timed(f, "assign VPLs to tiles", gi_stage_assign);
+    gi__timed(f, "accumulate", gi_stage_accumulate);
+    gi__timed(f, "combine", gi_stage_combine);
+    gi__timed(f, "filter", gi_stage_filter);
+}
+
 void gi_frame_render_raytraced(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi__timed(f, "gbuffer (embree)", gi_stage_gbuffer_raytrace);
-    gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    if (f->show_direct) gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    gi__indirect_stages(f);
     gi__timed(f, "compose", gi_stage_compose);
     pf_jobs_wait_all(f->jobs);
 }
@@ -132,8 +170,11 @@ void gi_frame_render_raster(gi_frame *f)
     memset(&f->times, 0, sizeof f->times);
     gi__timed(f, "gbuffer raster (visibility)", gi_stage_gbuffer_raster);
     gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
-    gi__timed(f, "shadow maps", gi_stage_shadow_maps);
-    gi__timed(f, "direct light (shadow maps)", gi_stage_direct_shadowmap);
+    if (f->show_direct) {
+        gi__timed(f, "shadow maps", gi_stage_shadow_maps);
+        gi__timed(f, "direct light (shadow maps)", gi_stage_direct_shadowmap);
+    }
+    gi__indirect_stages(f);
     gi__timed(f, "compose", gi_stage_compose);
     pf_jobs_wait_all(f->jobs);
 }

@@ -10,15 +10,22 @@
  *                          gi_stage_gbuffer_resolve    (rs_gbuffer_resolve: attributes)
  *   2. direct light        gi_stage_shadow_maps        (rs_shadow_render: one map or cube per light)
  *                          gi_stage_direct_shadowmap   (16-tap PCF, Laine 2007 Sec. 6)
- *   3. compose             gi_stage_compose            (emission + direct)
+ *   3. VPL set             gi_stage_vpl_update         (the VPL method: Instant Radiosity by default)
+ *   4. VPL shadow maps     gi_stage_vpl_shadow_maps    (paraboloid maps of new/moved VPLs)
+ *   5. split               gi_stage_split              (n x m interleaved tiles)
+ *   6. assign              gi_stage_assign             (VPLs to tiles, intensity balanced)
+ *   7. accumulate          gi_stage_accumulate         (bounded geometry term, map lookups)
+ *   8. combine             gi_stage_combine
+ *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, or bilateral)
+ *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):
  *   1. G-buffer            gi_stage_gbuffer_raytrace   (Embree primary rays)
  *   2. direct light        gi_stage_direct_raytrace
  *   3. compose             gi_stage_compose
  *
- * Later issues add the VPL set, the interleaved split / accumulate /
- * combine and the filter between 2 and 3.
+ * (steps 3-9 run when gi_frame_enable_indirect was called; the ray-traced
+ * frame runs them too, with its G-buffer).
  *
  * Memory: everything a frame writes is allocated once in gi_frame_init
  * (frame lifetime, reused every frame); stages do not allocate. */
@@ -32,6 +39,7 @@
 #include "rs_gbuffer.h"
 #include "rs_raster.h"
 #include "rs_shadow.h"
+#include "gi_indirect.h"
 
 typedef enum gi_buffer_id {
     GI_BUF_DEPTH = 0, /* G-buffer planes */
@@ -40,6 +48,11 @@ typedef enum gi_buffer_id {
     GI_BUF_ALBEDO,
     GI_BUF_PRIM,
     GI_BUF_DIRECT, /* direct radiance (RGB) */
+    GI_BUF_VPLS,        /* the VPLs drawn over the final image */
+    GI_BUF_SPLIT,       /* split G-buffer normals, tile layout */
+    GI_BUF_ACCUMULATED, /* per-tile irradiance, tile layout */
+    GI_BUF_COMBINED,    /* irradiance, image layout, before the filter */
+    GI_BUF_FILTERED,    /* irradiance after the filter */
     GI_BUF_FINAL,  /* composed linear radiance (RGB) */
     GI_BUF_COUNT
 } gi_buffer_id;
@@ -59,6 +72,9 @@ typedef struct gi_frame {
     /* buffers (owned, frame lifetime) */
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
+    gi_indirect ind;       /* many-light state and buffers (when enabled) */
+    int indirect;          /* run steps 3-9 */
+    int show_direct;       /* compose adds emission + direct (0 for --indirect-only) */
     float *direct; /* RGB, width*height*3 */
     float *final;  /* RGB, width*height*3 */
     pf_stage_times times;
@@ -68,6 +84,10 @@ typedef struct gi_frame {
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
                         const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err);
 void gi_frame_free(gi_frame *f);
+
+/* Turns on the many-light stages (steps 3-9); `indirect_only` drops emission
+ * and direct light from the composed image. */
+pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err);
 
 /* The primary ray through the centre of pixel (x, y): dir is scaled so that
  * t along it equals view depth. */
@@ -81,6 +101,11 @@ void gi_stage_direct_raytrace(gi_frame *f);
 void gi_stage_shadow_maps(gi_frame *f);
 void gi_stage_direct_shadowmap(gi_frame *f);
 void gi_stage_compose(gi_frame *f);
+
+/* Writes every stage's buffer of the last frame as `DIR/NN-name.png` (data
+ * buffers mapped to [0,1], radiance/irradiance tone mapped like the final
+ * image) plus `DIR/captions.txt` with one caption line per image. */
+pf_result gi_frame_dump_stages(const gi_frame *f, const char *dir, pf_error *err);
 
 /* The whole ray-traced frame: G-buffer, direct light, compose (timed). */
 void gi_frame_render_raytraced(gi_frame *f);

@@ -1,0 +1,93 @@
+/* gi_indirect: the many-light part of a frame, Laine 2007 Sec. 3 steps 3-9
+ * and Sec. 5 (interleaved sampling after Keller and Heidrich 2001 and Wald
+ * 2004; the bounded geometry term of the survey's Sec. 5):
+ *
+ *   gi_stage_vpl_update        the VPL method's update (step 3)
+ *   gi_stage_vpl_shadow_maps   paraboloid maps, re-rendered only for new or
+ *                              moved VPLs (step 4, Laine 2007 Sec. 6)
+ *   gi_stage_split             the G-buffer split into n x m interleaved
+ *                              tiles: pixel (a, b) of tile (i, j) is pixel
+ *                              (a n + i, b m + j) of the image (Sec. 5.1)
+ *   gi_stage_assign            VPLs to tiles, balancing intensity: sorted by
+ *                              luminance, dealt in a boustrophedon order, so
+ *                              every tile gets a representative subset (the
+ *                              problem Laine 2007 Sec. 7 names)
+ *   gi_stage_accumulate        each tile pixel's irradiance from its tile's
+ *                              VPLs: E = T * sum I G_b V, with G_b =
+ *                              min(cos cos / r^2, b) and V from the VPL's
+ *                              paraboloid map (or an Embree ray); T = n m
+ *                              makes the n x m average the full sum
+ *   gi_stage_combine           back to image layout (Sec. 5.1)
+ *   gi_stage_filter            Laine's geometry-aware n x m box filter
+ *                              (Fig. 5: |p2 - p| < alpha, n2 . n > beta), or a
+ *                              cross-bilateral filter, or none (Sec. 5.2)
+ *
+ * The receiving surface's albedo is applied at compose: radiance = albedo /
+ * pi * E (Sec. 5.1: "the color of the receiving surface is not taken into
+ * account at this point"). */
+#ifndef GI_INDIRECT_H
+#define GI_INDIRECT_H
+
+#include "gi_vpl.h"
+#include "rs_paraboloid.h"
+
+typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE } gi_filter_kind;
+
+typedef struct gi_indirect_options {
+    const gi_vpl_method *method; /* NULL: Instant Radiosity */
+    uint32_t vpls;               /* budget (0: 256) */
+    uint32_t bounces;            /* (0: 3) */
+    uint32_t tiles_n, tiles_m;   /* (0: 4 x 4) */
+    int no_interleave;           /* 1 x 1 tiles: every pixel sees every VPL */
+    int visibility_raytrace;     /* Embree shadow rays instead of paraboloid maps */
+    float clamp;                 /* b = clamp / diagonal^2; 0 = off; < 0 = default 400 */
+    gi_filter_kind filter;
+    float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
+    float beta;                  /* filter normal threshold (0: 0.8, Laine 2007) */
+    uint32_t para_res;           /* paraboloid map resolution (0: 128) */
+} gi_indirect_options;
+
+typedef struct gi_indirect {
+    gi_indirect_options opt;
+    void *method_state;
+    gi_vpl_set vpls;
+    uint32_t frame;
+    float b;                  /* bounded geometry term (1/m^2), INFINITY when off */
+    float alpha;              /* filter threshold in scene units */
+    /* paraboloid maps: one slot per VPL index */
+    rs_para_context *para;
+    uint16_t *atlas;
+    uint32_t atlas_slots;
+    rs_para_frame *frames;
+    float range;
+    uint32_t maps_rendered;   /* this frame */
+    /* interleaving */
+    uint32_t n, m;
+    uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */
+    uint32_t *tile_w, *tile_h;
+    float *split_px, *split_py, *split_pz, *split_nx, *split_ny, *split_nz;
+    uint32_t *split_valid;
+    uint32_t *assign;         /* VPL indices grouped by tile */
+    uint32_t *assign_start;   /* n m + 1 */
+    float *split_e;           /* RGB irradiance in split layout */
+    float *combined;          /* RGB irradiance, image layout */
+    float *filtered;          /* RGB irradiance after the filter */
+} gi_indirect;
+
+struct gi_frame;
+
+pf_result gi_indirect_init(struct gi_frame *f, const gi_indirect_options *opt, pf_error *err);
+void gi_indirect_free(gi_indirect *ind);
+
+void gi_stage_vpl_update(struct gi_frame *f);
+void gi_stage_vpl_shadow_maps(struct gi_frame *f);
+void gi_stage_split(struct gi_frame *f);
+void gi_stage_assign(struct gi_frame *f);
+void gi_stage_accumulate(struct gi_frame *f);
+void gi_stage_combine(struct gi_frame *f);
+void gi_stage_filter(struct gi_frame *f);
+
+/* Pixel (x, y) of the image -> index in the split layout. */
+uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint32_t y);
+
+#endif

@@ -1,0 +1,280 @@
+/* gi_reference: the reference path tracer (see gi_reference.h for the
+ * estimator, the bounce definition and the random-number scheme).
+ *
+ * Per job item (one image row), per group of 8 pixels, per sample index:
+ *   1. camera rays       gi__camera_ray jittered within the pixel
+ *   2. for vertex k = 1 .. B+1:
+ *      a. intersect      the live paths, compacted into one packet
+ *      b. emission       L += T Le(x_k)
+ *      c. next event     per light: irradiance, shadow packet, L += T albedo/pi E
+ *      d. continue       cosine-weighted bounce, T *= albedo
+ *   3. accumulate        L of every path into its pixel's sum, in sample order */
+#include <math.h>
+#include <stdatomic.h>
+#include <string.h>
+
+#include "gi_light.h"
+#include "gi_reference.h"
+
+/* ---------------------------------------------------------------- random numbers */
+
+/* SplitMix64's finaliser (Steele et al. 2014; constants by D. Stafford,
+ * "Mix13"): a bijection on 64-bit words with full avalanche, so distinct
+ * counters give unrelated outputs. */
+static uint64_t gi__mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim)
+{
+    /* Two rounds: the first makes one word per (pixel, sample) stream (a
+     * bijection of the 64-bit counter, offset by the golden ratio so that
+     * stream 0 does not map to 0), the second mixes in the position within
+     * the stream. The top 24 bits give a float in [0, 1) exactly: k * 2^-24
+     * with k < 2^24 is representable and never rounds up to 1. */
+    uint64_t stream = gi__mix64((((uint64_t)pixel << 32) | sample) + 0x9e3779b97f4a7c15ull);
+    uint64_t h = gi__mix64(stream ^ (((uint64_t)vertex << 32) | dim));
+    return (float)(h >> 40) * 0x1p-24f;
+}
+
+pf_ray gi_reference_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y,
+                               uint32_t sample)
+{
+    uint32_t pixel = y * width + x;
+    /* Box filter: a point uniform in the pixel square [x, x+1) x [y, y+1). */
+    float jx = gi_reference_random(pixel, sample, 0, 0), jy = gi_reference_random(pixel, sample, 0, 1);
+    pf_ray r;
+    r.org = cam->eye;
+    r.dir = pf_camera_ray_dir(cam, width, height, (float)x + jx, (float)y + jy);
+    r.tnear = cam->znear;
+    r.tfar = cam->zfar > 0.0f ? cam->zfar : INFINITY;
+    return r;
+}
+
+/* ---------------------------------------------------------------- sampling */
+
+/* Cosine-weighted direction around unit n (Malley's method): a point uniform
+ * on the unit disc, (r cos phi, r sin phi) with r = sqrt(u0), phi = 2 pi u1,
+ * lifted to the hemisphere z = sqrt(1 - r^2). The disc's uniform density 1/pi
+ * projects to pdf(w) = cos(theta) / pi over solid angle. */
+static pf_vec3 gi__sample_cosine(pf_vec3 n, float u0, float u1)
+{
+    float r = sqrtf(u0), phi = 2.0f * PF_PI * u1;
+    float lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1.0f - u0));
+    pf_vec3 t, b;
+    pf_v3_basis(n, &t, &b);
+    return pf_v3_add(pf_v3_add(pf_v3_scale(t, lx), pf_v3_scale(b, ly)), pf_v3_scale(n, lz));
+}
+
+/* ---------------------------------------------------------------- path tracing */
+
+typedef struct gi__ref_ctx {
+    float *out;
+    const pf_scene *scene;
+    const pf_rt *rt;
+    const pf_camera *camera;
+    uint32_t width, height, spp, bounces;
+    int indirect_only;
+    gi_reference_progress_fn progress;
+    void *progress_user;
+    uint32_t caller_worker; /* the job system's id of the thread that waits */
+    atomic_uint rows_done;
+} gi__ref_ctx;
+
+/* The state of one path (one lane of a packet). */
+typedef struct gi__path {
+    pf_ray ray;      /* the segment to trace next */
+    pf_vec3 T;       /* throughput: product of the albedos so far (f_r cos / pdf per bounce) */
+    pf_vec3 L;       /* radiance gathered so far */
+    int alive;
+    /* the surface at the current vertex */
+    pf_vec3 p, ng, ns; /* ng: the triangle's, unflipped; ns: turned to face the incoming ray */
+    pf_vec3 ng_front;  /* ng turned to the incoming side */
+    pf_vec3 nee_w;     /* T * albedo / pi: the weight of an irradiance at this vertex */
+} gi__path;
+
+/* 2b + 2c for the paths of a packet that hit a surface at vertex k. */
+static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t *lanes, uint32_t m)
+{
+    const pf_scene *s = c->scene;
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        pf_ray rays[PF_RT_WIDTH];
+        gi_light_sample ls[PF_RT_WIDTH];
+        uint32_t who[PF_RT_WIDTH], q = 0;
+        for (uint32_t j = 0; j < m; j++) {
+            gi__path *P = &paths[lanes[j]];
+            if (!gi_light_irradiance(&s->lights[l], P->p, P->ns, &ls[q])) continue;
+            /* The shadow ray exactly as the renderer's (gi_raytrace.c): from the
+             * point offset to the light's side, stopping just short of the light
+             * so that a light lying on a surface does not shadow itself. */
+            pf_ray r;
+            r.org = pf_rt_offset_origin(P->p, P->ng, ls[q].wi);
+            r.dir = ls[q].wi;
+            r.tnear = 0.0f;
+            r.tfar = isinf(ls[q].distance) ? INFINITY : ls[q].distance * (1.0f - 1.0e-4f);
+            rays[q] = r;
+            who[q] = lanes[j];
+            q++;
+        }
+        if (q == 0) continue;
+        uint8_t occ[PF_RT_WIDTH];
+        pf_rt_occluded(c->rt, rays, occ, q);
+        for (uint32_t j = 0; j < q; j++) {
+            if (occ[j]) continue;
+            gi__path *P = &paths[who[j]];
+            /* Lr = f_r E = albedo/pi E for a Lambertian surface */
+            P->L = pf_v3_add(P->L, pf_v3_mul(P->nee_w, ls[j].irradiance));
+        }
+    }
+}
+
+/* One sample index for n <= 8 neighbouring pixels of row y: traces their paths
+ * together and adds each path's radiance to acc. */
+static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint32_t n, uint32_t sample,
+                             double acc[PF_RT_WIDTH][3])
+{
+    const pf_scene *s = c->scene;
+    gi__path paths[PF_RT_WIDTH];
+    for (uint32_t i = 0; i < n; i++) {
+        gi__path *P = &paths[i];
+        memset(P, 0, sizeof *P);
+        P->ray = gi_reference_camera_ray(c->camera, c->width, c->height, x0 + i, y, sample);
+        P->T = pf_v3(1.0f, 1.0f, 1.0f);
+        P->alive = 1;
+    }
+    /* Vertex k is the k-th surface the path meets: x1 seen from the camera,
+     * x2 .. x_{B+1} after 1 .. B bounces. */
+    for (uint32_t k = 1; k <= c->bounces + 1; k++) {
+        /* 2a. intersect the live paths as one compacted packet */
+        pf_ray rays[PF_RT_WIDTH];
+        pf_hit hits[PF_RT_WIDTH];
+        uint32_t lanes[PF_RT_WIDTH], m = 0;
+        for (uint32_t i = 0; i < n; i++)
+            if (paths[i].alive) {
+                rays[m] = paths[i].ray;
+                lanes[m++] = i;
+            }
+        if (m == 0) break;
+        pf_rt_intersect(c->rt, rays, hits, m);
+
+        /* 2b. emission of the surfaces hit, and the surface frames */
+        uint32_t hit_lanes[PF_RT_WIDTH], h = 0;
+        int counts = !(c->indirect_only && k == 1); /* indirect_only: nothing from x1 itself */
+        for (uint32_t j = 0; j < m; j++) {
+            gi__path *P = &paths[lanes[j]];
+            if (hits[j].prim == PF_RT_MISS) { /* left the scene: no environment light */
+                P->alive = 0;
+                continue;
+            }
+            pf_surface sf;
+            pf_rt_surface(c->rt, &hits[j], 0.0f, &sf);
+            /* Two-sided shading, as the renderer: turn the normals to face the
+             * incoming ray (decided by the geometric normal). */
+            int back = pf_v3_dot(sf.ng, rays[j].dir) > 0.0f;
+            P->p = sf.p;
+            P->ng = sf.ng;
+            P->ng_front = back ? pf_v3_scale(sf.ng, -1.0f) : sf.ng;
+            P->ns = back ? pf_v3_scale(sf.ns, -1.0f) : sf.ns;
+            pf_vec3 albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
+            P->nee_w = pf_v3_mul(P->T, pf_v3_scale(albedo, PF_INV_PI));
+            if (counts) {
+                const float *e = s->materials[sf.material].emission;
+                P->L = pf_v3_add(P->L, pf_v3_mul(P->T, pf_v3(e[0], e[1], e[2])));
+            }
+            /* the throughput of the bounce leaving x_k (used in 2d) */
+            P->T = pf_v3_mul(P->T, albedo);
+            hit_lanes[h++] = lanes[j];
+        }
+
+        /* 2c. next-event estimation to every punctual light */
+        if (counts && h > 0) gi__next_event(c, paths, hit_lanes, h);
+
+        /* 2d. continue: a cosine-weighted bounce, throughput *= albedo
+         * (f_r cos / pdf = (albedo/pi) cos / (cos/pi)); none after x_{B+1} */
+        for (uint32_t j = 0; j < h; j++) {
+            gi__path *P = &paths[hit_lanes[j]];
+            if (k == c->bounces + 1 || pf_v3_max_comp(P->T) <= 0.0f) {
+                P->alive = 0;
+                continue;
+            }
+            uint32_t pixel = y * c->width + x0 + hit_lanes[j];
+            float u0 = gi_reference_random(pixel, sample, k, 0), u1 = gi_reference_random(pixel, sample, k, 1);
+            /* A shading normal that points below the (turned) geometric
+             * surface, possible with bad vertex normals, is replaced by ng. */
+            pf_vec3 n = pf_v3_dot(P->ns, P->ng_front) > 0.0f ? P->ns : P->ng_front;
+            pf_vec3 wi = gi__sample_cosine(n, u0, u1);
+            /* Below the geometric surface (interpolated normals only): mirror
+             * in its tangent plane, w - 2 (w.ng) ng. Keeps |w| = 1 and the
+             * throughput albedo, and the path on the side it arrived from. */
+            float d = pf_v3_dot(wi, P->ng_front);
+            if (d < 0.0f) wi = pf_v3_sub(wi, pf_v3_scale(P->ng_front, 2.0f * d));
+            P->ray.org = pf_rt_offset_origin(P->p, P->ng_front, P->ng_front);
+            P->ray.dir = wi;
+            P->ray.tnear = 0.0f;
+            P->ray.tfar = INFINITY;
+        }
+    }
+    /* 3. accumulate (double: 2^20 samples of float radiance lose no bits that matter) */
+    for (uint32_t i = 0; i < n; i++) {
+        acc[i][0] += paths[i].L.x;
+        acc[i][1] += paths[i].L.y;
+        acc[i][2] += paths[i].L.z;
+    }
+}
+
+static void gi__reference_row(void *ctx, uint32_t y, uint32_t worker)
+{
+    gi__ref_ctx *c = ctx;
+    float *out = c->out + (size_t)y * c->width * 3;
+    for (uint32_t x0 = 0; x0 < c->width; x0 += PF_RT_WIDTH) {
+        uint32_t n = c->width - x0 < PF_RT_WIDTH ? c->width - x0 : PF_RT_WIDTH;
+        double acc[PF_RT_WIDTH][3];
+        memset(acc, 0, sizeof acc);
+        for (uint32_t sample = 0; sample < c->spp; sample++) gi__trace_packet(c, x0, y, n, sample, acc);
+        for (uint32_t i = 0; i < n; i++)
+            for (int ch = 0; ch < 3; ch++) out[3 * (x0 + i) + ch] = (float)(acc[i][ch] / c->spp);
+    }
+    /* Progress: a relaxed counter (it orders nothing: the image is only read
+     * after pf_jobs_parallel_for returns, which synchronises); reported only
+     * on the caller's thread so the callback needs no lock. */
+    uint32_t done = atomic_fetch_add_explicit(&c->rows_done, 1u, memory_order_relaxed) + 1u;
+    if (c->progress && worker == c->caller_worker) c->progress(c->progress_user, done, c->height);
+}
+
+pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
+                              const pf_camera *camera, uint32_t width, uint32_t height,
+                              const gi_reference_options *opts, pf_error *err)
+{
+    gi_reference_options o;
+    if (opts) o = *opts;
+    else memset(&o, 0, sizeof o);
+    if (width == 0 || height == 0 || (uint64_t)width * height > 0xffffffffull)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "reference: bad image size %ux%u", width, height);
+    if (o.direct_only && o.indirect_only)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "reference: direct_only and indirect_only exclude each other");
+    if (o.bounces > GI_REFERENCE_MAX_BOUNCES)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "reference: %u bounces (at most %u)", o.bounces,
+                            GI_REFERENCE_MAX_BOUNCES);
+    gi__ref_ctx c;
+    memset(&c, 0, sizeof c);
+    c.out = out_rgb;
+    c.scene = scene;
+    c.rt = rt;
+    c.camera = camera;
+    c.width = width;
+    c.height = height;
+    c.spp = o.spp ? o.spp : GI_REFERENCE_DEFAULT_SPP;
+    c.bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
+    c.indirect_only = o.indirect_only;
+    c.progress = o.progress;
+    c.progress_user = o.progress_user;
+    c.caller_worker = pf_jobs_thread_count(jobs) - 1u;
+    atomic_init(&c.rows_done, 0u);
+    /* grain 1: rows cost very different amounts (sky vs. deep corners) */
+    pf_jobs_parallel_for(jobs, gi__reference_row, &c, height, 1);
+    if (c.progress) c.progress(c.progress_user, height, height);
+    return PF_OK;
+}

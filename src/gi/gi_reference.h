@@ -1,0 +1,120 @@
+/* gi_reference: the reference path tracer (`softgi reference`), the ground
+ * truth the VPL methods are compared against.
+ *
+ * This work is based on: Kajiya 1986, "The Rendering Equation" (path
+ * tracing), in the notation of the many-light survey, Dachsbacher et al.
+ * 2014, Sec. 2: radiance at x1 is the sum over path lengths (Eq. 3) of
+ * integrals over paths x1 .. xk of the throughput T_1^k times Le(xk) (Eq. 2),
+ * estimated by drawing one path per sample (Eq. 4). Per vertex x:
+ *
+ *   Lo(x) = Le(x) + albedo/pi * sum_lights E_l(x) V_l(x)        punctual lights: NEE
+ *                 + albedo/pi * integral Lo(y(x, wi)) cos dwi   surfaces: BSDF sampling
+ *
+ * The same sum over path lengths the VPL methods split at x2 (the survey's
+ * Eq. 5), so the reference and a VPL image estimate the same quantity.
+ *
+ * Materials and units are exactly the renderer's (README "Light units",
+ * gi_light.h): Lambertian BRDF albedo/pi with albedo = baseColor (mip level 0,
+ * as the --raytrace path), point/spot lights in W/sr with the KHR cone
+ * factor, directional lights in W/m^2, emission as radiance W/(sr m^2).
+ *
+ * Bounces (what --bounces B means; default 3). A path starts at the camera,
+ * meets its first surface at x1 and is continued by B diffuse bounces to
+ * x2 .. x_{B+1}: at most B+1 segments from the camera. At every vertex
+ * x1 .. x_{B+1} the estimator adds
+ *   - the emission Le(xk) of the surface the path hit (two-sided, as the
+ *     renderer's compose), weighted by the throughput so far, and
+ *   - next-event estimation: for every punctual light, albedo/pi * E with
+ *     E = gi_light_irradiance (the renderer's units exactly) times a shadow
+ *     ray (pf_rt_occluded).
+ * So B = 0 is "emission seen directly + direct light" (what `softgi render`
+ * computes), B = 1 adds one-bounce indirect light, and inside a closed
+ * sphere of uniform emission Le and albedo rho the expected value is exactly
+ * Le * sum_{k=0..B} rho^k (-> Le / (1 - rho) as B grows; the furnace test).
+ * Emissive surfaces are reached only by BSDF sampling (there is no light
+ * sampling for them) and punctual lights only by NEE (a path can never hit
+ * them), so each light path is counted by exactly one strategy and no
+ * multiple importance sampling is needed.
+ *
+ * indirect_only drops the two first-hit terms (Le(x1) and the NEE at x1): what
+ * is left is the light that reached x1 after at least one bounce, the part
+ * the VPL methods approximate. direct_only sets B = 0.
+ *
+ * No Russian roulette: paths stop after B bounces, when they leave the scene
+ * or when the throughput is zero (a black surface). The estimate of the
+ * truncated sum is unbiased and the work per path bounded by B + 1.
+ * Nothing is clamped either, so a punctual light close to a surface (the
+ * Cornell box's, 1 cm under the ceiling: E ~ I / r^2 = 10^4 I there) gives
+ * fireflies at low spp when a bounce lands near it; they average out, slowly.
+ *
+ * Sampling. Cosine-weighted directions around the shading normal (Malley's
+ * method: a uniform disc point lifted to the hemisphere), pdf = cos/pi, so the
+ * throughput update f_r cos / pdf = (albedo/pi) cos / (cos/pi) = albedo
+ * exactly. Shading is two-sided like the renderer's: the normal is turned to
+ * face the incoming ray. With interpolated normals a direction may fall
+ * below the geometric surface although it lies above the shading one; it is
+ * then mirrored in the geometric tangent plane (keeps the throughput albedo,
+ * so energy is conserved and the path stays on the side it came from; flat
+ * meshes never need it).
+ *
+ * Random numbers: counter-based, a 64-bit hash of (pixel index, sample index,
+ * path vertex, dimension) (gi_reference_random), never of the thread, so the
+ * image is bit-identical for any thread count. Camera rays go through the
+ * pixel jittered uniformly within it (box filter) by the vertex-0 numbers.
+ *
+ * Parallel structure: one job item per image row; an item traces its pixels
+ * 8 at a time (the 8 paths of one sample index travel together, so rays go
+ * to Embree as 8-wide packets, the fixed width of pf_rt) and writes only its
+ * row. Each pixel sums its samples in sample order (in double), then divides
+ * by spp. */
+#ifndef GI_REFERENCE_H
+#define GI_REFERENCE_H
+
+#include <stdint.h>
+
+#include "pf_jobs.h"
+#include "pf_result.h"
+#include "pf_rt.h"
+#include "pf_scene.h"
+
+#define GI_REFERENCE_DEFAULT_SPP 64u
+#define GI_REFERENCE_DEFAULT_BOUNCES 3u
+#define GI_REFERENCE_MAX_BOUNCES 1024u
+
+/* Progress: rows finished so far out of the image's height. Called only on the
+ * thread that called gi_reference_render (the job system's waiting thread
+ * helps run rows; it reports after each row it finishes, and once more with
+ * rows_done == rows_total at the end), so the callback needs no locking. */
+typedef void (*gi_reference_progress_fn)(void *user, uint32_t rows_done, uint32_t rows_total);
+
+/* Zero-initialise for defaults. */
+typedef struct gi_reference_options {
+    uint32_t spp;      /* samples per pixel; 0: GI_REFERENCE_DEFAULT_SPP */
+    uint32_t bounces;  /* B as defined above; 0: GI_REFERENCE_DEFAULT_BOUNCES (use direct_only for B = 0) */
+    int direct_only;   /* B = 0: emission seen directly + direct light */
+    int indirect_only; /* drop Le(x1) and the NEE at x1 */
+    gi_reference_progress_fn progress; /* may be NULL */
+    void *progress_user;
+} gi_reference_options;
+
+/* Renders the reference image into out_rgb (width * height * 3 floats, linear
+ * RGB, top row first; caller-owned). rt must be built from `scene`. Returns
+ * PF_ERR_ARGUMENT for a zero size, a bounce count above
+ * GI_REFERENCE_MAX_BOUNCES or direct_only together with indirect_only. */
+pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
+                              const pf_camera *camera, uint32_t width, uint32_t height,
+                              const gi_reference_options *opts, pf_error *err);
+
+/* The random number in [0, 1) of (pixel = y * width + x, sample, path vertex,
+ * dimension). Vertex 0 is the camera (dimensions 0, 1: the jitter within the
+ * pixel); vertex k >= 1 is the bounce leaving x_k (dimensions 0, 1: the
+ * hemisphere sample). */
+float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim);
+
+/* The camera ray of pixel (x, y), sample `sample`: through the pixel at the
+ * jittered position (x + u0, y + u1), dir scaled as gi_camera_ray's (t =
+ * view depth). Exposed so tests can recompute the exact hit points. */
+pf_ray gi_reference_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y,
+                               uint32_t sample);
+
+#endif

@@ -1,0 +1,445 @@
+/* test_reference: the reference path tracer (gi_reference) against answers
+ * known in closed form, and its determinism.
+ *
+ * - Furnace (scenes/closed-sphere, its point light removed): inside a closed
+ *   sphere of uniform emission Le = 1 and albedo rho = 0.5, the radiance is
+ *   Le sum_{k=0..B} rho^k with B bounces (1, 1.5, 1.75, 1.875 for B = 0..3)
+ *   and Le / (1 - rho) = 2 in the limit; B = 30 leaves a truncation error of
+ *   rho^31 / (1 - rho) = 2^-30. Tolerance: with cosine-weighted sampling the
+ *   per-bounce weight is exactly rho, and every path stays inside the closed
+ *   sphere and meets emission Le at each of its B + 1 vertices, so *every
+ *   path* returns the expected value: the estimator has zero variance and
+ *   the sample count does not enter the tolerance. What is left is float
+ *   rounding of a sum of 31 terms (a few ulps, < 1e-6 relative); we allow
+ *   1e-5. A single path leaking out of the sphere, a bounce counted twice or
+ *   a wrong pdf would be off by at least ~1e-3 relative per pixel (a leak loses
+ *   >= rho^B Le / spp of one pixel's value; rho^30 = 1e-9 would hide only at
+ *   the last bounce, so the truncated-B tests check the small B too).
+ * - Analytic quad: a white Lambertian quad under a point light. A single
+ *   planar quad has no interreflection (every bounce leaves the scene), and
+ *   NEE is exact per sample, so each pixel equals the mean over its samples
+ *   of albedo I cos / (pi r^2) at the jittered hit points (recomputed in
+ *   double from gi_reference_camera_ray): within 1e-4 relative, as
+ *   test_direct. --indirect-only there gives exactly 0 (also with emission).
+ * - Form factor: one bounce from a floor point to an emissive square above
+ *   it against the closed-form point-to-rectangle form factor (tests the
+ *   cosine-weighted direction distribution, which the furnace cannot see).
+ * - Decomposition: full = direct_only + indirect_only per pixel (the same
+ *   random numbers drive all three), to float rounding.
+ * - Determinism: identical bytes with 1, 2 and 3 threads; a golden hash of a
+ *   small Cornell box reference at --isa sse2.
+ * - Progress is reported on the calling thread only, monotonically, ending
+ *   at the image height; bad arguments give PF_ERR_ARGUMENT. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <math.h>
+#include <pthread.h>
+
+#include "gi_reference.h"
+#include "pf_gltf.h"
+#include "pf_imageio.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "test_util.h"
+
+#define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+#define SPHERE SOFTGI_SOURCE_DIR "/scenes/closed-sphere/closed-sphere.gltf"
+
+/* Golden: gi_reference_render on scenes/cornell-box, 32x24, 4 spp, 3 bounces,
+ * Embree pinned to sse2 (equals `softgi reference --isa sse2 --size 32x24
+ * --spp 4 --hash`). A change is a change in what the reference computes. */
+#define GOLDEN_CORNELL_REF_SSE2 0x654cf8b28cd9a4a5ull
+
+/* Renders `scene` into a new buffer (caller frees). */
+static float *render(const pf_scene *scene, pf_isa isa, uint32_t threads, const pf_camera *cam, uint32_t w,
+                     uint32_t h, const gi_reference_options *o)
+{
+    pf_error err;
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, scene, isa, 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(threads);
+    assert_non_null(jobs);
+    float *img = malloc(sizeof(float) * 3 * w * h);
+    assert_non_null(img);
+    pf_result r = gi_reference_render(img, scene, rt, jobs, cam, w, h, o, &err);
+    if (r != PF_OK) fail_msg("gi_reference_render: %s", err.message);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    return img;
+}
+
+static pf_isa best_isa(void)
+{
+    pf_isa isa;
+    pf_error err;
+    assert_int_equal(pf_isa_resolve(PF_ISA_AUTO, &isa, &err), PF_OK);
+    return isa;
+}
+
+/* ---------------------------------------------------------------- furnace */
+
+static void load_sphere(pf_scene *s)
+{
+    pf_error err;
+    assert_int_equal(pf_gltf_load(s, SPHERE, NULL, &err), PF_OK);
+    assert_true(s->camera_count >= 1);
+    s->light_count = 0; /* emission only */
+    for (uint32_t m = 0; m < s->material_count; m++) {
+        assert_true(s->materials[m].base_color[0] == 0.5f && s->materials[m].emission[0] == 1.0f);
+    }
+}
+
+/* Every pixel of a B-bounce render equals `want` within 1e-5 relative. */
+static void check_furnace(const pf_scene *s, uint32_t bounces, int direct_only, uint32_t spp, double want)
+{
+    enum { W = 24, H = 24 };
+    gi_reference_options o = {0};
+    o.spp = spp;
+    o.bounces = bounces;
+    o.direct_only = direct_only;
+    float *img = render(s, best_isa(), 2, &s->cameras[0], W, H, &o);
+    double worst = 0.0, mean = 0.0;
+    for (int i = 0; i < 3 * W * H; i++) {
+        worst = fmax(worst, fabs(img[i] - want) / want);
+        mean += img[i];
+    }
+    mean /= 3 * W * H;
+    print_message("furnace B=%u spp=%u: mean %.9f, expected %.9f, worst relative error %.3g\n",
+                  direct_only ? 0u : bounces, spp, mean, want, worst);
+    if (worst > 1e-5) fail_msg("furnace B=%u: worst relative error %.3g", bounces, worst);
+    free(img);
+}
+
+static void test_furnace_converged(void **state)
+{
+    (void)state;
+    pf_scene s;
+    load_sphere(&s);
+    /* Le / (1 - rho) = 2; B = 30 truncates the series 2^-30 short of it. */
+    check_furnace(&s, 30, 0, 8, 2.0);
+    pf_scene_free(&s);
+}
+
+static void test_furnace_truncated(void **state)
+{
+    (void)state;
+    pf_scene s;
+    load_sphere(&s);
+    check_furnace(&s, 0, 1, 4, 1.0); /* B = 0: emission seen directly */
+    double sum = 1.0, term = 1.0;
+    for (uint32_t b = 1; b <= 5; b++) {
+        term *= 0.5;
+        sum += term;
+        check_furnace(&s, b, 0, 4, sum);
+    }
+    pf_scene_free(&s);
+}
+
+/* ---------------------------------------------------------------- analytic quad */
+
+#define QW 48
+#define QH 48
+static const float k_albedo[3] = {0.8f, 0.6f, 0.4f};
+
+static void make_quad_scene(pf_scene *s, pf_camera *cam, float emission)
+{
+    tu_quad floor = {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {k_albedo[0], k_albedo[1], k_albedo[2], 1}, PF_ALPHA_OPAQUE, 0.5f};
+    tu_make_scene(s, &floor, 1);
+    for (int c = 0; c < 3; c++) s->materials[0].emission[c] = emission;
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    L.type = PF_LIGHT_POINT;
+    L.position = pf_v3(0.4f, 1.7f, -0.3f);
+    L.color = pf_v3(1.0f, 0.9f, 0.7f);
+    L.intensity = 3.0f;
+    pf_error err;
+    assert_int_equal(pf_scene_add_light(s, &L, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(s, &err), PF_OK);
+    assert_int_equal(pf_camera_look_at(cam, pf_v3(0.1f, 3.0f, 0.2f), pf_v3(0, 0, 0), pf_radians(70.0f), &err), PF_OK);
+}
+
+static void test_quad_analytic(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_camera cam;
+    make_quad_scene(&s, &cam, 0.0f);
+    const uint32_t spp = 4;
+    gi_reference_options o = {0};
+    o.spp = spp; /* default B = 3: the bounces all leave the scene */
+    float *img = render(&s, best_isa(), 2, &cam, QW, QH, &o);
+    const pf_light *L = &s.lights[0];
+    double worst = 0.0;
+    for (uint32_t y = 0; y < QH; y++)
+        for (uint32_t x = 0; x < QW; x++) {
+            double want[3] = {0, 0, 0};
+            for (uint32_t k = 0; k < spp; k++) {
+                /* the sample's hit point on y = 0, in double */
+                pf_ray r = gi_reference_camera_ray(&cam, QW, QH, x, y, k);
+                double t = -(double)r.org.y / r.dir.y;
+                assert_true(t > 0);
+                double px = r.org.x + t * r.dir.x, pz = r.org.z + t * r.dir.z;
+                assert_true(fabs(px) < 10 && fabs(pz) < 10); /* the quad fills the view */
+                double dx = L->position.x - px, dy = L->position.y, dz = L->position.z - pz;
+                double r2 = dx * dx + dy * dy + dz * dz;
+                double e = L->intensity * (dy / sqrt(r2)) / r2;
+                const float col[3] = {L->color.x, L->color.y, L->color.z};
+                for (int c = 0; c < 3; c++) want[c] += k_albedo[c] * col[c] * e / M_PI / spp;
+            }
+            for (int c = 0; c < 3; c++) {
+                double got = img[3 * (y * QW + x) + c];
+                double rel = fabs(got - want[c]) / want[c];
+                worst = fmax(worst, rel);
+                if (rel > 1e-4) fail_msg("pixel (%u,%u) channel %d: got %.9g, analytic %.9g", x, y, c, got, want[c]);
+            }
+        }
+    print_message("analytic quad: worst relative error %.3g\n", worst);
+    free(img);
+    pf_scene_free(&s);
+}
+
+static void test_quad_indirect_only_zero(void **state)
+{
+    (void)state;
+    for (int emissive = 0; emissive <= 1; emissive++) {
+        pf_scene s;
+        pf_camera cam;
+        make_quad_scene(&s, &cam, emissive ? 1.0f : 0.0f);
+        gi_reference_options o = {0};
+        o.spp = 2;
+        o.indirect_only = 1;
+        float *img = render(&s, best_isa(), 2, &cam, QW, QH, &o);
+        for (int i = 0; i < 3 * QW * QH; i++)
+            if (img[i] != 0.0f) fail_msg("indirect-only on one quad (emissive %d): value %g at %d", emissive, img[i], i);
+        free(img);
+        /* without it the emission (1) is there, plus direct light */
+        o.indirect_only = 0;
+        img = render(&s, best_isa(), 2, &cam, QW, QH, &o);
+        for (int i = 0; i < 3 * QW * QH; i++) assert_true(img[i] >= (emissive ? 1.0f : 0.0f) && img[i] > 0.0f);
+        free(img);
+        pf_scene_free(&s);
+    }
+}
+
+/* ---------------------------------------------------------------- form factor */
+
+/* The furnace cannot see the direction distribution (every direction returns
+ * the same). This can: a floor point (albedo rho) under a parallel emissive
+ * square (Le, half-width a, height h, centred above it, black so paths end
+ * there) receives E = pi Le F with the point-to-rectangle form factor, for
+ * each of the four a x a quarters (corner above the point, X = Y = a/h):
+ *   F_q = 1/(2 pi) [X/sqrt(1+X^2) atan(Y/sqrt(1+X^2)) + Y/sqrt(1+Y^2) atan(X/sqrt(1+Y^2))]
+ * so with B = 1, indirect only, L = rho Le F. A 1x1 image through a 0.01
+ * degree field of view sees (0, 0, 0) only. Each sample is rho Le (the bounce
+ * hit the square) or 0, so the standard error is rho Le sqrt(F (1-F) / N);
+ * the test allows 5 of them (N = 2^16: 0.5%). Uniform hemisphere sampling
+ * with the same weight would give 0.42 instead of 0.55 for F. */
+static void test_form_factor(void **state)
+{
+    (void)state;
+    const float rho = 0.5f, a = 1.0f, h = 1.0f;
+    tu_quad q[2] = {
+        {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {rho, rho, rho, 1}, PF_ALPHA_OPAQUE, 0.5f},
+        {{0, h, 0}, {a, 0, 0}, {0, 0, a}, {0, 0, 0, 1}, PF_ALPHA_OPAQUE, 0.5f},
+    };
+    pf_scene s;
+    tu_make_scene(&s, q, 2);
+    for (int c = 0; c < 3; c++) s.materials[1].emission[c] = 1.0f;
+    pf_error err;
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_camera cam;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.001f, 0.5f, 0.0f), pf_v3(0, 0, 0), pf_radians(0.01f), &err), PF_OK);
+    const uint32_t n = 1u << 16;
+    gi_reference_options o = {0};
+    o.spp = n;
+    o.bounces = 1;
+    o.indirect_only = 1;
+    float *img = render(&s, best_isa(), 2, &cam, 1, 1, &o);
+    double X = a / h, Y = a / h;
+    double fq = (X / sqrt(1 + X * X) * atan(Y / sqrt(1 + X * X)) + Y / sqrt(1 + Y * Y) * atan(X / sqrt(1 + Y * Y))) /
+                (2.0 * M_PI);
+    double F = 4.0 * fq, want = rho * F, se = rho * sqrt(F * (1.0 - F) / n);
+    print_message("form factor: got %.6f, analytic %.6f (F = %.6f), %.2f standard errors\n", img[0], want, F,
+                  fabs(img[0] - want) / se);
+    for (int c = 0; c < 3; c++) assert_true(fabs(img[c] - want) < 5.0 * se);
+    free(img);
+    pf_scene_free(&s);
+}
+
+/* ---------------------------------------------------------------- Cornell box */
+
+static void test_decomposition(void **state)
+{
+    (void)state;
+    enum { W = 40, H = 30 };
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    gi_reference_options o = {0};
+    o.spp = 2;
+    float *full = render(&s, best_isa(), 2, &s.cameras[0], W, H, &o);
+    o.direct_only = 1;
+    float *dir = render(&s, best_isa(), 2, &s.cameras[0], W, H, &o);
+    o.direct_only = 0;
+    o.indirect_only = 1;
+    float *ind = render(&s, best_isa(), 2, &s.cameras[0], W, H, &o);
+    double sum_ind = 0.0, sum_full = 0.0;
+    for (int i = 0; i < 3 * W * H; i++) {
+        double d = fabs((double)full[i] - ((double)dir[i] + ind[i]));
+        if (d > 1e-5 * full[i] + 1e-9) fail_msg("value %d: full %.9g != direct %.9g + indirect %.9g", i, full[i], dir[i], ind[i]);
+        assert_true(ind[i] >= 0.0f && dir[i] >= 0.0f);
+        sum_ind += ind[i];
+        sum_full += full[i];
+    }
+    print_message("cornell: indirect is %.1f%% of the image\n", 100.0 * sum_ind / sum_full);
+    assert_true(sum_ind > 0.05 * sum_full); /* a closed box has plenty of indirect light */
+    free(full);
+    free(dir);
+    free(ind);
+    pf_scene_free(&s);
+}
+
+static void test_threads_identical(void **state)
+{
+    (void)state;
+    enum { W = 40, H = 30 };
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    gi_reference_options o = {0};
+    o.spp = 3;
+    float *a = render(&s, best_isa(), 1, &s.cameras[0], W, H, &o);
+    float *b = render(&s, best_isa(), 2, &s.cameras[0], W, H, &o);
+    float *c = render(&s, best_isa(), 3, &s.cameras[0], W, H, &o);
+    assert_memory_equal(a, b, sizeof(float) * 3 * W * H);
+    assert_memory_equal(a, c, sizeof(float) * 3 * W * H);
+    free(a);
+    free(b);
+    free(c);
+    pf_scene_free(&s);
+}
+
+static void test_golden_cornell(void **state)
+{
+    (void)state;
+    enum { W = 32, H = 24 };
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    gi_reference_options o = {0};
+    o.spp = 4;
+    float *img = render(&s, PF_ISA_SSE2, 2, &s.cameras[0], W, H, &o);
+    uint64_t h = pf_imageio_hash(img, 3ull * W * H);
+    print_message("cornell reference sse2 %dx%d 4 spp hash %016llx\n", W, H, (unsigned long long)h);
+    assert_true(h == GOLDEN_CORNELL_REF_SSE2);
+    free(img);
+    pf_scene_free(&s);
+}
+
+/* ---------------------------------------------------------------- progress, bad input */
+
+typedef struct progress_log {
+    pthread_t caller;
+    uint32_t calls, last, total;
+    int wrong_thread, backwards;
+} progress_log;
+
+static void on_progress(void *user, uint32_t done, uint32_t total)
+{
+    progress_log *p = user;
+    if (!pthread_equal(pthread_self(), p->caller)) p->wrong_thread = 1;
+    if (done < p->last) p->backwards = 1;
+    p->last = done;
+    p->total = total;
+    p->calls++;
+}
+
+static void test_progress(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_camera cam;
+    make_quad_scene(&s, &cam, 0.0f);
+    progress_log log;
+    memset(&log, 0, sizeof log);
+    log.caller = pthread_self();
+    gi_reference_options o = {0};
+    o.spp = 1;
+    o.progress = on_progress;
+    o.progress_user = &log;
+    float *img = render(&s, best_isa(), 3, &cam, QW, QH, &o);
+    assert_false(log.wrong_thread);
+    assert_false(log.backwards);
+    assert_true(log.calls >= 1);
+    assert_int_equal(log.last, QH);
+    assert_int_equal(log.total, QH);
+    free(img);
+    pf_scene_free(&s);
+}
+
+static void test_bad_arguments(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_camera cam;
+    make_quad_scene(&s, &cam, 0.0f);
+    pf_error err;
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, best_isa(), 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(1);
+    float img[3 * 4];
+    gi_reference_options o = {0};
+    assert_int_equal(gi_reference_render(img, &s, rt, jobs, &cam, 0, 4, &o, &err), PF_ERR_ARGUMENT);
+    assert_int_equal(gi_reference_render(img, &s, rt, jobs, &cam, 4, 0, &o, &err), PF_ERR_ARGUMENT);
+    o.direct_only = o.indirect_only = 1;
+    assert_int_equal(gi_reference_render(img, &s, rt, jobs, &cam, 2, 2, &o, &err), PF_ERR_ARGUMENT);
+    assert_non_null(strstr(err.message, "exclude"));
+    o.direct_only = o.indirect_only = 0;
+    o.bounces = GI_REFERENCE_MAX_BOUNCES + 1;
+    assert_int_equal(gi_reference_render(img, &s, rt, jobs, &cam, 2, 2, &o, &err), PF_ERR_ARGUMENT);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* The random numbers lie in [0, 1) and depend on every counter. */
+static void test_random(void **state)
+{
+    (void)state;
+    double sum = 0.0;
+    const int n = 100000;
+    for (int i = 0; i < n; i++) {
+        float u = gi_reference_random((uint32_t)i, 7, 2, 1);
+        assert_true(u >= 0.0f && u < 1.0f);
+        sum += u;
+    }
+    /* mean of n uniforms: sd 1/sqrt(12 n) = 0.0009; 5 sd */
+    assert_true(fabs(sum / n - 0.5) < 0.0046);
+    float base = gi_reference_random(5, 6, 7, 1);
+    assert_true(base != gi_reference_random(6, 6, 7, 1));
+    assert_true(base != gi_reference_random(5, 7, 7, 1));
+    assert_true(base != gi_reference_random(5, 6, 8, 1));
+    assert_true(base != gi_reference_random(5, 6, 7, 0));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_random),
+        cmocka_unit_test(test_furnace_converged),
+        cmocka_unit_test(test_furnace_truncated),
+        cmocka_unit_test(test_quad_analytic),
+        cmocka_unit_test(test_quad_indirect_only_zero),
+        cmocka_unit_test(test_form_factor),
+        cmocka_unit_test(test_decomposition),
+        cmocka_unit_test(test_threads_identical),
+        cmocka_unit_test(test_golden_cornell),
+        cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_bad_arguments),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

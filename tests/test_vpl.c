@@ -1,0 +1,355 @@
+/* test_vpl: the many-light stages (gi_indirect, gi_ir).
+ * - one VPL's irradiance on a floor against the analytic answer, with
+ *   Embree-ray and paraboloid-map visibility;
+ * - the clamp bounds every VPL's contribution (E <= I b);
+ * - split then combine returns the G-buffer bit-exactly (several tilings and
+ *   image sizes that the tiles do not divide);
+ * - the box filter removes a 4x4 structured pattern on a flat wall and does
+ *   not blur across a depth discontinuity;
+ * - Instant Radiosity: a static scene keeps a static VPL set (nothing moved
+ *   on the second frame), flux conservation for one bounce;
+ * - every stage of the Cornell box GI frame identical with 1 and 2 threads,
+ *   and golden hashes of every stage. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <math.h>
+
+#include "gi_frame.h"
+#include "pf_gltf.h"
+#include "pf_imageio.h"
+#include "test_util.h"
+
+#define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+
+typedef struct fx {
+    pf_scene scene;
+    pf_rt *rt;
+    pf_jobs *jobs;
+    rs_context *rs;
+    gi_frame f;
+} fx;
+
+static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_camera *cam,
+                     const gi_indirect_options *io)
+{
+    pf_error err;
+    assert_int_equal(pf_scene_validate(&x->scene, &err), PF_OK);
+    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
+    x->jobs = pf_jobs_create(threads);
+    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
+    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, w, h, 64, &err), PF_OK);
+    assert_int_equal(gi_frame_enable_indirect(&x->f, io, 0, &err), PF_OK);
+}
+
+static void fx_end(fx *x)
+{
+    gi_frame_free(&x->f);
+    rs_context_destroy(x->rs);
+    pf_jobs_destroy(x->jobs);
+    pf_rt_destroy(x->rt);
+    pf_scene_free(&x->scene);
+}
+
+/* A 20 x 20 floor at y = 0 seen from above. */
+static void floor_scene(pf_scene *s)
+{
+    tu_quad q = {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f};
+    tu_make_scene(s, &q, 1);
+}
+
+static void one_vpl(int raytrace)
+{
+    fx x;
+    floor_scene(&x.scene);
+    pf_camera cam;
+    pf_error err;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.2f, 4, 0.1f), pf_v3(0, 0, 0), pf_radians(60), &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.no_interleave = 1;
+    io.visibility_raytrace = raytrace;
+    io.clamp = 0.0f; /* off */
+    io.vpls = 4;
+    fx_begin(&x, 2, 64, 48, &cam, &io);
+    gi_frame *f = &x.f;
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
+    /* one VPL 1.5 above the floor, facing down at an angle */
+    gi_vpl v = {{0.3f, 1.5f, -0.2f}, {0, -1, 0}, {2.0f, 1.0f, 0.5f}, 7, 1};
+    v.nrm = pf_v3_normalize(pf_v3(0.3f, -1.0f, 0.2f));
+    assert_int_equal(gi_vpl_set_reserve(&f->ind.vpls, 1, &err), PF_OK);
+    f->ind.vpls.v[0] = v;
+    f->ind.vpls.count = 1;
+    gi_stage_vpl_shadow_maps(f);
+    gi_stage_split(f);
+    gi_stage_assign(f);
+    gi_stage_accumulate(f);
+    gi_stage_combine(f);
+    int checked = 0;
+    for (uint32_t i = 0; i < 64 * 48; i++) {
+        if (f->gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+        double px = f->gbuf.pos_x[i], py = f->gbuf.pos_y[i], pz = f->gbuf.pos_z[i];
+        double dx = v.pos.x - px, dy = v.pos.y - py, dz = v.pos.z - pz, r2 = dx * dx + dy * dy + dz * dz;
+        double r = sqrt(r2), c1 = dy / r, c2 = -(v.nrm.x * dx + v.nrm.y * dy + v.nrm.z * dz) / r;
+        double G = c1 > 0 && c2 > 0 ? c1 * c2 / r2 : 0.0;
+        const double I[3] = {2.0, 1.0, 0.5};
+        for (int c = 0; c < 3; c++) {
+            double want = I[c] * G, got = f->ind.combined[3 * i + c];
+            if (fabs(got - want) > 1e-4 * want + 1e-7) fail_msg("pixel %u: E %.8g, analytic %.8g", i, got, want);
+        }
+        checked++;
+    }
+    assert_true(checked > 1000);
+    fx_end(&x);
+}
+
+static void test_one_vpl_raytrace(void **state)
+{
+    (void)state;
+    one_vpl(1);
+}
+
+static void test_one_vpl_paraboloid(void **state)
+{
+    (void)state;
+    one_vpl(0);
+}
+
+/* E from any VPL never exceeds I b, whatever the distance. */
+static void test_clamp_bounds(void **state)
+{
+    (void)state;
+    fx x;
+    floor_scene(&x.scene);
+    pf_camera cam;
+    pf_error err;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.2f, 4, 0.1f), pf_v3(0, 0, 0), pf_radians(60), &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.no_interleave = 1;
+    io.visibility_raytrace = 1;
+    io.clamp = 50.0f;
+    fx_begin(&x, 1, 64, 48, &cam, &io);
+    gi_frame *f = &x.f;
+    float b = f->ind.b;
+    assert_true(b > 0.0f && isfinite(b));
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
+    gi_vpl v = {{0.0f, 0.01f, 0.0f}, {0, -1, 0}, {1, 1, 1}, 1, 1}; /* 1 cm above the floor: G up to 1e4 */
+    assert_int_equal(gi_vpl_set_reserve(&f->ind.vpls, 1, &err), PF_OK);
+    f->ind.vpls.v[0] = v;
+    f->ind.vpls.count = 1;
+    gi_stage_split(f);
+    gi_stage_assign(f);
+    gi_stage_accumulate(f);
+    gi_stage_combine(f);
+    int at_clamp = 0;
+    for (uint32_t i = 0; i < 64 * 48; i++) {
+        assert_true(f->ind.combined[3 * i] <= b * 1.0000001f);
+        at_clamp += f->ind.combined[3 * i] == b;
+    }
+    assert_true(at_clamp > 0); /* the clamp was reached under the VPL */
+    fx_end(&x);
+}
+
+/* split positions, store them as the split irradiance, combine: the
+ * G-buffer's positions come back bit for bit. */
+static void check_split_combine(uint32_t n, uint32_t m, uint32_t w, uint32_t h)
+{
+    fx x;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.tiles_n = n;
+    io.tiles_m = m;
+    io.visibility_raytrace = 1;
+    fx_begin(&x, 2, w, h, &x.scene.cameras[0], &io);
+    gi_frame *f = &x.f;
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
+    gi_stage_split(f);
+    for (uint32_t k = 0; k < w * h; k++) {
+        f->ind.split_e[3 * k] = f->ind.split_px[k];
+        f->ind.split_e[3 * k + 1] = f->ind.split_py[k];
+        f->ind.split_e[3 * k + 2] = f->ind.split_pz[k];
+    }
+    gi_stage_combine(f);
+    for (uint32_t i = 0; i < w * h; i++) {
+        assert_memory_equal(&f->ind.combined[3 * i], &f->gbuf.pos_x[i], sizeof(float));
+        assert_memory_equal(&f->ind.combined[3 * i + 1], &f->gbuf.pos_y[i], sizeof(float));
+        assert_memory_equal(&f->ind.combined[3 * i + 2], &f->gbuf.pos_z[i], sizeof(float));
+    }
+    /* the split layout is a permutation: every texel written exactly once */
+    assert_int_equal(f->ind.tile_x0[n * m], w * h);
+    fx_end(&x);
+}
+
+static void test_split_combine_exact(void **state)
+{
+    (void)state;
+    check_split_combine(4, 4, 160, 120);
+    check_split_combine(3, 2, 37, 29);
+    check_split_combine(5, 7, 64, 48);
+    check_split_combine(1, 1, 33, 17);
+}
+
+/* Two walls facing the camera, the right half 1 m farther: a 4x4 pattern on
+ * each is removed completely, and the two walls' values do not mix. */
+static void test_box_filter(void **state)
+{
+    (void)state;
+    fx x;
+    tu_quad q[2] = {
+        {{-1, 0, -3}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+        {{1, 0, -4}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+    };
+    tu_make_scene(&x.scene, q, 2);
+    pf_camera cam;
+    pf_error err;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.visibility_raytrace = 1;
+    io.alpha_rel = 0.05f; /* 5% of the 4.5 m diagonal: well under the 1 m step */
+    fx_begin(&x, 2, 96, 64, &cam, &io);
+    gi_frame *f = &x.f;
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
+    /* pattern values with exact binary sums: mean 1.0 on the near wall, 3.0 far */
+    for (uint32_t y = 0; y < 64; y++)
+        for (uint32_t x0 = 0; x0 < 96; x0++) {
+            size_t i = (size_t)y * 96 + x0;
+            float base = f->gbuf.prim[i] < 2 ? 1.0f : 3.0f;
+            float p = ((x0 % 4) * 4 + (y % 4)) / 8.0f - 0.9375f; /* sums to 0 over a 4x4 block */
+            for (int c = 0; c < 3; c++) f->ind.combined[3 * i + c] = base + p;
+        }
+    gi_stage_filter(f);
+    int interior = 0;
+    for (uint32_t y = 2; y + 2 < 64; y++)
+        for (uint32_t x0 = 2; x0 + 2 < 96; x0++) {
+            size_t i = (size_t)y * 96 + x0;
+            if (f->gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+            /* a window that lies on one wall only */
+            int mixed = 0;
+            for (int dy = -2; dy <= 1; dy++)
+                for (int dx = -2; dx <= 1; dx++)
+                    mixed |= (f->gbuf.prim[i + dy * 96 + dx] < 2) != (f->gbuf.prim[i] < 2) ||
+                             f->gbuf.prim[i + dy * 96 + dx] == RS_GBUFFER_EMPTY;
+            float want = f->gbuf.prim[i] < 2 ? 1.0f : 3.0f;
+            if (!mixed) {
+                if (f->ind.filtered[3 * i] != want) fail_msg("pixel (%u,%u): %.9g, want %g", x0, y, f->ind.filtered[3 * i], want);
+                interior++;
+            } else {
+                /* next to the step: only same-wall samples, so within that wall's pattern range */
+                assert_true(fabsf(f->ind.filtered[3 * i] - want) <= 0.95f);
+            }
+        }
+    assert_true(interior > 1000);
+    fx_end(&x);
+}
+
+/* Instant Radiosity on the Cornell box: the second frame of a static scene
+ * moves nothing, and the set is the same. */
+static void test_ir_static(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    void *st;
+    assert_int_equal(gi_method_ir.create(&st, &err), PF_OK);
+    gi_vpl_set a = {0}, b = {0};
+    gi_vpl_inputs in = {&s, rt, NULL, &s.cameras[0], 0, 256, 3};
+    assert_int_equal(gi_method_ir.update(st, &in, &a, &err), PF_OK);
+    in.frame = 1;
+    assert_int_equal(gi_method_ir.update(st, &in, &b, &err), PF_OK);
+    assert_int_equal(a.count, 256);
+    assert_int_equal(b.count, 256);
+    uint32_t moved = 0;
+    for (uint32_t i = 0; i < b.count; i++) moved += b.v[i].moved;
+    assert_int_equal(moved, 0);
+    for (uint32_t i = 0; i < a.count; i++) {
+        assert_int_equal(a.v[i].id, b.v[i].id);
+        assert_true(a.v[i].moved == 1);
+    }
+    /* moving the light regenerates everything */
+    s.lights[0].position.x += 0.05f;
+    in.frame = 2;
+    assert_int_equal(gi_method_ir.update(st, &in, &b, &err), PF_OK);
+    moved = 0;
+    for (uint32_t i = 0; i < b.count; i++) moved += b.v[i].moved;
+    assert_true(moved > b.count * 9 / 10);
+    gi_method_ir.destroy(st);
+    gi_vpl_set_free(&a);
+    gi_vpl_set_free(&b);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* The GI frame with 1 and 2 threads: every stage's buffer identical; golden. */
+static uint64_t gi_hashes(uint32_t threads, uint64_t stage[8])
+{
+    fx x;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.vpls = 64;
+    fx_begin(&x, threads, 80, 60, &x.scene.cameras[0], &io);
+    gi_frame_render_raster(&x.f);
+    uint64_t n = 80 * 60;
+    const gi_indirect *ind = &x.f.ind;
+    stage[0] = pf_imageio_hash((const float *)ind->vpls.v, ind->vpls.count * (sizeof(gi_vpl) / 4));
+    stage[1] = pf_imageio_hash((const float *)ind->atlas, (uint64_t)ind->vpls.count * 128 * 128 / 2);
+    stage[2] = pf_imageio_hash(ind->split_nx, n);
+    stage[3] = pf_imageio_hash(ind->split_e, 3 * n);
+    stage[4] = pf_imageio_hash(ind->combined, 3 * n);
+    stage[5] = pf_imageio_hash(ind->filtered, 3 * n);
+    stage[6] = pf_imageio_hash(x.f.direct, 3 * n);
+    stage[7] = pf_imageio_hash(x.f.final, 3 * n);
+    uint64_t all = 0;
+    for (int k = 0; k < 8; k++) all = all * 31 + stage[k];
+    fx_end(&x);
+    return all;
+}
+
+/* Golden: 80x60 Cornell box GI frame (64 VPLs, 4x4 tiles, paraboloid maps,
+ * scalar raster, Embree pinned to sse2): vpls, maps, split, accumulated,
+ * combined, filtered, direct, final. */
+static const uint64_t k_golden[8] = {
+    0x55a3e9b955bffe3eull, 0xbf3e90a09a7b5b1dull, 0x108a925dc7f00a3aull, 0x7b7293d18d09585full,
+    0x6ef0787ae7512e57ull, 0x79ee6112ff0f1082ull, 0x780c259c74ba52c4ull, 0xf8bcd8accbaf19ccull,
+};
+
+static void test_frame_threads_and_golden(void **state)
+{
+    (void)state;
+    uint64_t s1[8], s2[8];
+    uint64_t h1 = gi_hashes(1, s1), h2 = gi_hashes(2, s2);
+    for (int k = 0; k < 8; k++) {
+        print_message("stage %d hash 0x%016llxull\n", k, (unsigned long long)s1[k]);
+        assert_true(s1[k] == s2[k]);
+    }
+    assert_true(h1 == h2);
+    for (int k = 0; k < 8; k++)
+        if (s1[k] != k_golden[k]) fail_msg("stage %d hash %016llx differs from the golden %016llx", k,
+                                           (unsigned long long)s1[k], (unsigned long long)k_golden[k]);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_one_vpl_raytrace),  cmocka_unit_test(test_one_vpl_paraboloid),
+        cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
+        cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
+        cmocka_unit_test(test_frame_threads_and_golden),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

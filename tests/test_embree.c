@@ -22,18 +22,6 @@
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
 
-static int load_or_skip(pf_scene *s, const char *path)
-{
-    if (!tu_file_exists(path)) {
-        print_message("SKIP: %s is absent (the shared scenes are not checked out beside the repo)\n", path);
-        return 0;
-    }
-    pf_error err;
-    pf_result r = pf_gltf_load(s, path, NULL, &err);
-    if (r != PF_OK) fail_msg("%s", err.message);
-    return 1;
-}
-
 /* Camera rays over the scene's bounds, looking at the centre from a corner. */
 static void make_rays(const pf_scene *s, pf_ray *rays, uint32_t w, uint32_t h)
 {
@@ -55,7 +43,7 @@ static int same_hit(const pf_hit *a, const pf_hit *b)
 static void check_single_vs_packet(const char *path)
 {
     pf_scene s;
-    if (!load_or_skip(&s, path)) return;
+    if (!tu_load_or_skip(&s, path)) return;
     pf_error err;
     pf_rt *rt;
     pf_isa isa = pf_isa_detect();
@@ -105,7 +93,7 @@ static void test_build_threads_and_isa(void **state)
 {
     (void)state;
     pf_scene s;
-    if (!load_or_skip(&s, SIBENIK) && !load_or_skip(&s, CORNELL)) return;
+    if (!tu_load_or_skip(&s, SIBENIK) && !tu_load_or_skip(&s, CORNELL)) return;
     pf_error err;
     pf_rt *a, *b, *c;
     assert_int_equal(pf_rt_create(&a, &s, pf_isa_detect(), 1, &err), PF_OK);

@@ -73,18 +73,6 @@
  * 128x128 uint16 codes, little-endian). */
 #define GOLDEN_CORNELL 0xb47204a5d499b253ull
 
-static int load_or_skip(pf_scene *s, const char *path)
-{
-    if (!tu_file_exists(path)) {
-        print_message("SKIP: %s is absent (the shared scenes are not checked out beside the repo)\n", path);
-        return 0;
-    }
-    pf_error err;
-    pf_result r = pf_gltf_load(s, path, NULL, &err);
-    if (r != PF_OK) fail_msg("%s", err.message);
-    return 1;
-}
-
 static uint64_t fnv1a(const void *data, size_t n)
 {
     const uint8_t *p = data;
@@ -258,7 +246,7 @@ static void test_atlas_size(void **state)
 
     /* a render writes exactly its maps: guard words after the atlas stay */
     pf_scene s;
-    assert_true(load_or_skip(&s, CORNELL));
+    assert_true(tu_load_or_skip(&s, CORNELL));
     pf_error err;
     rs_para_context *ctx;
     rs_para_options o = {.resolution = 32};
@@ -288,7 +276,7 @@ static void test_cornell_vs_traced(void **state)
 {
     (void)state;
     pf_scene s;
-    assert_true(load_or_skip(&s, CORNELL));
+    assert_true(tu_load_or_skip(&s, CORNELL));
     check_vs_traced(&s, 64, 128, "cornell");
     check_vs_traced(&s, 16, 67, "cornell (odd resolution)");
     pf_scene_free(&s);
@@ -298,7 +286,7 @@ static void test_sibenik_vs_traced(void **state)
 {
     (void)state;
     pf_scene s;
-    if (!load_or_skip(&s, SIBENIK)) return;
+    if (!tu_load_or_skip(&s, SIBENIK)) return;
     check_vs_traced(&s, 24, 128, "sibenik");
     pf_scene_free(&s);
 }
@@ -307,7 +295,7 @@ static void test_conference_vs_traced(void **state)
 {
     (void)state;
     pf_scene s;
-    if (!load_or_skip(&s, CONFERENCE)) return;
+    if (!tu_load_or_skip(&s, CONFERENCE)) return;
     check_vs_traced(&s, 12, 128, "conference");
     pf_scene_free(&s);
 }
@@ -319,7 +307,7 @@ static void test_closed_sphere_watertight(void **state)
 {
     (void)state;
     pf_scene s;
-    assert_true(load_or_skip(&s, SPHERE));
+    assert_true(tu_load_or_skip(&s, SPHERE));
     pf_error err;
     rs_para_context *ctx;
     assert_int_equal(rs_para_context_create(&ctx, &s, NULL, &err), PF_OK);
@@ -494,10 +482,10 @@ static void test_threads_and_paths_identical(void **state)
 {
     (void)state;
     pf_scene s;
-    assert_true(load_or_skip(&s, CORNELL));
+    assert_true(tu_load_or_skip(&s, CORNELL));
     check_same_bytes(&s, 16);
     pf_scene_free(&s);
-    if (load_or_skip(&s, SIBENIK)) {
+    if (tu_load_or_skip(&s, SIBENIK)) {
         check_same_bytes(&s, 6);
         pf_scene_free(&s);
     }
@@ -507,7 +495,7 @@ static void test_golden_hash(void **state)
 {
     (void)state;
     pf_scene s;
-    assert_true(load_or_skip(&s, CORNELL));
+    assert_true(tu_load_or_skip(&s, CORNELL));
     pf_error err;
     rs_para_context *ctx;
     assert_int_equal(rs_para_context_create(&ctx, &s, NULL, &err), PF_OK);
@@ -601,7 +589,7 @@ static void test_lookup_vs_shadow_rays(void **state)
 {
     (void)state;
     pf_scene s;
-    assert_true(load_or_skip(&s, CORNELL));
+    assert_true(tu_load_or_skip(&s, CORNELL));
     pf_error err;
     pf_rt *rt;
     assert_int_equal(pf_rt_create(&rt, &s, pf_isa_detect(), 1, &err), PF_OK);
@@ -689,7 +677,7 @@ static void test_simplified(void **state)
     const char *path = bounds ? SIBENIK : SPHERE;
     if (!bounds)
         print_message("SKIP: %s is absent: the simplified path runs on the sphere, bounds unchecked\n", SIBENIK);
-    assert_true(load_or_skip(&full, path));
+    assert_true(tu_load_or_skip(&full, path));
     pf_error err;
     rs_para_context *cf;
     assert_int_equal(rs_para_context_create(&cf, &full, NULL, &err), PF_OK);
@@ -793,7 +781,7 @@ static double ms_per_map_traced(const pf_rt *rt, pf_jobs *jobs, const pf_vec3 *p
 static void bench_scene(const char *path, const char *name)
 {
     pf_scene s;
-    if (!load_or_skip(&s, path)) return;
+    if (!tu_load_or_skip(&s, path)) return;
     enum { N = 64 };
     pf_error err;
     pf_vec3 pos[N], nrm[N];

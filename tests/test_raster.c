@@ -365,17 +365,6 @@ static void test_clipping(void **state)
 
 /* ------------------------------------------------------------ paths and threads */
 
-static int load_or_skip(pf_scene *s, const char *path)
-{
-    if (!tu_file_exists(path)) {
-        print_message("SKIP: %s is absent (shared scenes not beside the repo)\n", path);
-        return 0;
-    }
-    pf_error err;
-    if (pf_gltf_load(s, path, NULL, &err) != PF_OK) fail_msg("%s", err.message);
-    return 1;
-}
-
 /* A camera inside the scene's bounds looking across it. */
 static pf_camera scene_camera(const pf_scene *s)
 {
@@ -411,7 +400,7 @@ static void render_hashes(const pf_scene *s, uint32_t threads, rs_simd simd, uin
 static void check_paths(const char *path)
 {
     pf_scene s;
-    if (!load_or_skip(&s, path)) return;
+    if (!tu_load_or_skip(&s, path)) return;
     pf_isa best = pf_isa_detect();
     uint64_t d0, p0;
     render_hashes(&s, 1, RS_SIMD_SCALAR, &d0, &p0);
@@ -447,7 +436,7 @@ static void test_paths_sibenik(void **state)
 static void check_vs_embree(const char *path)
 {
     pf_scene s;
-    if (!load_or_skip(&s, path)) return;
+    if (!tu_load_or_skip(&s, path)) return;
     enum { W = 320, H = 240 };
     pf_error err;
     pf_rt *rt;

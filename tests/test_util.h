@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include "pf_gltf.h"
 #include "pf_scene.h"
 
 /* A scene of `quads` axis-aligned quads given as centre, two half-extent
@@ -72,6 +73,21 @@ static inline int tu_file_exists(const char *path)
 {
     struct stat st;
     return stat(path, &st) == 0;
+}
+
+/* Loads a scene for a test: 0 with a SKIP message when the file is absent
+ * (the shared scenes live beside the repo, not in it), 1 when loaded; a
+ * file that exists but fails to load fails the test. Needs <cmocka.h>
+ * included before this header. */
+static inline int tu_load_or_skip(pf_scene *s, const char *path)
+{
+    if (!tu_file_exists(path)) {
+        print_message("SKIP: %s is absent (the shared scenes are not checked out beside the repo)\n", path);
+        return 0;
+    }
+    pf_error err;
+    if (pf_gltf_load(s, path, NULL, &err) != PF_OK) fail_msg("%s", err.message);
+    return 1;
 }
 
 #endif

@@ -5,6 +5,16 @@
 
 #include "pf_cli.h"
 
+/* Prints "softgi: <message>" and returns the exit status for err->code. */
+int app_fail(const pf_error *err);
+
+/* Loads the scene render and reference draw (SCENE or the embedded Cornell
+ * box), applies --camera and --light, validates it, and prints its load
+ * warnings; `stem` gets the output base name ("cornell-box"). On failure the
+ * scene is freed. */
+pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
+                         pf_error *err);
+
 /* `softgi render`: load, override, build, render, write. Returns the exit status. */
 int app_render(const pf_options *opts);
 

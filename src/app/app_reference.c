@@ -22,25 +22,6 @@
 #include "pf_rt.h"
 #include "pf_timer.h"
 
-extern const unsigned char softgi_default_scene[];
-extern const unsigned long softgi_default_scene_size;
-
-static int app__fail(const pf_error *err)
-{
-    fprintf(stderr, "softgi: %s\n", err->message);
-    return pf_result_exit_code(err->code);
-}
-
-/* "dir/name.gltf" -> "name" into buf. */
-static void app__stem(const char *path, char *buf, size_t size)
-{
-    const char *base = strrchr(path, '/');
-    base = base ? base + 1 : path;
-    snprintf(buf, size, "%s", base);
-    char *dot = strrchr(buf, '.');
-    if (dot && dot != buf) *dot = 0;
-}
-
 /* ---------------------------------------------------------------- progress bar */
 
 typedef struct app__progress {
@@ -85,54 +66,24 @@ int app_reference(const pf_options *o)
     uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
     uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
     pf_isa isa;
-    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app__fail(&err);
+    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     if (o->indirect_only && o->direct_only) {
         pf_error_set(&err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
-        return app__fail(&err);
+        return app_fail(&err);
     }
     if (o->bounces > GI_REFERENCE_MAX_BOUNCES) {
         pf_error_set(&err, PF_ERR_ARGUMENT, "--bounces: %u is too many (at most %u)", o->bounces,
                      GI_REFERENCE_MAX_BOUNCES);
-        return app__fail(&err);
+        return app_fail(&err);
     }
 
     /* Scene (as app_render.c) */
     double t0 = pf_time_now();
     pf_scene scene;
-    pf_result r;
-    char stem[256];
-    if (o->scene_path) {
-        r = pf_gltf_load(&scene, o->scene_path, NULL, &err);
-        app__stem(o->scene_path, stem, sizeof stem);
-    } else {
-        r = pf_gltf_load_memory(&scene, softgi_default_scene, softgi_default_scene_size, NULL,
-                                "embedded scenes/cornell-box", NULL, &err);
-        snprintf(stem, sizeof stem, "cornell-box");
-    }
-    if (r != PF_OK) return app__fail(&err);
-    if (scene.warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", scene.warnings);
-
     pf_camera camera;
-    if (o->has_camera) {
-        r = pf_camera_look_at(&camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), &err);
-    } else if (scene.camera_count > 0) {
-        camera = scene.cameras[0];
-    } else {
-        r = pf_error_set(&err, PF_ERR_NO_CAMERA,
-                         "%s has no camera; give one with --camera ex,ey,ez:tx,ty,tz:fovy_deg",
-                         o->scene_path ? o->scene_path : "the scene");
-    }
-    if (r == PF_OK && o->light_count > 0) {
-        scene.light_count = 0; /* given lights replace the file's */
-        for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(&scene, &o->lights[i], &err);
-    }
-    if (r == PF_OK) r = pf_scene_validate(&scene, &err);
-    if (r != PF_OK) {
-        pf_scene_free(&scene);
-        return app__fail(&err);
-    }
-    if (scene.light_count == 0 && !o->quiet)
-        fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    char stem[256];
+    pf_result r = app_scene_load(o, &scene, &camera, stem, sizeof stem, &err);
+    if (r != PF_OK) return app_fail(&err);
     pf_stage_add(&t, "load scene", (pf_time_now() - t0) * 1e3);
 
     /* Embree + jobs + the image */
@@ -140,7 +91,7 @@ int app_reference(const pf_options *o)
     pf_rt *rt;
     if ((r = pf_rt_create(&rt, &scene, isa, threads, &err)) != PF_OK) {
         pf_scene_free(&scene);
-        return app__fail(&err);
+        return app_fail(&err);
     }
     pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
     pf_jobs *jobs = pf_jobs_create(threads);
@@ -185,7 +136,7 @@ int app_reference(const pf_options *o)
         pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     }
     int status = 0;
-    if (r != PF_OK) status = app__fail(&err);
+    if (r != PF_OK) status = app_fail(&err);
     else {
         if (!o->quiet) {
             uint32_t b = ro.direct_only ? 0u : ro.bounces;

@@ -762,18 +762,26 @@ rs__row_avx512(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t
 typedef int (*rs__block_fn)(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
                             unsigned lanes, float *depth, uint32_t *prim, size_t stride);
 
-static int rs__block_scalar(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
-                            unsigned lanes, float *depth, uint32_t *prim, size_t stride)
+/* A block row by row with a row kernel (64-bit lanes): the scalar path, and
+ * the SIMD paths' fallback for triangles too large for 32-bit lanes. */
+static int rs__block_rows(rs__row_fn row, const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
+                          unsigned lanes, float *depth, uint32_t *prim, size_t stride)
 {
     int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
     for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
     int wrote = 0;
     for (int32_t y = y0; y <= y1; y++) {
         size_t o = (size_t)(y - y0) * stride;
-        wrote |= rs__row_scalar(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
+        wrote |= row(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
         for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
     }
     return wrote;
+}
+
+static int rs__block_scalar(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
+                            unsigned lanes, float *depth, uint32_t *prim, size_t stride)
+{
+    return rs__block_rows(rs__row_scalar, t, x, y0, y1, e_in, lanes, depth, prim, stride);
 }
 
 #ifdef RS_HAVE_X86
@@ -783,17 +791,8 @@ __attribute__((target("avx2"))) static int rs__block_avx2(const rs__tri *t, int3
                                                           const int64_t e_in[3], unsigned lanes, float *depth,
                                                           uint32_t *prim, size_t stride)
 {
+    if (!t->small) return rs__block_rows(rs__row_avx2, t, x, y0, y1, e_in, lanes, depth, prim, stride);
     int wrote = 0;
-    if (!t->small) {
-        int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
-        for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
-        for (int32_t y = y0; y <= y1; y++) {
-            size_t o = (size_t)(y - y0) * stride;
-            wrote |= rs__row_avx2(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
-            for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
-        }
-        return wrote;
-    }
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     __m256i ev[3], sy[3];
     for (int k = 0; k < 3; k++) {
@@ -827,17 +826,8 @@ __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) static int
 rs__block_avx512(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3], unsigned lanes,
                  float *depth, uint32_t *prim, size_t stride)
 {
+    if (!t->small) return rs__block_rows(rs__row_avx512, t, x, y0, y1, e_in, lanes, depth, prim, stride);
     int wrote = 0;
-    if (!t->small) {
-        int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
-        for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
-        for (int32_t y = y0; y <= y1; y++) {
-            size_t o = (size_t)(y - y0) * stride;
-            wrote |= rs__row_avx512(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
-            for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
-        }
-        return wrote;
-    }
     /* 16 lanes = 2 rows of 8: lane l is column l & 7 of row l >> 3 */
     const __m512i col = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
     const __m512i row = _mm512_setr_epi32(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1);

@@ -1,0 +1,63 @@
+/* app_scene: the scene loading `render` and `reference` share: the file or
+ * the embedded default scene, the --camera / --light overrides, validation
+ * and the user-facing warnings. */
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+#include "pf_gltf.h"
+
+extern const unsigned char softgi_default_scene[];
+extern const unsigned long softgi_default_scene_size;
+
+int app_fail(const pf_error *err)
+{
+    fprintf(stderr, "softgi: %s\n", err->message);
+    return pf_result_exit_code(err->code);
+}
+
+/* "dir/name.gltf" -> "name" */
+static void app__stem(const char *path, char *buf, size_t size)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    snprintf(buf, size, "%s", base);
+    char *dot = strrchr(buf, '.');
+    if (dot && dot != buf) *dot = 0;
+}
+
+pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
+                         pf_error *err)
+{
+    pf_result r;
+    if (o->scene_path) {
+        r = pf_gltf_load(scene, o->scene_path, NULL, err);
+        app__stem(o->scene_path, stem, stem_size);
+    } else {
+        r = pf_gltf_load_memory(scene, softgi_default_scene, softgi_default_scene_size, NULL,
+                                "embedded scenes/cornell-box", NULL, err);
+        snprintf(stem, stem_size, "cornell-box");
+    }
+    if (r != PF_OK) return r;
+    if (scene->warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", scene->warnings);
+    if (o->has_camera) {
+        r = pf_camera_look_at(camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), err);
+    } else if (scene->camera_count > 0) {
+        *camera = scene->cameras[0];
+    } else {
+        r = pf_error_set(err, PF_ERR_NO_CAMERA, "%s has no camera; give one with --camera ex,ey,ez:tx,ty,tz:fovy_deg",
+                         o->scene_path ? o->scene_path : "the scene");
+    }
+    if (r == PF_OK && o->light_count > 0) {
+        scene->light_count = 0; /* given lights replace the file's */
+        for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(scene, &o->lights[i], err);
+    }
+    if (r == PF_OK) r = pf_scene_validate(scene, err);
+    if (r != PF_OK) {
+        pf_scene_free(scene);
+        return r;
+    }
+    if (scene->light_count == 0 && !o->quiet)
+        fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    return PF_OK;
+}

@@ -22,6 +22,13 @@ int app_render(const pf_options *opts);
  * Embree, as a table and one JSON line. Returns the exit status. */
 int app_bench_raster(const pf_options *opts);
 
+/* `softgi sequence FILE.json`: renders a camera/light sequence to a folder,
+ * keeping VPL state between frames (app_sequence.c). */
+int app_sequence(const pf_options *opts);
+
+/* `softgi bench frame`: per-stage medians of the whole frame (app_bench_frame.c). */
+int app_bench_frame(const pf_options *opts);
+
 /* `softgi reference`: the path-traced reference (gi_reference). */
 int app_reference(const pf_options *opts);
 

@@ -26,7 +26,9 @@ int main(int argc, char **argv)
         printf("softgi %s\n", SOFTGI_VERSION);
         return 0;
     }
-    if (!strcmp(opts.command, "bench")) return app_bench_raster(&opts);
+    if (!strcmp(opts.command, "bench"))
+        return !strcmp(opts.scene_path, "frame") ? app_bench_frame(&opts) : app_bench_raster(&opts);
+    if (!strcmp(opts.command, "sequence")) return app_sequence(&opts);
     if (!strcmp(opts.command, "reference")) return app_reference(&opts);
     return app_render(&opts);
 }

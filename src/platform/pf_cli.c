@@ -10,6 +10,8 @@ void pf_cli_usage(FILE *out)
 {
     fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
           "       softgi reference [SCENE.gltf|SCENE.glb] [options]   (path-traced reference)\n"
+          "       softgi sequence SEQUENCE.json [options]             (render a camera/light sequence)\n"
+          "       softgi bench frame [--threads N] [--frames N] [--scenes DIR]\n"
           "       softgi compare ...                                  (softgi compare --help)\n"
           "       softgi bench raster [--threads N] [--frames N] [--scenes DIR] [--isa ISA]\n"
           "\n"
@@ -287,13 +289,17 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
     if (!o->help && !o->version) {
         if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
         if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0 &&
-            strcmp(o->command, "reference") != 0)
+            strcmp(o->command, "reference") != 0 && strcmp(o->command, "sequence") != 0)
             return pf_error_set(err, PF_ERR_ARGUMENT,
-                                "unknown command '%s' (softgi knows: render, reference, bench, compare)", o->command);
+                                "unknown command '%s' (softgi knows: render, reference, sequence, bench, compare)",
+                                o->command);
+        if (!strcmp(o->command, "sequence") && !o->scene_path)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
         if (o->indirect_only && o->direct_only)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
-        if (!strcmp(o->command, "bench") && (!o->scene_path || strcmp(o->scene_path, "raster") != 0))
-            return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster",
+        if (!strcmp(o->command, "bench") &&
+            (!o->scene_path || (strcmp(o->scene_path, "raster") != 0 && strcmp(o->scene_path, "frame") != 0)))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster, frame",
                                 o->scene_path ? o->scene_path : "");
     }
     return PF_OK;

@@ -23,7 +23,8 @@
 
 typedef struct pf_options {
     const char *command;    /* "render", "reference" or "bench" ("compare" parses its own arguments) */
-    const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench */
+    const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench;
+                               sequence: the sequence file */
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
     uint32_t frames;        /* bench: repetitions per measurement (0: default 15) */
     uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */

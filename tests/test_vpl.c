@@ -19,6 +19,7 @@
 #include <math.h>
 
 #include "gi_frame.h"
+#include "gi_reference.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "test_util.h"
@@ -343,13 +344,88 @@ static void test_frame_threads_and_golden(void **state)
                                            (unsigned long long)s1[k], (unsigned long long)k_golden[k]);
 }
 
+/* Instant Radiosity against the path-traced reference (issue 4's
+ * convergence check): the Cornell box, indirect light only, every pixel
+ * seeing every VPL through Embree rays, 16384 VPLs, no clamp, no filter,
+ * against `softgi reference` with the same 3 bounces. Deviation from the
+ * issue: the point light is moved from 1 cm under the ceiling to the middle
+ * of the box (0.278, 0.35, 0.28): under the ceiling it makes the reference
+ * converge so slowly (fireflies from paths that pass next to the light;
+ * 2048 and 16384 spp still differ by 25% per pixel) that no test-suite
+ * budget separates method error from reference noise. Pixels whose 3x3
+ * neighbourhood sees more than one triangle are left out: the reference
+ * averages over the pixel's area, the G-buffer samples its centre. */
+static void test_ir_converges_to_reference(void **state)
+{
+    (void)state;
+    enum { W = 48, H = 36 };
+    fx x;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+    x.scene.lights[0].position = pf_v3(0.278f, 0.35f, 0.28f);
+    x.scene.lights[0].intensity = 0.3f;
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.no_interleave = 1;
+    io.visibility_raytrace = 1;
+    io.vpls = 16384;
+    io.clamp = 0.0f;
+    io.filter = GI_FILTER_NONE;
+    fx_begin(&x, 2, W, H, &x.scene.cameras[0], &io);
+    x.f.show_direct = 0; /* indirect only */
+    gi_frame_render_raster(&x.f);
+    static float ref[3 * W * H];
+    gi_reference_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.spp = 32768; /* its noise dominates the error: 4096 spp gives 4.8%, 16384 gives 2.8% */
+    ro.bounces = 3;
+    ro.indirect_only = 1;
+    assert_int_equal(gi_reference_render(ref, &x.scene, x.rt, x.jobs, &x.scene.cameras[0], W, H, &ro, &err), PF_OK);
+    double sum = 0.0, sum_ir = 0.0, sum_ref = 0.0;
+    int n = 0;
+    for (int y = 1; y + 1 < H; y++)
+        for (int xx = 1; xx + 1 < W; xx++) {
+            size_t i = (size_t)y * W + (size_t)xx;
+            uint32_t p = x.f.gbuf.prim[i];
+            int edge = p == RS_GBUFFER_EMPTY;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) edge |= x.f.gbuf.prim[i + (size_t)(dy * W + dx)] != p;
+            /* the Cornell walls are quads of two triangles: same material, same plane */
+            if (edge) {
+                int same = p != RS_GBUFFER_EMPTY;
+                for (int dy = -1; dy <= 1 && same; dy++)
+                    for (int dx = -1; dx <= 1 && same; dx++) {
+                        uint32_t q = x.f.gbuf.prim[i + (size_t)(dy * W + dx)];
+                        same = q != RS_GBUFFER_EMPTY && x.scene.tri_material[q] == x.scene.tri_material[p] &&
+                               fabsf(x.f.gbuf.nrm_x[i] - x.f.gbuf.nrm_x[i + (size_t)(dy * W + dx)]) < 1e-3f &&
+                               fabsf(x.f.gbuf.nrm_y[i] - x.f.gbuf.nrm_y[i + (size_t)(dy * W + dx)]) < 1e-3f &&
+                               fabsf(x.f.gbuf.nrm_z[i] - x.f.gbuf.nrm_z[i + (size_t)(dy * W + dx)]) < 1e-3f;
+                    }
+                if (!same) continue;
+            }
+            double a = 0.2126 * x.f.final[3 * i] + 0.7152 * x.f.final[3 * i + 1] + 0.0722 * x.f.final[3 * i + 2];
+            double b = 0.2126 * ref[3 * i] + 0.7152 * ref[3 * i + 1] + 0.0722 * ref[3 * i + 2];
+            if (!(b > 1e-5)) continue;
+            sum += fabs(a - b) / b;
+            sum_ir += a, sum_ref += b;
+            n++;
+        }
+    double mre = sum / n;
+    print_message("IR vs reference: mean relative error %.4f over %d pixels, ratio of means %.4f\n", mre, n,
+                  sum_ir / sum_ref);
+    assert_true(n > W * H / 3);
+    assert_true(mre < 0.03);
+    assert_true(fabs(sum_ir / sum_ref - 1.0) < 0.02);
+    fx_end(&x);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_vpl_raytrace),  cmocka_unit_test(test_one_vpl_paraboloid),
         cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
-        cmocka_unit_test(test_frame_threads_and_golden),
+        cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_ir_converges_to_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

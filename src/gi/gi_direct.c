@@ -4,12 +4,39 @@
  * visibility (rs_shadow_visibility), albedo / pi. The ray-traced
  * counterpart is gi_stage_direct_raytrace (--raytrace), the reference these
  * maps are tested against. One job item per row; each writes its own row. */
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "gi_frame.h"
 #include "gi_light.h"
 
-void gi_stage_shadow_maps(gi_frame *f) { rs_shadow_set_render(f->raster, &f->shadows, NULL); }
+void gi_stage_shadow_maps(gi_frame *f)
+{
+    const pf_scene *s = f->scene;
+    int same = f->shadows_rendered && f->shadow_light_count == s->light_count &&
+               (s->light_count == 0 || memcmp(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count) == 0);
+    if (same) return; /* static lights: last frame's maps still hold */
+    if (f->shadows_rendered) {
+        /* a light changed: its map's frustum/box may change too, so rebuild the set */
+        rs_shadow_desc desc;
+        memset(&desc, 0, sizeof desc);
+        desc.size = f->shadow_size;
+        pf_error err;
+        rs_shadow_set_free(&f->shadows);
+        if (rs_shadow_set_init(&f->shadows, s, &desc, &err) != PF_OK) {
+            fprintf(stderr, "softgi: shadow maps: %s\n", err.message);
+            return;
+        }
+    }
+    rs_shadow_set_render(f->raster, &f->shadows, NULL);
+    pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
+    if (!copy) return; /* next frame renders again */
+    f->shadow_lights = copy;
+    if (s->light_count) memcpy(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count);
+    f->shadow_light_count = s->light_count;
+    f->shadows_rendered = 1;
+}
 
 static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
 {
@@ -29,7 +56,7 @@ static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
         pf_vec3 ng = pf_v3_normalize(
             pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
         float e[3] = {0, 0, 0};
-        for (uint32_t l = 0; l < s->light_count; l++) {
+        for (uint32_t l = 0; l < s->light_count && l < f->shadows.count; l++) {
             gi_light_sample ls;
             if (!gi_light_irradiance(&s->lights[l], pos, nrm, &ls)) continue;
             float vis = rs_shadow_visibility(&f->shadows.maps[l], pos, ng);

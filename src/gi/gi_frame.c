@@ -55,6 +55,7 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
         rs_shadow_desc desc;
         memset(&desc, 0, sizeof desc);
         desc.size = shadow_size;
+        f->shadow_size = shadow_size;
         r = rs_shadow_set_init(&f->shadows, scene, &desc, err);
         if (r != PF_OK) {
             gi_frame_free(f);
@@ -68,6 +69,7 @@ void gi_frame_free(gi_frame *f)
 {
     rs_gbuffer_free(&f->gbuf);
     rs_shadow_set_free(&f->shadows);
+    free(f->shadow_lights);
     gi_indirect_free(&f->ind);
     free(f->direct);
     free(f->final);

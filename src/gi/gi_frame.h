@@ -72,6 +72,10 @@ typedef struct gi_frame {
     /* buffers (owned, frame lifetime) */
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
+    pf_light *shadow_lights;  /* the lights the maps were rendered for (static lights: maps reused) */
+    uint32_t shadow_light_count;
+    uint32_t shadow_size;
+    int shadows_rendered;     /* 0: render at the next gi_stage_shadow_maps */
     gi_indirect ind;       /* many-light state and buffers (when enabled) */
     int indirect;          /* run steps 3-9 */
     int show_direct;       /* compose adds emission + direct (0 for --indirect-only) */
@@ -98,6 +102,8 @@ void gi_stage_gbuffer_raytrace(gi_frame *f);
 void gi_stage_gbuffer_raster(gi_frame *f);  /* visibility: triangle id + depth per pixel */
 void gi_stage_gbuffer_resolve(gi_frame *f); /* attributes from the visibility buffer */
 void gi_stage_direct_raytrace(gi_frame *f);
+/* Renders the lights' shadow maps, or reuses last frame's when no light
+ * changed (a changed light re-creates the maps). */
 void gi_stage_shadow_maps(gi_frame *f);
 void gi_stage_direct_shadowmap(gi_frame *f);
 void gi_stage_compose(gi_frame *f);

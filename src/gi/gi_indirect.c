@@ -260,8 +260,8 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
             if (ind->para) {
-                float bias = rs_para_bias(R, ind->range, &ind->frames[vi], pos, nrm);
-                visible = rs_para_visible(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos, bias);
+                visible = rs_para_visible_at(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
+                                             pf_v3_dot(nrm, w));
             } else {
                 pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
                 visible = !pf_rt_occluded1(f->rt, ray);

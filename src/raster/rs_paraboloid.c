@@ -236,6 +236,9 @@ int rs_para_texel_inside(uint32_t resolution, uint32_t i, uint32_t j)
     return a * a + b * b <= (int64_t)resolution * resolution;
 }
 
+/* The texel holding (u, v), moved inside the disc when its centre is not. */
+static uint32_t rs__texel_of_uv(uint32_t resolution, float u, float v);
+
 uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d)
 {
     float u, v;
@@ -250,6 +253,11 @@ uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d)
         u = rr > 0.0f ? d.x / rr : 1.0f;
         v = rr > 0.0f ? d.y / rr : 0.0f;
     }
+    return rs__texel_of_uv(resolution, u, v);
+}
+
+static uint32_t rs__texel_of_uv(uint32_t resolution, float u, float v)
+{
     float h = 0.5f * (float)resolution;
     for (int pass = 0; pass < 2; pass++) {
         float fi = floorf((u + 1.0f) * h), fj = floorf((v + 1.0f) * h);
@@ -304,6 +312,24 @@ float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_
     float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
     float w = rs_para_texel_world_size(resolution, dist, rs_para_to_local(f, p));
     return w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES;
+}
+
+int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
+                       float cos_receiver)
+{
+    /* rs_para_bias + rs_para_visible in one pass: the local direction, its
+     * length and its (u, v) are computed once (the many-light accumulation
+     * makes this call per VPL per pixel) */
+    pf_vec3 d = rs_para_to_local(f, p);
+    if (!(d.z > 0.0f)) return 0; /* behind the VPL: it emits nothing there */
+    float dist = pf_v3_length(d), den = dist + d.z;
+    float u = d.x / den, v = d.y / den; /* rs_para_dir_to_uv of d / dist */
+    float w = dist * (4.0f / (float)resolution) / (1.0f + (u * u + v * v));
+    float c = fabsf(cos_receiver), s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
+    float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
+    uint16_t code = map[rs__texel_of_uv(resolution, u, v)];
+    if (code > RS_PARA_MAX_CODE) return 1;
+    return dist <= rs_para_decode(code, range) + (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
 }
 
 int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,

@@ -219,6 +219,10 @@ float rs_para_texel_world_size(uint32_t resolution, float dist, pf_vec3 d_local)
 float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p, pf_vec3 ng);
 /* 1 if world point p is visible from the VPL: in front of its tangent plane
  * and no nearer than the stored distance + bias (see the header). */
+/* rs_para_visible with rs_para_bias's bias, fused: `cos_receiver` is the
+ * cosine between the receiver's normal and the direction to the VPL. */
+int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
+                       float cos_receiver);
 int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
                     float bias);
 

@@ -8,6 +8,7 @@ pkgs=(build-essential cmake pkg-config
       libtinygltf-dev    # tinygltf: glTF 2.0 scenes
       libstb-dev         # stb_image_write: PNG output
       libmeshoptimizer-dev   # meshoptimizer: simplified shadow geometry
+      libcjson-dev      # cJSON: sequence files
       libcmocka-dev)     # cmocka: the test framework
 missing=()
 for p in "${pkgs[@]}"; do

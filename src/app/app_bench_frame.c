@@ -1,11 +1,403 @@
-/* app_bench_frame: `softgi bench frame` — being written (issue 4). */
-#include <stdio.h>
+/* app_bench_frame: `softgi bench frame` — the whole many-light frame, stage
+ * by stage (issue 4).
+ *
+ * For Sibenik and the conference room (from --scenes, default
+ * ../shared/scenes, textures ignored) at 1024x768, with 256 and 2048 VPLs
+ * (or --vpls N) and 1 and 2 threads (or --threads N):
+ * - the scene's lights are replaced by one static point light (Sibenik:
+ *   (0, 0, 0), 50 W/sr; the conference room, whose unit is 1/0.003 m:
+ *   (300, 550, -100), 2e5 W/sr); cameras as `softgi bench raster`;
+ * - the rasterized frame (gi_frame_render_raster) with indirect light on:
+ *   Instant Radiosity, 4x4 interleaved tiles (or --tiles), box filter;
+ * - one warm-up frame (the first frame: every VPL is new, so every
+ *   paraboloid map is rendered; reported on its own), then --frames frames
+ *   (default 15). The light never moves, so IR returns the same VPL set and
+ *   the frame re-renders no map: the moved-VPL and rendered-map counts after
+ *   the first frame are printed to show it (they should be 0).
+ * Each stage's figure is the median over the frames of its time in
+ * f->times; "frame" is the median wall-clock time of the whole
+ * gi_frame_render_raster call (so it is not the sum of the stage medians).
+ * Shares are stage median / frame median.
+ * Output: one table per scene (stages as rows, configurations as columns,
+ * ms and share of the frame), the target line (issue 4: IR with 256 VPLs and
+ * a static light at >= 15 frames/s on 2 threads) and one JSON line (prefix
+ * "json: "). */
+#include <stdlib.h>
+#include <string.h>
 
 #include "app.h"
+#include "gi_frame.h"
+#include "pf_gltf.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
+#include "rs_raster.h"
 
-int app_bench_frame(const pf_options *opts)
+#define BF_W 1024
+#define BF_H 768
+#define BF_MAX_CONFIGS 4 /* per scene: 2 VPL counts x 2 thread counts */
+#define BF_TARGET_FPS 15.0
+#define BF_TARGET_VPLS 256u
+#define BF_TARGET_THREADS 2u
+#define BF_MAPS_STAGE "VPL paraboloid maps" /* gi_frame.c's name for step 4 */
+
+typedef struct bf_scene {
+    const char *name, *file;
+    pf_vec3 eye, target;
+    float fovy_deg;
+    pf_vec3 light_pos;
+    float light_intensity; /* W/sr in the scene's units */
+} bf_scene;
+
+/* The cameras of `softgi bench raster` (README "Benchmarks"); the lights: one
+ * point light inside the nave, one above the conference table. */
+static const bf_scene k_scenes[] = {
+    {"sibenik", "sibenik/sibenik.gltf", {-18.0f, -11.0f, 0.0f}, {10.0f, -8.0f, 0.0f}, 70.0f, {0.0f, 0.0f, 0.0f}, 50.0f},
+    {"conference", "conference/conference.gltf", {1400.0f, 420.0f, 500.0f}, {-600.0f, 150.0f, -700.0f}, 65.0f,
+     {300.0f, 550.0f, -100.0f}, 2e5f},
+};
+#define BF_SCENES (sizeof k_scenes / sizeof k_scenes[0])
+
+typedef struct bf_result {
+    const char *scene;
+    uint32_t vpl_budget, vpl_count, threads;
+    /* medians over the measured frames */
+    pf_stage_times stages; /* names in the order the frame ran them, ms = median */
+    double frame_ms, fps;
+    /* the first (warm-up) frame: every VPL new, every map rendered */
+    pf_stage_times first;
+    double first_ms;
+    uint32_t first_moved, first_maps;
+    /* summed over the measured frames: should be 0 with a static light */
+    uint64_t moved_after, maps_after;
+} bf_result;
+
+static int bf__cmp(const void *a, const void *b)
 {
-    (void)opts;
-    fprintf(stderr, "softgi: bench frame: not implemented yet (issue 4)\n");
-    return 1;
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double bf__median(double *v, uint32_t n)
+{
+    qsort(v, n, sizeof *v, bf__cmp);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static double bf__stage_ms(const pf_stage_times *t, const char *name)
+{
+    for (uint32_t i = 0; i < t->count; i++)
+        if (!strcmp(t->name[i], name)) return t->ms[i];
+    return 0.0;
+}
+
+static uint32_t bf__moved(const gi_frame *f)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < f->ind.vpls.count; i++) n += f->ind.vpls.v[i].moved != 0;
+    return n;
+}
+
+/* One configuration: a frame on an already built Embree scene and raster
+ * context, a warm-up frame, then `frames` measured frames. */
+static pf_result bf__measure(const pf_scene *lit, const bf_scene *bs, pf_rt *rt, rs_context *rs, pf_jobs *jobs,
+                             uint32_t threads, uint32_t vpls, const pf_options *o, uint32_t frames, bf_result *out,
+                             pf_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->scene = bs->name;
+    out->vpl_budget = vpls;
+    out->threads = threads;
+    pf_camera cam;
+    pf_result r = pf_camera_look_at(&cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), err);
+    if (r != PF_OK) return r;
+    gi_frame f;
+    if ((r = gi_frame_init(&f, lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) return r;
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io); /* zero = defaults: IR, 3 bounces, box filter, 128^2 paraboloid maps */
+    io.vpls = vpls;
+    io.tiles_n = o->tiles_n;
+    io.tiles_m = o->tiles_m;
+    io.clamp = -1.0f; /* the default clamp, as `softgi render` */
+    if ((r = gi_frame_enable_indirect(&f, &io, 0, err)) != PF_OK) {
+        gi_frame_free(&f);
+        return r;
+    }
+    double *frame_ms = malloc(sizeof(double) * frames);
+    double *stage_ms = malloc(sizeof(double) * frames * PF_MAX_STAGES); /* [stage][frame] */
+    if (!frame_ms || !stage_ms) {
+        free(frame_ms), free(stage_ms);
+        gi_frame_free(&f);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
+    }
+    for (uint32_t i = 0; i <= frames; i++) { /* i == 0: the first frame, every map rendered */
+        double t0 = pf_time_now();
+        gi_frame_render_raster(&f);
+        double ms = (pf_time_now() - t0) * 1e3;
+        uint32_t moved = bf__moved(&f);
+        if (i == 0) {
+            out->first = f.times;
+            out->first_ms = ms;
+            out->first_moved = moved;
+            out->first_maps = f.ind.maps_rendered;
+            out->vpl_count = f.ind.vpls.count;
+            out->stages.count = 0;
+            continue;
+        }
+        out->moved_after += moved;
+        out->maps_after += f.ind.maps_rendered;
+        frame_ms[i - 1] = ms;
+        /* stages matched by name, so a stage that a frame skips counts 0 ms */
+        for (uint32_t s = 0; s < f.times.count; s++) {
+            uint32_t k = 0;
+            while (k < out->stages.count && strcmp(out->stages.name[k], f.times.name[s])) k++;
+            if (k == out->stages.count) {
+                out->stages.name[k] = f.times.name[s];
+                out->stages.count++;
+                for (uint32_t j = 0; j < frames; j++) stage_ms[k * frames + j] = 0.0;
+            }
+            stage_ms[k * frames + i - 1] = f.times.ms[s];
+        }
+    }
+    for (uint32_t k = 0; k < out->stages.count; k++) out->stages.ms[k] = bf__median(stage_ms + k * frames, frames);
+    out->frame_ms = bf__median(frame_ms, frames);
+    out->fps = 1e3 / out->frame_ms;
+    free(frame_ms), free(stage_ms);
+    gi_frame_free(&f);
+    return PF_OK;
+}
+
+/* Every configuration of one scene: one Embree scene, raster context and job
+ * pool per thread count, shared by the VPL counts. */
+static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint32_t *vpl_list, uint32_t nvpls,
+                           const uint32_t *thread_list, uint32_t nthreads, pf_isa isa, const pf_options *o,
+                           uint32_t frames, bf_result *results, pf_error *err)
+{
+    pf_scene lit = *scene; /* shallow copy with our one light; the arrays stay the scene's */
+    pf_light light;
+    memset(&light, 0, sizeof light);
+    snprintf(light.name, sizeof light.name, "bench point light");
+    light.type = PF_LIGHT_POINT;
+    light.position = bs->light_pos;
+    light.color = pf_v3(1, 1, 1);
+    light.intensity = bs->light_intensity;
+    lit.lights = &light;
+    lit.light_count = 1;
+    pf_result r = PF_OK;
+    for (uint32_t t = 0; t < nthreads && r == PF_OK; t++) {
+        pf_jobs *jobs = pf_jobs_create(thread_list[t]);
+        pf_rt *rt = NULL;
+        rs_context *rs = NULL;
+        if (!jobs) r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", thread_list[t]);
+        if (r == PF_OK) r = pf_rt_create(&rt, &lit, isa, thread_list[t], err);
+        if (r == PF_OK) r = rs_context_create(&rs, &lit, jobs, rs_simd_for_isa(isa), err);
+        for (uint32_t v = 0; v < nvpls && r == PF_OK; v++) {
+            bf_result *res = &results[v * nthreads + t];
+            r = bf__measure(&lit, bs, rt, rs, jobs, thread_list[t], vpl_list[v], o, frames, res, err);
+            if (r == PF_OK)
+                fprintf(stderr, "  %s, %u VPLs, %u thread%s: first frame %.0f ms, then %.1f ms/frame\n", bs->name,
+                        vpl_list[v], thread_list[t], thread_list[t] > 1 ? "s" : "", res->first_ms, res->frame_ms);
+        }
+        rs_context_destroy(rs);
+        pf_rt_destroy(rt);
+        if (jobs) pf_jobs_destroy(jobs);
+    }
+    return r;
+}
+
+/* One scene's table: stages as rows, its configurations as columns, each
+ * "ms share". 28 + 4 x 17 = 96 columns. */
+static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_result *res, uint32_t n,
+                            uint32_t frames)
+{
+    printf("\n%s: %u triangles, point light (%g, %g, %g) %g W/sr; median of %u frames, ms and share of the frame\n",
+           bs->name, scene->tri_count, (double)bs->light_pos.x, (double)bs->light_pos.y, (double)bs->light_pos.z,
+           (double)bs->light_intensity, frames);
+    printf("%-28s", "stage");
+    for (uint32_t c = 0; c < n; c++) {
+        char h[32];
+        snprintf(h, sizeof h, "%u VPLs %u thr", res[c].vpl_budget, res[c].threads);
+        printf("  %15s", h);
+    }
+    printf("\n");
+    /* rows: the union of the configurations' stages, in frame order */
+    pf_stage_times rows;
+    memset(&rows, 0, sizeof rows);
+    for (uint32_t c = 0; c < n; c++)
+        for (uint32_t s = 0; s < res[c].stages.count; s++) pf_stage_add(&rows, res[c].stages.name[s], 0.0);
+    for (uint32_t s = 0; s < rows.count; s++) {
+        printf("%-28.28s", rows.name[s]);
+        for (uint32_t c = 0; c < n; c++) {
+            double ms = bf__stage_ms(&res[c].stages, rows.name[s]);
+            printf("  %8.2f %5.1f%%", ms, 100.0 * ms / res[c].frame_ms);
+        }
+        printf("\n");
+    }
+    printf("%-28s", "frame (wall clock)");
+    for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].frame_ms, "100%");
+    printf("\n%-28s", "frames/s");
+    for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].fps, "");
+    printf("\n%-28s", "VPLs (IR set)");
+    for (uint32_t c = 0; c < n; c++) printf("  %8u %6s", res[c].vpl_count, "");
+    printf("\n%-28s", "moved VPLs after frame 1");
+    for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].moved_after, "");
+    printf("\n%-28s", "maps rendered after frame 1");
+    for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].maps_after, "");
+    printf("\nfirst frame (all VPLs new):\n%-28s", "  frame (wall clock) ms");
+    for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].first_ms, "");
+    printf("\n%-28s", "  " BF_MAPS_STAGE " ms");
+    for (uint32_t c = 0; c < n; c++) printf("  %8.2f %5.1f%%", bf__stage_ms(&res[c].first, BF_MAPS_STAGE),
+                                            100.0 * bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_ms);
+    printf("\n%-28s", "  maps rendered");
+    for (uint32_t c = 0; c < n; c++) printf("  %8u %6s", res[c].first_maps, "");
+    printf("\n%-28s", "  ms per map");
+    for (uint32_t c = 0; c < n; c++)
+        printf("  %8.3f %6s", res[c].first_maps ? bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_maps : 0.0,
+               "");
+    printf("\n");
+}
+
+/* Stage names are static literals, but quote them properly anyway. */
+static void bf__json_string(const char *s)
+{
+    putchar('"');
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\') printf("\\%c", *s);
+        else if ((unsigned char)*s < 0x20) printf("\\u%04x", (unsigned)(unsigned char)*s);
+        else putchar(*s);
+    }
+    putchar('"');
+}
+
+static void bf__json_stages(const pf_stage_times *t)
+{
+    putchar('{');
+    for (uint32_t s = 0; s < t->count; s++) {
+        if (s) putchar(',');
+        bf__json_string(t->name[s]);
+        printf(":%.3f", t->ms[s]);
+    }
+    putchar('}');
+}
+
+/* bench frame honours --threads, --frames, --scenes, --isa, --vpls (one
+ * count instead of 256 and 2048) and --tiles; any other frame option would
+ * silently change what is measured, so it is refused. */
+static pf_result bf__check_options(const pf_options *o, pf_error *err)
+{
+    const char *bad = o->width                 ? "--size"
+                      : o->raytrace            ? "--raytrace"
+                      : o->direct_only         ? "--direct-only"
+                      : o->indirect_only       ? "--indirect-only"
+                      : o->no_interleave       ? "--no-interleave"
+                      : o->visibility_raytrace ? "--visibility"
+                      : o->method              ? "--method"
+                      : o->bounces             ? "--bounces"
+                      : o->clamp_set           ? "--clamp"
+                      : o->filter              ? "--filter"
+                      : o->shadow_size         ? "--shadow-size"
+                      : o->has_camera          ? "--camera"
+                      : o->light_count         ? "--light"
+                      : o->dump_dir            ? "--dump-stages"
+                      : o->spp                 ? "--spp"
+                      : o->out_path            ? "--output"
+                      : o->hdr_path            ? "--hdr"
+                      : o->print_hash          ? "--hash"
+                      : o->exposure != 0.0f    ? "--exposure"
+                                               : NULL;
+    if (bad)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
+                            "--tiles)",
+                            bad);
+    return PF_OK;
+}
+
+int app_bench_frame(const pf_options *o)
+{
+    pf_error err;
+    pf_isa isa;
+    if (bf__check_options(o, &err) != PF_OK || pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
+    const char *dir = o->scenes_dir ? o->scenes_dir : "../shared/scenes";
+    uint32_t frames = o->frames ? o->frames : 15;
+    uint32_t thread_list[2] = {1, 2}, nthreads = 2;
+    if (o->threads) thread_list[0] = o->threads, nthreads = 1;
+    uint32_t vpl_list[2] = {256, 2048}, nvpls = 2;
+    if (o->vpls) vpl_list[0] = o->vpls, nvpls = 1;
+    uint32_t tn = o->tiles_n ? o->tiles_n : 4, tm = o->tiles_m ? o->tiles_m : 4;
+    uint32_t per_scene = nvpls * nthreads;
+    bf_result results[BF_SCENES * BF_MAX_CONFIGS];
+    printf("softgi bench frame: %dx%d, isa %s, raster path %s, Instant Radiosity, %ux%u tiles, static point light,\n"
+           "1 warm-up frame then median of %u\n",
+           BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), tn, tm, frames);
+    fflush(stdout);
+    for (size_t k = 0; k < BF_SCENES; k++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, k_scenes[k].file);
+        pf_scene scene;
+        pf_gltf_options go = {1}; /* textures ignored: albedo = material factor */
+        if (pf_gltf_load(&scene, path, &go, &err) != PF_OK) {
+            fprintf(stderr, "softgi: bench frame: %s (give the folder with --scenes)\n", err.message);
+            return 1;
+        }
+        bf_result *res = &results[k * per_scene];
+        pf_result r = bf__scene(&scene, &k_scenes[k], vpl_list, nvpls, thread_list, nthreads, isa, o, frames, res, &err);
+        if (r == PF_OK) bf__print_table(&k_scenes[k], &scene, res, per_scene, frames);
+        pf_scene_free(&scene);
+        if (r != PF_OK) {
+            fprintf(stderr, "softgi: bench frame: %s: %s\n", k_scenes[k].name, err.message);
+            return pf_result_exit_code(r);
+        }
+        fflush(stdout);
+    }
+    uint32_t n = (uint32_t)BF_SCENES * per_scene;
+    int static_ok = 1;
+    for (uint32_t i = 0; i < n; i++) static_ok &= results[i].moved_after == 0 && results[i].maps_after == 0;
+    printf("\nstatic light: %s\n", static_ok ? "no VPL moved and no map was re-rendered after the first frame"
+                                             : "WARNING: VPLs moved or maps were re-rendered after the first frame");
+
+    /* target (issue 4) */
+    printf("target: IR %u VPLs, static light, %ux%u tiles, >= %.0f frames/s on %u threads:\n", BF_TARGET_VPLS, tn, tm,
+           BF_TARGET_FPS, BF_TARGET_THREADS);
+    for (size_t k = 0; k < BF_SCENES; k++) {
+        const bf_result *t = NULL;
+        for (uint32_t i = 0; i < per_scene; i++) {
+            const bf_result *r = &results[k * per_scene + i];
+            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS) t = r;
+        }
+        if (t)
+            printf("  %-11s %.2f frames/s (%.2f ms): %s\n", k_scenes[k].name, t->fps, t->frame_ms,
+                   t->fps >= BF_TARGET_FPS ? "met" : "NOT met");
+        else
+            printf("  %-11s not measured (needs %u threads and %u VPLs)\n", k_scenes[k].name, BF_TARGET_THREADS,
+                   BF_TARGET_VPLS);
+    }
+
+    printf("json: {\"bench\":\"frame\",\"width\":%d,\"height\":%d,\"isa\":\"%s\",\"method\":\"ir\",\"tiles\":[%u,%u],"
+           "\"frames\":%u,\"static_ok\":%s,\"results\":[",
+           BF_W, BF_H, pf_isa_name(isa), tn, tm, frames, static_ok ? "true" : "false");
+    for (uint32_t i = 0; i < n; i++) {
+        const bf_result *r = &results[i];
+        printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"frame_ms\":%.3f,\"fps\":%.3f,"
+               "\"stages_ms\":",
+               i ? "," : "", r->scene, r->vpl_budget, r->vpl_count, r->threads, r->frame_ms, r->fps);
+        bf__json_stages(&r->stages);
+        printf(",\"moved_after_first\":%llu,\"maps_after_first\":%llu,\"first_frame_ms\":%.3f,"
+               "\"first_frame_maps\":%u,\"first_frame_moved\":%u,\"first_frame_stages_ms\":",
+               (unsigned long long)r->moved_after, (unsigned long long)r->maps_after, r->first_ms, r->first_maps,
+               r->first_moved);
+        bf__json_stages(&r->first);
+        printf("}");
+    }
+    printf("],\"target\":{\"vpls\":%u,\"threads\":%u,\"fps\":%.0f", BF_TARGET_VPLS, BF_TARGET_THREADS, BF_TARGET_FPS);
+    for (size_t k = 0; k < BF_SCENES; k++) {
+        const char *verdict = "\"not measured\"";
+        for (uint32_t i = 0; i < per_scene; i++) {
+            const bf_result *r = &results[k * per_scene + i];
+            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS)
+                verdict = r->fps >= BF_TARGET_FPS ? "\"met\"" : "\"not met\"";
+        }
+        printf(",\"%s\":%s", k_scenes[k].name, verdict);
+    }
+    printf("}}\n");
+    return 0;
 }

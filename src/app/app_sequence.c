@@ -1,11 +1,359 @@
-/* app_sequence: `softgi sequence` — being written (issue 4). */
+/* app_sequence: `softgi sequence FILE.seq.json [render options]` (issue 4).
+ *
+ * Renders the frames of a sequence (pf_sequence.h: scene, camera and light
+ * keyframes) to a folder, keeping one gi_frame alive across frames so the
+ * VPL method keeps its state (Laine 2007 Sec. 3: VPLs persist and only new
+ * or moved ones get new paraboloid maps):
+ *
+ *   load sequence -> load scene (app_scene_load, with the sequence's scene,
+ *   first camera and replacing lights) -> check every frame's camera and
+ *   lights -> build Embree, jobs, rasterizer and the frame once ->
+ *   per frame: set frame.camera and the scene's lights (the frame re-renders
+ *   the shadow maps of the lights that changed), render, write
+ *     DIR/frame_NNNN.pfm        linear RGB
+ *     DIR/frame_NNNN.png        tone mapped (--exposure), for viewing
+ *     DIR/frame_NNNN.view       the camera (gi_metrics.h)
+ *     DIR/frame_NNNN.depth.pfm  the G-buffer's view depth
+ *   and print its time and how many VPLs moved.
+ *
+ * The folder is -o DIR, else the file's "output", else out/<name>; frame
+ * files left from a longer earlier run are removed so `softgi compare` sees
+ * exactly this sequence. With "track" pixels, DIR/track.txt lists them
+ * ("X,Y" per line, for `softgi compare --track`; scaled when --size differs
+ * from the file's "size"). --hash prints one FNV-1a
+ * hash over all frames (the per-frame hashes of the linear images, hashed in
+ * frame order).
+ *
+ * The CLI's render options apply (--size overrides the file's size;
+ * --camera/--light act as in render when the file has no camera keys / no
+ * full lights, and are refused when it has: the file would override them
+ * silently otherwise). Instant Radiosity regenerates every VPL when a light
+ * moves (the expected baseline); a moving camera alone moves none. */
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "app.h"
+#include "gi_frame.h"
+#include "gi_metrics.h"
+#include "pf_imageio.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_sequence.h"
+#include "pf_timer.h"
 
-int app_sequence(const pf_options *opts)
+static int app__light_equal(const pf_light *a, const pf_light *b)
 {
-    (void)opts;
-    fprintf(stderr, "softgi: sequence: not implemented yet (issue 4)\n");
-    return 1;
+    return a->type == b->type && !memcmp(&a->position, &b->position, sizeof a->position) &&
+           !memcmp(&a->direction, &b->direction, sizeof a->direction) &&
+           !memcmp(&a->color, &b->color, sizeof a->color) && a->intensity == b->intensity &&
+           a->inner_cone == b->inner_cone && a->outer_cone == b->outer_cone;
+}
+
+/* The scene's lights at `frame` into dst[0..scene->light_count). `base` is
+ * the lights as loaded (what entries naming a scene light animate). */
+static pf_result app__lights_at(const pf_sequence *seq, uint32_t frame, const pf_light *base, uint32_t base_count,
+                                pf_light *dst, pf_error *err)
+{
+    if (seq->lights_replace) {
+        for (uint32_t i = 0; i < seq->light_count; i++) {
+            pf_result r = pf_sequence_light_at(seq, i, frame, NULL, &dst[i], err);
+            if (r != PF_OK) return r;
+        }
+        return PF_OK;
+    }
+    memcpy(dst, base, sizeof *dst * base_count);
+    for (uint32_t i = 0; i < seq->light_count; i++) {
+        int32_t l = seq->lights[i].scene_light;
+        if ((uint32_t)l >= base_count)
+            return pf_error_set(err, PF_ERR_INDEX_RANGE, "%s: lights[%u]: the scene has no light %d (it has %u)",
+                                seq->file, i, l, base_count);
+        pf_result r = pf_sequence_light_at(seq, i, frame, &base[l], &dst[l], err);
+        if (r != PF_OK) {
+            char m[sizeof err->message];
+            snprintf(m, sizeof m, "%s", err->message);
+            return pf_error_set(err, r, "%s: %s", seq->file, m);
+        }
+    }
+    return PF_OK;
+}
+
+/* DIR/frame_NNNN<suffix> */
+static void app__frame_path(char *dst, size_t size, const char *dir, uint32_t frame, const char *suffix)
+{
+    snprintf(dst, size, "%s/frame_%04u%s", dir, frame, suffix);
+}
+
+static uint64_t app__fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+/* Everything the run owns, freed by app__cleanup. */
+typedef struct app__seq_run {
+    pf_sequence seq;
+    pf_scene scene;
+    int scene_loaded;
+    pf_light *base_lights, *lights;
+    pf_rt *rt;
+    pf_jobs *jobs;
+    rs_context *raster;
+    gi_frame frame;
+    int frame_ready;
+} app__seq_run;
+
+static void app__cleanup(app__seq_run *s)
+{
+    if (s->frame_ready) gi_frame_free(&s->frame);
+    rs_context_destroy(s->raster);
+    pf_jobs_destroy(s->jobs);
+    if (s->rt) pf_rt_destroy(s->rt);
+    if (s->scene_loaded) pf_scene_free(&s->scene);
+    free(s->base_lights);
+    free(s->lights);
+    pf_sequence_free(&s->seq);
+}
+
+static int app__fail_run(app__seq_run *s, const pf_error *err)
+{
+    int st = app_fail(err);
+    app__cleanup(s);
+    return st;
+}
+
+int app_sequence(const pf_options *o)
+{
+    pf_error err;
+    app__seq_run s;
+    memset(&s, 0, sizeof s);
+    uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
+    pf_isa isa;
+    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
+
+    /* Sequence */
+    pf_result r = pf_sequence_load(&s.seq, o->scene_path, &err);
+    if (r != PF_OK) return app__fail_run(&s, &err);
+    const pf_sequence *seq = &s.seq;
+    uint32_t width = o->width ? o->width : seq->width ? seq->width : 640;
+    uint32_t height = o->height ? o->height : seq->height ? seq->height : 480;
+    if (seq->camera.count && o->has_camera)
+        r = pf_error_set(&err, PF_ERR_ARGUMENT, "--camera: %s has camera keys; edit the file instead", seq->file);
+    if (seq->lights_replace && o->light_count)
+        r = pf_error_set(&err, PF_ERR_ARGUMENT, "--light: %s gives its own lights; edit the file instead", seq->file);
+    /* Tracked pixels are in the file's image size: --size scales them. */
+    uint32_t track[PF_SEQUENCE_MAX_TRACK][2];
+    for (uint32_t i = 0; i < seq->track_count && r == PF_OK; i++) {
+        track[i][0] = seq->width ? (uint32_t)((uint64_t)seq->track[i][0] * width / seq->width) : seq->track[i][0];
+        track[i][1] = seq->height ? (uint32_t)((uint64_t)seq->track[i][1] * height / seq->height) : seq->track[i][1];
+        if (track[i][0] >= width || track[i][1] >= height)
+            r = pf_error_set(&err, PF_ERR_ARGUMENT, "%s: track[%u]: pixel (%u, %u) is outside the %ux%u image",
+                             seq->file, i, seq->track[i][0], seq->track[i][1], width, height);
+    }
+    if (r != PF_OK) return app__fail_run(&s, &err);
+
+    /* Scene: the sequence's scene, its first camera and its full lights
+     * through the same path as `render`'s --camera and --light. */
+    double t_load = pf_time_now();
+    pf_options so = *o;
+    so.scene_path = seq->scene_embedded ? NULL : seq->scene_path;
+    if (seq->camera.count) {
+        so.has_camera = 1;
+        pf_sequence_camera_at(seq, 0, &so.camera_eye, &so.camera_target, &so.camera_fovy_deg);
+    }
+    if (seq->lights_replace) {
+        so.light_count = seq->light_count; /* <= PF_SEQUENCE_MAX_LIGHTS == PF_CLI_MAX_LIGHTS */
+        for (uint32_t i = 0; i < seq->light_count && r == PF_OK; i++)
+            r = pf_sequence_light_at(seq, i, 0, NULL, &so.lights[i], &err);
+    }
+    pf_camera camera;
+    char stem[256];
+    if (r == PF_OK) r = app_scene_load(&so, &s.scene, &camera, stem, sizeof stem, &err);
+    if (r != PF_OK) return app__fail_run(&s, &err);
+    s.scene_loaded = 1;
+    t_load = pf_time_now() - t_load;
+
+    /* Check every frame before rendering any: cameras and lights. */
+    uint32_t nl = s.scene.light_count;
+    s.base_lights = malloc(sizeof(pf_light) * (nl ? nl : 1));
+    s.lights = malloc(sizeof(pf_light) * (nl ? nl : 1));
+    if (!s.base_lights || !s.lights) {
+        pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+        return app__fail_run(&s, &err);
+    }
+    memcpy(s.base_lights, s.scene.lights, sizeof(pf_light) * nl);
+    for (uint32_t f = 0; f < seq->frames && r == PF_OK; f++) {
+        pf_vec3 eye, target;
+        float fovy;
+        pf_camera cam;
+        if (pf_sequence_camera_at(seq, f, &eye, &target, &fovy) &&
+            pf_camera_look_at(&cam, eye, target, pf_radians(fovy), &err) != PF_OK) {
+            char m[sizeof err.message];
+            snprintf(m, sizeof m, "%s", err.message);
+            r = pf_error_set(&err, PF_ERR_PARSE, "%s: frame %u: %s", seq->file, f, m);
+        }
+        if (r == PF_OK) r = app__lights_at(seq, f, s.base_lights, nl, s.lights, &err);
+        for (uint32_t i = 0; i < nl && r == PF_OK; i++)
+            if (!pf_v3_is_finite(s.lights[i].position) || !pf_v3_is_finite(s.lights[i].color) ||
+                !isfinite(s.lights[i].intensity))
+                r = pf_error_set(&err, PF_ERR_NONFINITE, "%s: frame %u: light %u is not finite", seq->file, f, i);
+    }
+    if (r != PF_OK) return app__fail_run(&s, &err);
+
+    /* Output folder */
+    char dir[4096], path[4200];
+    if (o->out_path) snprintf(dir, sizeof dir, "%s", o->out_path);
+    else if (seq->output[0]) snprintf(dir, sizeof dir, "%s", seq->output);
+    else snprintf(dir, sizeof dir, "out/%s", seq->name);
+    size_t dl = strlen(dir);
+    while (dl > 1 && dir[dl - 1] == '/') dir[--dl] = 0;
+    app__frame_path(path, sizeof path, dir, 0, ".pfm");
+    if ((r = pf_imageio_make_parent_dirs(path, &err)) != PF_OK) return app__fail_run(&s, &err);
+
+    /* Embree, jobs, rasterizer, frame: once for the whole sequence. */
+    double t_build = pf_time_now();
+    if ((r = pf_rt_create(&s.rt, &s.scene, isa, threads, &err)) != PF_OK) return app__fail_run(&s, &err);
+    s.jobs = pf_jobs_create(threads);
+    if (!s.jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+    if (r == PF_OK && !o->raytrace) r = rs_context_create(&s.raster, &s.scene, s.jobs, rs_simd_for_isa(isa), &err);
+    if (r == PF_OK) {
+        r = gi_frame_init(&s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, o->shadow_size, &err);
+        s.frame_ready = r == PF_OK;
+    }
+    if (r == PF_OK && !o->direct_only) {
+        gi_indirect_options io;
+        memset(&io, 0, sizeof io);
+        io.method = gi_vpl_method_find(o->method);
+        if (!io.method)
+            r = pf_error_set(&err, PF_ERR_ARGUMENT, "--method '%s': softgi knows %s", o->method, gi_vpl_method_names());
+        io.vpls = o->vpls;
+        io.bounces = o->bounces;
+        io.tiles_n = o->tiles_n;
+        io.tiles_m = o->tiles_m;
+        io.no_interleave = o->no_interleave;
+        io.visibility_raytrace = o->visibility_raytrace;
+        io.clamp = o->clamp_set ? o->clamp : -1.0f;
+        io.filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
+                    : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
+                                                            : GI_FILTER_NONE;
+        if (r == PF_OK) r = gi_frame_enable_indirect(&s.frame, &io, o->indirect_only, &err);
+    }
+    if (r != PF_OK) return app__fail_run(&s, &err);
+    t_build = pf_time_now() - t_build;
+    gi_frame *fr = &s.frame;
+
+    if (!o->quiet) {
+        printf("softgi sequence: %s, scene %s, %u frames, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n",
+               seq->name, stem, seq->frames, s.scene.tri_count, nl, width, height, threads, pf_isa_name(isa),
+               o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
+        if (fr->indirect)
+            printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s\n", fr->ind.opt.method->name,
+                   fr->ind.opt.vpls, fr->ind.n, fr->ind.m, fr->ind.para ? "paraboloid maps" : "Embree rays");
+        printf("load %.1f ms, build %.1f ms; writing %s/frame_NNNN.{pfm,png,view,depth.pfm}\n", t_load * 1e3,
+               t_build * 1e3, dir);
+    }
+
+    /* Frames */
+    pf_stage_times total;
+    memset(&total, 0, sizeof total);
+    uint64_t hash = 0xcbf29ce484222325ull;
+    double render_sum = 0.0, write_sum = 0.0;
+    uint64_t moved_sum = 0;
+    for (uint32_t f = 0; f < seq->frames && r == PF_OK; f++) {
+        /* camera and lights of frame f (checked above) */
+        pf_vec3 eye, target;
+        float fovy;
+        if (pf_sequence_camera_at(seq, f, &eye, &target, &fovy))
+            pf_camera_look_at(&fr->camera, eye, target, pf_radians(fovy), &err);
+        app__lights_at(seq, f, s.base_lights, nl, s.lights, &err);
+        uint32_t lights_changed = 0;
+        for (uint32_t i = 0; i < nl; i++) {
+            if (app__light_equal(&s.scene.lights[i], &s.lights[i])) continue;
+            s.scene.lights[i] = s.lights[i];
+            lights_changed++;
+        }
+
+        /* render */
+        double t0 = pf_time_now();
+        if (o->raytrace) gi_frame_render_raytraced(fr);
+        else gi_frame_render_raster(fr);
+        double t_render = (pf_time_now() - t0) * 1e3;
+        for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
+        uint32_t moved = 0;
+        if (fr->indirect)
+            for (uint32_t i = 0; i < fr->ind.vpls.count; i++) moved += fr->ind.vpls.v[i].moved != 0;
+        moved_sum += moved;
+
+        /* write */
+        t0 = pf_time_now();
+        gi_metrics_view view;
+        gi_metrics_view_from_camera(&view, &fr->camera, width, height);
+        app__frame_path(path, sizeof path, dir, f, ".pfm");
+        r = pf_imageio_write_pfm(path, fr->final, width, height, &err);
+        app__frame_path(path, sizeof path, dir, f, ".png");
+        if (r == PF_OK) r = pf_imageio_write_png(path, fr->final, width, height, o->exposure, &err);
+        app__frame_path(path, sizeof path, dir, f, ".view");
+        if (r == PF_OK) r = gi_metrics_view_write(path, &view, &err);
+        app__frame_path(path, sizeof path, dir, f, ".depth.pfm");
+        if (r == PF_OK) r = gi_metrics_depth_write(path, fr->gbuf.depth, width, height, &err);
+        double t_write = (pf_time_now() - t0) * 1e3;
+        render_sum += t_render;
+        write_sum += t_write;
+        uint64_t fh = pf_imageio_hash(fr->final, (uint64_t)width * height * 3);
+        hash = app__fnv1a(hash, &fh, sizeof fh);
+        if (r == PF_OK && !o->quiet) {
+            printf("frame %04u  render %8.1f ms  write %6.1f ms", f, t_render, t_write);
+            if (fr->indirect)
+                printf("  VPLs %u, moved %u, maps %u", fr->ind.vpls.count, moved, fr->ind.maps_rendered);
+            if (lights_changed) printf("  (%u light%s moved)", lights_changed, lights_changed > 1 ? "s" : "");
+            printf("\n");
+        }
+    }
+    if (r != PF_OK) return app__fail_run(&s, &err);
+
+    /* Frame files beyond this sequence (from a longer earlier run) would
+     * make compare read a different sequence: remove them. */
+    for (uint32_t f = seq->frames; f < 1000000; f++) {
+        static const char *const suffix[] = {".pfm", ".png", ".view", ".depth.pfm"};
+        int any = 0;
+        for (int k = 0; k < 4; k++) {
+            app__frame_path(path, sizeof path, dir, f, suffix[k]);
+            any |= remove(path) == 0;
+        }
+        if (!any) break;
+    }
+    snprintf(path, sizeof path, "%s/track.txt", dir);
+    if (seq->track_count) {
+        FILE *tf = fopen(path, "w");
+        int ok = tf != NULL;
+        for (uint32_t i = 0; ok && i < seq->track_count; i++)
+            ok = fprintf(tf, "%u,%u\n", track[i][0], track[i][1]) > 0;
+        if (tf && fclose(tf) != 0) ok = 0;
+        if (!ok) {
+            pf_error_set(&err, PF_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+            return app__fail_run(&s, &err);
+        }
+    } else {
+        remove(path);
+    }
+
+    if (!o->quiet) {
+        double n = (double)seq->frames;
+        printf("%u frames: render %.1f ms/frame (total %.2f s), write %.1f ms/frame", seq->frames, render_sum / n,
+               render_sum * 1e-3, write_sum / n);
+        if (fr->indirect) printf(", %.1f VPLs moved/frame", (double)moved_sum / n);
+        printf("\nmean per frame:\n");
+        for (uint32_t i = 0; i < total.count; i++) total.ms[i] /= n;
+        pf_stage_print(&total, stdout);
+        printf("wrote %u frames to %s\n", seq->frames, dir);
+    }
+    if (o->print_hash) printf("hash %016llx\n", (unsigned long long)hash);
+    app__cleanup(&s);
+    return 0;
 }

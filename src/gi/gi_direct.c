@@ -14,24 +14,40 @@
 void gi_stage_shadow_maps(gi_frame *f)
 {
     const pf_scene *s = f->scene;
-    int same = f->shadows_rendered && f->shadow_light_count == s->light_count &&
-               (s->light_count == 0 || memcmp(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count) == 0);
-    if (same) return; /* static lights: last frame's maps still hold */
-    if (f->shadows_rendered) {
-        /* a light changed: its map's frustum/box may change too, so rebuild the set */
-        rs_shadow_desc desc;
-        memset(&desc, 0, sizeof desc);
-        desc.size = f->shadow_size;
-        pf_error err;
-        rs_shadow_set_free(&f->shadows);
-        if (rs_shadow_set_init(&f->shadows, s, &desc, &err) != PF_OK) {
-            fprintf(stderr, "softgi: shadow maps: %s\n", err.message);
-            return;
+    rs_shadow_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.size = f->shadow_size;
+    pf_error err;
+    if (!f->shadows_rendered || f->shadow_light_count != s->light_count || f->shadows.count != s->light_count) {
+        /* first frame, or lights added/removed: all maps */
+        if (f->shadows_rendered) {
+            rs_shadow_set_free(&f->shadows);
+            if (rs_shadow_set_init(&f->shadows, s, &desc, &err) != PF_OK) {
+                fprintf(stderr, "softgi: shadow maps: %s\n", err.message);
+                return;
+            }
+        }
+        rs_shadow_set_render(f->raster, &f->shadows, NULL);
+    } else {
+        /* only the lights that changed: their map's kind, matrices and range
+         * follow the light; static lights keep last frame's maps */
+        for (uint32_t i = 0; i < s->light_count; i++) {
+            if (memcmp(&f->shadow_lights[i], &s->lights[i], sizeof(pf_light)) == 0) continue;
+            rs_shadow_map *m = &f->shadows.maps[i];
+            rs_shadow_map_free(m);
+            if (rs_shadow_map_init(m, s, i, &desc, &err) != PF_OK) {
+                fprintf(stderr, "softgi: shadow map of light %u: %s\n", i, err.message);
+                memset(m, 0, sizeof *m);
+                continue;
+            }
+            rs_shadow_render(f->raster, m, 1, NULL);
         }
     }
-    rs_shadow_set_render(f->raster, &f->shadows, NULL);
     pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
-    if (!copy) return; /* next frame renders again */
+    if (!copy) {
+        f->shadows_rendered = 0; /* render everything next frame */
+        return;
+    }
     f->shadow_lights = copy;
     if (s->light_count) memcpy(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count);
     f->shadow_light_count = s->light_count;

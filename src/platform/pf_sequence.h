@@ -1,0 +1,139 @@
+/* pf_sequence: sequence files for `softgi sequence` (issue 4): a scene, a
+ * frame count, and camera and light keyframes, linearly interpolated.
+ *
+ * Format (JSON, parsed with cJSON; keys are case-sensitive, unknown or
+ * repeated keys are errors so a typo never passes silently; "comment" is
+ * allowed in every object and ignored):
+ *
+ *   {
+ *     "name": "cornell-light-move",          optional; default: the file name
+ *                                            without .json / .seq.json
+ *     "scene": "cornell-box.gltf",           required: a .gltf/.glb path relative
+ *                                            to this file (or absolute), or
+ *                                            "embedded:cornell-box"
+ *     "frames": 48,                          required: 1..PF_SEQUENCE_MAX_FRAMES
+ *     "size": [640, 480],                    optional (--size wins; default 640x480)
+ *     "output": "renders/light",             optional folder, relative to this file
+ *                                            (-o wins; default out/<name>)
+ *     "camera": [                            optional (absent: the scene's camera
+ *       {"frame": 0,  "eye": [x,y,z],        or --camera, held still); every key
+ *        "target": [x,y,z], "fovy_deg": 39}, has all four fields
+ *       {"frame": 47, ...}
+ *     ],
+ *     "lights": [                            optional (absent: the scene's lights)
+ *       {"light": 0,                         animates the scene's light 0 ...
+ *        "keys": [{"frame": 0, "position": [x,y,z]}, {"frame": 47, ...}]},
+ *       {"type": "spot", "position": [..],   ... or a full light, like --light:
+ *        "direction": [..], "color": [r,g,b],  type point|spot|directional (or
+ *        "intensity": 5, "inner_cone_deg": 20, "dir"); position (point, spot),
+ *        "outer_cone_deg": 30,                 direction (spot, directional),
+ *        "keys": [...]}                        color (default [1,1,1]),
+ *     ],                                       intensity (W/sr; W/m^2 for
+ *                                              directional), cones in degrees
+ *     "track": [[x, y], ...]                 optional pixels for `softgi compare
+ *   }                                        --track` (at most PF_SEQUENCE_MAX_TRACK)
+ *
+ * Either every entry of "lights" names a scene light ("light": index) or
+ * every entry is a full light; full lights replace the scene's lights, in
+ * order (as --light does). A light key holds "frame" and any of position,
+ * direction, color, intensity, inner_cone_deg, outer_cone_deg; each field is
+ * its own track over the keys that name it, and a field no key names keeps
+ * the light's own value.
+ *
+ * Interpolation (pf_sequence_track_eval): keys sorted by frame (strictly
+ * increasing in the file, within [0, frames)); before the first key and
+ * after the last the end value holds; between keys a and b at frames fa < f
+ * < fb, t = (f - fa) / (fb - fa) in double and v = (1 - t) a + t b, exact at
+ * both keys. Positions, eye, target, colour, intensity and cones are
+ * interpolated linearly; a direction is interpolated linearly and
+ * renormalised (keys are stored normalised; consecutive keys may not be
+ * opposite). A camera is rebuilt every frame with pf_camera_look_at from the
+ * interpolated eye, target and fovy.
+ *
+ * Errors: every bad input (unreadable file, JSON syntax error with line and
+ * column, missing key, wrong type, non-integer or out-of-range frame, NaN or
+ * huge number, keys out of order, a field on the wrong light type, ...) gives
+ * PF_ERR_IO or PF_ERR_PARSE (PF_ERR_NONFINITE for non-finite numbers) and a
+ * message "FILE: where: what", e.g.
+ *   "light.seq.json: camera[2].frame: frames must increase (5 after 9)". */
+#ifndef PF_SEQUENCE_H
+#define PF_SEQUENCE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "pf_result.h"
+#include "pf_scene.h"
+
+#define PF_SEQUENCE_MAX_FRAMES 10000u
+#define PF_SEQUENCE_MAX_LIGHTS 64u
+#define PF_SEQUENCE_MAX_TRACK 64u
+#define PF_SEQUENCE_MAX_SIZE 16384u
+#define PF_SEQUENCE_MAX_FILE (16u << 20) /* bytes */
+#define PF_SEQUENCE_EMBEDDED_CORNELL "embedded:cornell-box"
+
+/* One keyframed quantity: count keys at strictly increasing frames, each
+ * with `dim` floats (value[k * dim + c]). */
+typedef struct pf_sequence_track {
+    uint32_t count, dim;
+    uint32_t *frame;
+    float *value;
+} pf_sequence_track;
+
+typedef enum pf_sequence_field {
+    PF_SEQUENCE_POSITION = 0, /* 3 */
+    PF_SEQUENCE_DIRECTION,    /* 3, unit */
+    PF_SEQUENCE_COLOR,        /* 3 */
+    PF_SEQUENCE_INTENSITY,    /* 1 */
+    PF_SEQUENCE_INNER_CONE,   /* 1, degrees */
+    PF_SEQUENCE_OUTER_CONE,   /* 1, degrees */
+    PF_SEQUENCE_FIELD_COUNT
+} pf_sequence_field;
+
+typedef struct pf_sequence_light {
+    int32_t scene_light; /* >= 0: animates that scene light; -1: `spec` is a full light */
+    pf_light spec;       /* full light at its own values (cones in radians) */
+    pf_sequence_track field[PF_SEQUENCE_FIELD_COUNT];
+} pf_sequence_light;
+
+/* Owns everything; freed by pf_sequence_free. */
+typedef struct pf_sequence {
+    char file[4096];       /* the sequence file as given (for messages) */
+    char name[128];
+    char scene_path[4096]; /* resolved; empty when scene_embedded */
+    int scene_embedded;    /* "embedded:cornell-box" */
+    uint32_t frames;
+    uint32_t width, height; /* 0: not given */
+    char output[4096];      /* resolved folder; empty: not given */
+    pf_sequence_track camera; /* dim 7: eye xyz, target xyz, fovy_deg; count 0: no camera keys */
+    uint32_t light_count;
+    pf_sequence_light *lights;
+    int lights_replace;     /* the entries are full lights that replace the scene's */
+    uint32_t track_count;
+    uint32_t track[PF_SEQUENCE_MAX_TRACK][2]; /* x, y */
+} pf_sequence;
+
+/* Reads and parses a sequence file. On failure *seq is empty (freeing it
+ * is harmless). */
+pf_result pf_sequence_load(pf_sequence *seq, const char *path, pf_error *err);
+/* Parses `size` bytes of JSON. `file` names it in messages and locates
+ * relative paths (its folder); it is not opened. */
+pf_result pf_sequence_parse(pf_sequence *seq, const char *json, size_t size, const char *file, pf_error *err);
+void pf_sequence_free(pf_sequence *seq);
+
+/* Track value at `frame` (dim floats into out); a track without keys
+ * leaves out untouched. */
+void pf_sequence_track_eval(const pf_sequence_track *track, uint32_t frame, float *out);
+
+/* Eye, target and fovy (degrees) at `frame`. Returns 0 (and leaves the
+ * outputs) when the sequence has no camera keys. */
+int pf_sequence_camera_at(const pf_sequence *seq, uint32_t frame, pf_vec3 *eye, pf_vec3 *target, float *fovy_deg);
+
+/* Light i at `frame`: its base (`scene_light` for an entry naming a scene
+ * light, the entry's spec otherwise) with every keyed field interpolated.
+ * Checks what only the base light decides: fields valid for its type, a
+ * non-zero direction, 0 <= inner < outer <= 90 degrees. */
+pf_result pf_sequence_light_at(const pf_sequence *seq, uint32_t i, uint32_t frame, const pf_light *scene_light,
+                               pf_light *out, pf_error *err);
+
+#endif

@@ -1,0 +1,646 @@
+/* test_sequence: sequence files (pf_sequence) and `softgi sequence`.
+ *
+ * - the shipped sequence files parse, with the cameras, lights and scene
+ *   paths they promise (the shared scenes' paths resolve from a clean clone
+ *   with shared/ beside it);
+ * - every kind of bad input gives its code and a message naming the place;
+ * - interpolation is exact at keys and at midpoints;
+ * - end to end on a tiny embedded-Cornell sequence: the frame files exist,
+ *   `softgi compare` reads the folder, a moving camera under a static light
+ *   moves no VPL after frame 0, a moving light moves all of them, and the
+ *   --hash over all frames is the same with 1 and 2 threads. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pf_sequence.h"
+#include "test_util.h"
+
+#define BIN SOFTGI_BINARY
+
+static char g_tmp[256];
+
+/* ---------------------------------------------------------------- helpers */
+
+static void parse_ok(pf_sequence *s, const char *json)
+{
+    pf_error err;
+    pf_result r = pf_sequence_parse(s, json, strlen(json), "dir/t.seq.json", &err);
+    if (r != PF_OK) fail_msg("unexpected error: %s\nfor: %s", err.message, json);
+}
+
+static void expect_bad(const char *json, pf_result code, const char *needle)
+{
+    pf_sequence s;
+    pf_error err;
+    memset(&err, 0, sizeof err);
+    pf_result r = pf_sequence_parse(&s, json, strlen(json), "t.seq.json", &err);
+    if (r == PF_OK) fail_msg("accepted: %s", json);
+    if (r != code || !strstr(err.message, needle) || strncmp(err.message, "t.seq.json: ", 12) != 0)
+        fail_msg("for %s\n  got code %d '%s'\n  want code %d and '%s'", json, (int)r, err.message, (int)code, needle);
+    assert_int_equal(s.frames, 0); /* emptied */
+    assert_null(s.lights);
+    pf_sequence_free(&s);
+}
+
+static int run(const char *args, char *out, size_t size)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "%s %s", BIN, args);
+    int st = tu_run(cmd, out, size);
+    if (st < 0 || st > 2) fail_msg("'%s' ended abnormally (status %d):\n%s", cmd, st, out);
+    return st;
+}
+
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    assert_int_equal(fclose(f), 0);
+}
+
+/* ---------------------------------------------------------------- shipped files */
+
+static void test_shipped_files(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *file;
+        int moving_camera, moving_light;
+    } files[] = {
+        {"scenes/cornell-box/camera-orbit.seq.json", 1, 0},
+        {"scenes/cornell-box/light-move.seq.json", 0, 1},
+        {"scenes/sequences/sibenik-camera.seq.json", 1, 0},
+        {"scenes/sequences/sibenik-light.seq.json", 0, 1},
+        {"scenes/sequences/conference-camera.seq.json", 1, 0},
+        {"scenes/sequences/conference-light.seq.json", 0, 1},
+    };
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", SOFTGI_SOURCE_DIR, files[i].file);
+        pf_sequence s;
+        pf_error err;
+        if (pf_sequence_load(&s, path, &err) != PF_OK) fail_msg("%s", err.message);
+        assert_true(s.frames >= 30 && s.frames <= 60);
+        assert_false(s.scene_embedded);
+        assert_true(tu_file_exists(s.scene_path) || strstr(s.scene_path, "shared/scenes"));
+        if (strstr(s.scene_path, "shared/scenes")) {
+            /* from a clean clone: <repo>/scenes/sequences/../../../shared/scenes = <repo>/../shared/scenes */
+            char shared[1024];
+            snprintf(shared, sizeof shared, "%s/../shared/scenes", SOFTGI_SOURCE_DIR);
+            if (tu_file_exists(shared)) assert_true(tu_file_exists(s.scene_path));
+            else print_message("SKIP: %s is absent; %s not checked\n", shared, s.scene_path);
+        }
+        /* the camera or a light moves, as the name says */
+        int cam_moves = 0, light_moves = 0;
+        pf_vec3 e0, t0, e, t;
+        float f0, f;
+        pf_light L0, L;
+        pf_light base;
+        memset(&base, 0, sizeof base);
+        base.color = pf_v3(1, 1, 1);
+        base.intensity = 1;
+        int has_cam = pf_sequence_camera_at(&s, 0, &e0, &t0, &f0);
+        for (uint32_t fr = 1; fr < s.frames; fr++) {
+            if (has_cam && pf_sequence_camera_at(&s, fr, &e, &t, &f) &&
+                (memcmp(&e, &e0, sizeof e) || memcmp(&t, &t0, sizeof t) || f != f0))
+                cam_moves = 1;
+            for (uint32_t l = 0; l < s.light_count; l++) {
+                assert_int_equal(pf_sequence_light_at(&s, l, 0, &base, &L0, &err), PF_OK);
+                assert_int_equal(pf_sequence_light_at(&s, l, fr, &base, &L, &err), PF_OK);
+                if (memcmp(&L.position, &L0.position, sizeof L.position)) light_moves = 1;
+            }
+        }
+        if (cam_moves != files[i].moving_camera || light_moves != files[i].moving_light)
+            fail_msg("%s: camera moves %d, light moves %d", files[i].file, cam_moves, light_moves);
+        pf_sequence_free(&s);
+    }
+}
+
+/* ---------------------------------------------------------------- the format */
+
+#define HEAD "{\"scene\": \"embedded:cornell-box\", \"frames\": 10, "
+
+static void test_parse_fields(void **state)
+{
+    (void)state;
+    pf_sequence s;
+    parse_ok(&s, "{\"scene\": \"box.gltf\", \"frames\": 5}");
+    assert_string_equal(s.scene_path, "dir/box.gltf");
+    assert_string_equal(s.name, "t");
+    assert_int_equal(s.frames, 5);
+    assert_int_equal(s.width, 0);
+    assert_int_equal(s.camera.count, 0);
+    assert_int_equal(s.light_count, 0);
+    pf_sequence_free(&s);
+
+    parse_ok(&s, "{\"comment\": \"x\", \"name\": \"walk\", \"scene\": \"/abs/s.glb\", \"frames\": 3, \"size\": [64, 48],"
+                 " \"output\": \"renders/walk\", \"track\": [[0, 0], [63, 47]]}");
+    assert_string_equal(s.scene_path, "/abs/s.glb");
+    assert_string_equal(s.name, "walk");
+    assert_string_equal(s.output, "dir/renders/walk");
+    assert_int_equal(s.width, 64);
+    assert_int_equal(s.height, 48);
+    assert_int_equal(s.track_count, 2);
+    assert_int_equal(s.track[1][0], 63);
+    assert_int_equal(s.track[1][1], 47);
+    pf_sequence_free(&s);
+
+    parse_ok(&s, HEAD "\"lights\": [{\"type\": \"spot\", \"position\": [0,1,0], \"direction\": [0,-2,0],"
+                      " \"inner_cone_deg\": 10, \"outer_cone_deg\": 20, \"intensity\": 3},"
+                      " {\"type\": \"directional\", \"direction\": [0,0,-1], \"color\": [1,0.5,0.25], \"intensity\": 2}]}");
+    assert_true(s.scene_embedded);
+    assert_true(s.lights_replace);
+    assert_int_equal(s.light_count, 2);
+    assert_int_equal(s.lights[0].spec.type, PF_LIGHT_SPOT);
+    assert_true(s.lights[0].spec.direction.y == -1.0f);
+    assert_true(fabsf(s.lights[0].spec.outer_cone - pf_radians(20.0f)) < 1e-7f);
+    assert_int_equal(s.lights[1].spec.type, PF_LIGHT_DIRECTIONAL);
+    assert_true(s.lights[1].spec.color.z == 0.25f);
+    pf_sequence_free(&s);
+
+    /* the default name drops .seq.json */
+    pf_error err;
+    const char *j = "{\"scene\": \"a.gltf\", \"frames\": 1}";
+    assert_int_equal(pf_sequence_parse(&s, j, strlen(j), "x/y/orbit.seq.json", &err), PF_OK);
+    assert_string_equal(s.name, "orbit");
+    assert_string_equal(s.scene_path, "x/y/a.gltf");
+    pf_sequence_free(&s);
+}
+
+static void test_bad_inputs(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *json;
+        pf_result code;
+        const char *needle;
+    } bad[] = {
+        /* not JSON / not an object */
+        {"", PF_ERR_PARSE, "empty file"},
+        {"{\"scene\": \"a.gltf\", \"frames\": 1", PF_ERR_PARSE, "ends too early"},
+        {"{\"scene\": \"a.gl", PF_ERR_PARSE, "ends too early"},
+        {"{\"camera\": [{\"frame\": 0,", PF_ERR_PARSE, "ends too early"},
+        {"{\"scene\": 'a'}", PF_ERR_PARSE, "syntax error at line 1, column 11"},
+        {"{\n  \"scene\": \"a\",\n  frames: 3\n}", PF_ERR_PARSE, "syntax error at line 3"},
+        {"{\"scene\": \"a\", \"frames\": NaN}", PF_ERR_PARSE, "syntax error"},
+        {"{\"scene\": \"a\", \"frames\": 1} {}", PF_ERR_PARSE, "unexpected text after the JSON value"},
+        {"{\"scene\": \"a\", \"frames\": 1}]", PF_ERR_PARSE, "unexpected text after the JSON value"},
+        {"[1, 2]", PF_ERR_PARSE, "expected a JSON object at the top, got an array"},
+        {"42", PF_ERR_PARSE, "expected a JSON object at the top, got a number"},
+        {"null", PF_ERR_PARSE, "got null"},
+        /* top-level keys */
+        {"{\"frames\": 1}", PF_ERR_PARSE, "missing key 'scene'"},
+        {"{\"scene\": \"a\"}", PF_ERR_PARSE, "missing key 'frames'"},
+        {"{\"scene\": \"a\", \"frames\": 1, \"frame\": 2}", PF_ERR_PARSE, "unknown key 'frame'"},
+        {"{\"scene\": \"a\", \"frames\": 1, \"frames\": 2}", PF_ERR_PARSE, "key 'frames' given twice"},
+        {"{\"scene\": 3, \"frames\": 1}", PF_ERR_PARSE, "scene: expected a string, got a number"},
+        {"{\"scene\": \"\", \"frames\": 1}", PF_ERR_PARSE, "scene: must not be empty"},
+        {"{\"scene\": \"embedded:sponza\", \"frames\": 1}", PF_ERR_PARSE, "only embedded scene"},
+        {"{\"scene\": \"a\", \"frames\": 0}", PF_ERR_PARSE, "frames: must be at least 1"},
+        {"{\"scene\": \"a\", \"frames\": -3}", PF_ERR_PARSE, "frames: -3 is out of range"},
+        {"{\"scene\": \"a\", \"frames\": 2.5}", PF_ERR_PARSE, "frames: expected an integer, got 2.5"},
+        {"{\"scene\": \"a\", \"frames\": \"10\"}", PF_ERR_PARSE, "frames: expected an integer, got a string"},
+        {"{\"scene\": \"a\", \"frames\": 10001}", PF_ERR_PARSE, "frames: 10001 is out of range 1..10000"},
+        {"{\"scene\": \"a\", \"frames\": 1e300}", PF_ERR_PARSE, "out of range"},
+        {"{\"scene\": \"a\", \"frames\": true}", PF_ERR_PARSE, "got a boolean"},
+        {HEAD "\"size\": [64]}", PF_ERR_PARSE, "size: expected [width, height]"},
+        {HEAD "\"size\": [0, 48]}", PF_ERR_PARSE, "size[0]: 0 is out of range"},
+        {HEAD "\"size\": [64, 99999]}", PF_ERR_PARSE, "size[1]: 99999 is out of range"},
+        {HEAD "\"size\": {\"w\": 1}}", PF_ERR_PARSE, "size: expected [width, height]"},
+        {HEAD "\"output\": []}", PF_ERR_PARSE, "output: expected a string, got an array"},
+        {HEAD "\"name\": \"a/b\"}", PF_ERR_PARSE, "name: expected 1 to"},
+        {HEAD "\"name\": 5}", PF_ERR_PARSE, "name: expected a string"},
+        /* camera */
+        {HEAD "\"camera\": {}}", PF_ERR_PARSE, "camera: expected an array of keys, got an object"},
+        {HEAD "\"camera\": []}", PF_ERR_PARSE, "camera: needs at least one key"},
+        {HEAD "\"camera\": [3]}", PF_ERR_PARSE, "camera[0]: expected an object, got a number"},
+        {HEAD "\"camera\": [{\"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}", PF_ERR_PARSE,
+         "camera[0]: missing key 'frame'"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"target\": [0,0,1], \"fovy_deg\": 40}]}", PF_ERR_PARSE,
+         "camera[0]: missing key 'eye'"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1]}]}", PF_ERR_PARSE,
+         "camera[0]: missing key 'fovy_deg'"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}", PF_ERR_PARSE,
+         "camera[0].eye: expected an array of 3 numbers, got 2 elements"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,\"0\",0], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera[0].eye[1]: expected a number, got a string"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,1e39], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_NONFINITE, "camera[0].eye[2]: number is not finite in single precision"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,2e7], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_NONFINITE, "camera[0].eye[2]: |2e+07| exceeds 1e+07"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 180}]}",
+         PF_ERR_PARSE, "camera[0].fovy_deg: field of view 180 is not in (0, 180) degrees"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": -1}]}",
+         PF_ERR_PARSE, "not in (0, 180)"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [1,2,3], \"target\": [1,2,3], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera[0]: eye and target must differ"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,2], \"fovy_deg\": 40},"
+              " {\"frame\": 2, \"eye\": [0,0,2], \"target\": [0,0,0], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera: eye and target coincide at frame 1"},
+        {HEAD "\"camera\": [{\"frame\": 10, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera[0].frame: 10 is out of range 0..9"},
+        {HEAD "\"camera\": [{\"frame\": 5, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40},"
+              " {\"frame\": 3, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera[1].frame: frames must increase (3 after 5)"},
+        {HEAD "\"camera\": [{\"frame\": 5, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40},"
+              " {\"frame\": 5, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "frames must increase (5 after 5)"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40, \"fov\": 3}]}",
+         PF_ERR_PARSE, "camera[0]: unknown key 'fov'"},
+        /* lights */
+        {HEAD "\"lights\": {}}", PF_ERR_PARSE, "lights: expected an array, got an object"},
+        {HEAD "\"lights\": []}", PF_ERR_PARSE, "lights: is empty"},
+        {HEAD "\"lights\": [1]}", PF_ERR_PARSE, "lights[0]: expected an object, got a number"},
+        {HEAD "\"lights\": [{}]}", PF_ERR_PARSE, "lights[0]: missing key 'light' (index of a scene light) or 'type'"},
+        {HEAD "\"lights\": [{\"light\": 0, \"type\": \"point\"}]}", PF_ERR_PARSE, "not both"},
+        {HEAD "\"lights\": [{\"light\": 0}]}", PF_ERR_PARSE, "lights[0]: missing key 'keys'"},
+        {HEAD "\"lights\": [{\"light\": -1, \"keys\": [{\"frame\": 0, \"intensity\": 1}]}]}", PF_ERR_PARSE,
+         "lights[0].light: -1 is out of range"},
+        {HEAD "\"lights\": [{\"light\": 0.5, \"keys\": [{\"frame\": 0, \"intensity\": 1}]}]}", PF_ERR_PARSE,
+         "lights[0].light: expected an integer"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": []}]}", PF_ERR_PARSE, "lights[0].light: needs at least one key"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": {}}]}", PF_ERR_PARSE, "lights[0].keys: expected an array"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0]: a key needs at least one of position"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"position\": [0,0,0]}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0]: missing key 'frame'"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"pos\": [0,0,0]}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0]: unknown key 'pos'"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 4, \"intensity\": 1}, {\"frame\": 2, \"intensity\": 2}]}]}",
+         PF_ERR_PARSE, "lights[0].keys[1].frame: frames must increase (2 after 4)"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"intensity\": -1}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0].intensity: intensity must be >= 0"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"color\": [1,-1,1]}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0].color: colour must be >= 0"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"direction\": [0,0,0]}]}]}", PF_ERR_PARSE,
+         "lights[0].keys[0].direction: direction must not be zero"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"direction\": [0,0,1]}, {\"frame\": 1, \"direction\": [0,0,-3]}]}]}",
+         PF_ERR_PARSE, "lights[0].keys[1].direction: opposite to the previous direction key"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"outer_cone_deg\": 91}]}]}", PF_ERR_PARSE,
+         "cone angle 91 is not in [0, 90] degrees"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"intensity\": 1}]},"
+              " {\"light\": 0, \"keys\": [{\"frame\": 0, \"intensity\": 2}]}]}",
+         PF_ERR_PARSE, "lights[1].light: scene light 0 is animated twice"},
+        {HEAD "\"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"intensity\": 1}]},"
+              " {\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1}]}",
+         PF_ERR_PARSE, "lights[1]: entries must all name scene lights ('light') or all be full lights"},
+        {HEAD "\"lights\": [{\"type\": \"area\", \"intensity\": 1}]}", PF_ERR_PARSE,
+         "lights[0].type: 'area': expected point, spot or directional"},
+        {HEAD "\"lights\": [{\"type\": 1}]}", PF_ERR_PARSE, "lights[0].type: expected a string, got a number"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"intensity\": 1}]}", PF_ERR_PARSE,
+         "lights[0]: missing key 'position' (a point light needs it)"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0]}]}", PF_ERR_PARSE,
+         "lights[0]: missing key 'intensity'"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1, \"direction\": [0,1,0]}]}",
+         PF_ERR_PARSE, "lights[0].direction: a point light has no direction"},
+        {HEAD "\"lights\": [{\"type\": \"directional\", \"direction\": [0,-1,0], \"intensity\": 1, \"position\": [0,1,0]}]}",
+         PF_ERR_PARSE, "lights[0].position: a directional light has no position"},
+        {HEAD "\"lights\": [{\"type\": \"spot\", \"position\": [0,0,0], \"direction\": [0,-1,0], \"intensity\": 1}]}",
+         PF_ERR_PARSE, "missing key 'inner_cone_deg'"},
+        {HEAD "\"lights\": [{\"type\": \"spot\", \"position\": [0,0,0], \"direction\": [0,-1,0], \"intensity\": 1,"
+              " \"inner_cone_deg\": 30, \"outer_cone_deg\": 20}]}",
+         PF_ERR_PARSE, "lights[0]: inner_cone_deg must be below outer_cone_deg"},
+        {HEAD "\"lights\": [{\"type\": \"spot\", \"position\": [0,0,0], \"direction\": [0,-1,0], \"intensity\": 1,"
+              " \"inner_cone_deg\": 10, \"outer_cone_deg\": 20, \"keys\": [{\"frame\": 0, \"inner_cone_deg\": 10},"
+              " {\"frame\": 9, \"inner_cone_deg\": 40}]}]}",
+         PF_ERR_PARSE, "t.seq.json: lights[0]: need 0 <= inner < outer <= 90 degrees at frame 3"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1,"
+              " \"keys\": [{\"frame\": 0, \"direction\": [0,1,0]}]}]}",
+         PF_ERR_PARSE, "lights[0].keys[0].direction: a point light has no direction"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1, \"extra\": 1}]}",
+         PF_ERR_PARSE, "lights[0]: unknown key 'extra'"},
+        /* tracked pixels */
+        {HEAD "\"track\": []}", PF_ERR_PARSE, "track: expected 1 to 64 pixels, got 0"},
+        {HEAD "\"track\": [[1]]}", PF_ERR_PARSE, "track[0]: expected [x, y]"},
+        {HEAD "\"track\": [[1, -2]]}", PF_ERR_PARSE, "track[0][1]: -2 is out of range"},
+        {HEAD "\"size\": [64, 48], \"track\": [[64, 0]]}", PF_ERR_PARSE,
+         "track[0]: pixel (64, 0) is outside the 64x48 image"},
+        {HEAD "\"track\": 3}", PF_ERR_PARSE, "track: expected an array of [x, y], got a number"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) expect_bad(bad[i].json, bad[i].code, bad[i].needle);
+
+    /* a NUL byte inside the text, and deep nesting (cJSON's limit, no stack overflow) */
+    pf_sequence s;
+    pf_error err;
+    const char nul[] = "{\"scene\": \"a\"\0, \"frames\": 1}";
+    assert_int_equal(pf_sequence_parse(&s, nul, sizeof nul - 1, "t.seq.json", &err), PF_ERR_PARSE);
+    assert_non_null(strstr(err.message, "NUL byte"));
+    size_t depth = 100000;
+    char *deep = malloc(2 * depth + 1);
+    assert_non_null(deep);
+    memset(deep, '[', depth);
+    memset(deep + depth, ']', depth);
+    deep[2 * depth] = 0;
+    assert_int_equal(pf_sequence_parse(&s, deep, 2 * depth, "t.seq.json", &err), PF_ERR_PARSE);
+    free(deep);
+    /* every prefix of a valid file fails cleanly (never crashes, never passes) */
+    const char *good = HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}],"
+                            " \"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 3, \"position\": [1,2,3]}]}]}";
+    size_t n = strlen(good);
+    for (size_t k = 0; k < n; k++) {
+        char *p = malloc(k + 1); /* exact size: ASan catches any read past it */
+        memcpy(p, good, k);
+        assert_int_not_equal(pf_sequence_parse(&s, p, k, "t.seq.json", &err), PF_OK);
+        pf_sequence_free(&s);
+        free(p);
+    }
+    parse_ok(&s, good);
+    pf_sequence_free(&s);
+
+    /* files */
+    assert_int_equal(pf_sequence_load(&s, "/nonexistent/x.seq.json", &err), PF_ERR_IO);
+    assert_non_null(strstr(err.message, "/nonexistent/x.seq.json: cannot open"));
+}
+
+/* ---------------------------------------------------------------- interpolation */
+
+static void test_interpolation(void **state)
+{
+    (void)state;
+    pf_sequence s;
+    parse_ok(&s, "{\"scene\": \"embedded:cornell-box\", \"frames\": 21, \"camera\": ["
+                 "{\"frame\": 4, \"eye\": [0.1, 0.2, 0.3], \"target\": [1, 1, 1], \"fovy_deg\": 30},"
+                 "{\"frame\": 8, \"eye\": [2.1, -0.2, 4.3], \"target\": [3, 1, 1], \"fovy_deg\": 50},"
+                 "{\"frame\": 18, \"eye\": [-1, 0, 0], \"target\": [0, 0, 7], \"fovy_deg\": 70}],"
+                 " \"lights\": [{\"light\": 1, \"keys\": ["
+                 "{\"frame\": 0, \"position\": [0, 0, 0], \"intensity\": 2},"
+                 "{\"frame\": 10, \"position\": [10, -20, 0.5]},"
+                 "{\"frame\": 20, \"intensity\": 4, \"direction\": [1, 0, 0]}]}]}");
+    pf_vec3 e, t;
+    float f;
+    /* exact at keys; held before the first and after the last */
+    assert_true(pf_sequence_camera_at(&s, 4, &e, &t, &f));
+    assert_true(e.x == 0.1f && e.y == 0.2f && e.z == 0.3f && t.x == 1.0f && f == 30.0f);
+    assert_true(pf_sequence_camera_at(&s, 0, &e, &t, &f));
+    assert_true(e.x == 0.1f && f == 30.0f);
+    assert_true(pf_sequence_camera_at(&s, 8, &e, &t, &f));
+    assert_true(e.x == 2.1f && e.y == -0.2f && e.z == 4.3f && t.x == 3.0f && f == 50.0f);
+    assert_true(pf_sequence_camera_at(&s, 18, &e, &t, &f));
+    assert_true(e.x == -1.0f && t.z == 7.0f && f == 70.0f);
+    assert_true(pf_sequence_camera_at(&s, 20, &e, &t, &f));
+    assert_true(e.x == -1.0f && t.z == 7.0f && f == 70.0f);
+    /* midpoints: (a + b) / 2 rounded once */
+    assert_true(pf_sequence_camera_at(&s, 6, &e, &t, &f));
+    assert_true(e.x == (float)(0.5 * (double)0.1f + 0.5 * (double)2.1f));
+    assert_true(e.y == (float)(0.5 * (double)0.2f + 0.5 * (double)-0.2f));
+    assert_true(t.x == 2.0f && f == 40.0f);
+    assert_true(pf_sequence_camera_at(&s, 13, &e, &t, &f));
+    assert_true(t.z == 4.0f && f == 60.0f);
+    /* a quarter of the way */
+    assert_true(pf_sequence_camera_at(&s, 5, &e, &t, &f));
+    assert_true(f == 35.0f && t.x == 1.5f);
+
+    /* light fields are separate tracks; unkeyed fields keep the base */
+    pf_light base, L;
+    pf_error err;
+    memset(&base, 0, sizeof base);
+    base.type = PF_LIGHT_SPOT;
+    base.position = pf_v3(9, 9, 9);
+    base.direction = pf_v3(0, -1, 0);
+    base.color = pf_v3(0.5f, 0.5f, 0.5f);
+    base.intensity = 7;
+    base.inner_cone = 0.1f;
+    base.outer_cone = 0.2f;
+    assert_int_equal(pf_sequence_light_at(&s, 0, 5, &base, &L, &err), PF_OK);
+    assert_true(L.position.x == 5.0f && L.position.y == -10.0f && L.position.z == 0.25f);
+    assert_true(L.intensity == 2.5f); /* keys at 0 and 20 */
+    assert_true(L.direction.x == 1.0f && L.direction.y == 0.0f); /* one key: held */
+    assert_true(L.color.x == 0.5f && L.outer_cone == 0.2f);
+    assert_int_equal(pf_sequence_light_at(&s, 0, 10, &base, &L, &err), PF_OK);
+    assert_true(L.position.x == 10.0f && L.position.y == -20.0f && L.position.z == 0.5f);
+    assert_true(L.intensity == 3.0f); /* the midpoint */
+    assert_int_equal(pf_sequence_light_at(&s, 0, 20, &base, &L, &err), PF_OK);
+    assert_true(L.position.x == 10.0f && L.intensity == 4.0f);
+    /* a direction key on a point light is caught once the base is known */
+    base.type = PF_LIGHT_POINT;
+    assert_int_equal(pf_sequence_light_at(&s, 0, 5, &base, &L, &err), PF_ERR_PARSE);
+    assert_non_null(strstr(err.message, "is a point light, it has no direction"));
+    pf_sequence_free(&s);
+
+    /* directions: normalised linear interpolation */
+    parse_ok(&s, HEAD "\"lights\": [{\"type\": \"directional\", \"direction\": [0,-1,0], \"intensity\": 1,"
+                      " \"keys\": [{\"frame\": 0, \"direction\": [0, -5, 0]}, {\"frame\": 2, \"direction\": [1, 0, 0]}]}]}");
+    assert_int_equal(pf_sequence_light_at(&s, 0, 1, NULL, &L, &err), PF_OK);
+    assert_true(fabsf(L.direction.x - 0.70710678f) < 1e-6f && fabsf(L.direction.y + 0.70710678f) < 1e-6f);
+    assert_int_equal(pf_sequence_light_at(&s, 0, 0, NULL, &L, &err), PF_OK);
+    assert_true(L.direction.x == 0.0f && L.direction.y == -1.0f);
+    pf_sequence_free(&s);
+
+    /* a track without keys leaves the output alone */
+    pf_sequence_track empty;
+    memset(&empty, 0, sizeof empty);
+    float v = 42.0f;
+    pf_sequence_track_eval(&empty, 3, &v);
+    assert_true(v == 42.0f);
+}
+
+/* ---------------------------------------------------------------- end to end */
+
+static const char *k_camera_seq =
+    "{\"scene\": \"embedded:cornell-box\", \"frames\": 6, \"size\": [64, 48],\n"
+    " \"camera\": [{\"frame\": 0, \"eye\": [0.278, 0.273, -0.8], \"target\": [0.278, 0.273, 0.28], \"fovy_deg\": 39.3},\n"
+    "            {\"frame\": 5, \"eye\": [0.1, 0.3, -0.7], \"target\": [0.278, 0.25, 0.28], \"fovy_deg\": 42}],\n"
+    " \"track\": [[10, 10], [40, 30]]}\n";
+static const char *k_light_seq =
+    "{\"scene\": \"embedded:cornell-box\", \"frames\": 6, \"size\": [64, 48],\n"
+    " \"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"position\": [0.278, 0.5388, 0.2795]},\n"
+    "                                   {\"frame\": 5, \"position\": [0.15, 0.45, 0.2]}]}]}\n";
+
+#define FAST "--vpls 64 --shadow-size 256 --isa sse2"
+
+/* Runs `softgi sequence`, checks exit 0, returns the moved counts per frame
+ * (-1 where a frame line is missing) and the hash. */
+static void run_sequence(const char *seq, const char *dir, const char *extra, int moved[6], char hash[17])
+{
+    char args[2048], out[32768];
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' " FAST " --hash %s", seq, dir, extra);
+    int st = run(args, out, sizeof out);
+    if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+    for (int f = 0; f < 6; f++) {
+        char key[32];
+        snprintf(key, sizeof key, "frame %04d ", f);
+        const char *line = strstr(out, key);
+        const char *m = line ? strstr(line, "moved ") : NULL;
+        moved[f] = m ? atoi(m + 6) : -1;
+    }
+    const char *h = strstr(out, "hash ");
+    if (!h || sscanf(h, "hash %16s", hash) != 1) fail_msg("no hash in:\n%s", out);
+}
+
+static void test_end_to_end(void **state)
+{
+    (void)state;
+    char cam[512], light[512], d1[512], d2[512], d3[512], d4[512], path[1024];
+    snprintf(cam, sizeof cam, "%s/cam.seq.json", g_tmp);
+    snprintf(light, sizeof light, "%s/light.seq.json", g_tmp);
+    write_file(cam, k_camera_seq);
+    write_file(light, k_light_seq);
+    snprintf(d1, sizeof d1, "%s/cam1", g_tmp);
+    snprintf(d2, sizeof d2, "%s/cam2", g_tmp);
+    snprintf(d3, sizeof d3, "%s/light1", g_tmp);
+    snprintf(d4, sizeof d4, "%s/light2", g_tmp);
+
+    /* static light, moving camera: VPLs made at frame 0 and kept */
+    int moved[6];
+    char h1[17], h2[17];
+    run_sequence(cam, d1, "--threads 1", moved, h1);
+    if (moved[0] <= 0) fail_msg("frame 0 moved %d VPLs", moved[0]);
+    for (int f = 1; f < 6; f++)
+        if (moved[f] != 0) fail_msg("camera sequence: frame %d moved %d VPLs (want 0)", f, moved[f]);
+    run_sequence(cam, d2, "--threads 2", moved, h2);
+    assert_string_equal(h1, h2);
+
+    /* moving light: Instant Radiosity regenerates every VPL every frame */
+    int moved_l[6];
+    char h3[17], h4[17];
+    run_sequence(light, d3, "--threads 1", moved_l, h3);
+    for (int f = 0; f < 6; f++)
+        if (moved_l[f] != moved[0]) fail_msg("light sequence: frame %d moved %d VPLs (want all %d)", f, moved_l[f], moved[0]);
+    run_sequence(light, d4, "--threads 2", moved_l, h4);
+    assert_string_equal(h3, h4);
+    assert_string_not_equal(h1, h3);
+    /* the ray-traced frame keeps the same guarantees */
+    char h5[17], h6[17], d5[512];
+    snprintf(d5, sizeof d5, "%s/light-rt", g_tmp);
+    run_sequence(light, d5, "--threads 1 --raytrace", moved_l, h5);
+    for (int f = 0; f < 6; f++) assert_int_equal(moved_l[f], moved[0]);
+    run_sequence(light, d5, "--threads 2 --raytrace", moved_l, h6);
+    assert_string_equal(h5, h6);
+    assert_string_not_equal(h3, h5);
+
+    /* the files compare reads */
+    static const char *const suffix[] = {".pfm", ".png", ".view", ".depth.pfm"};
+    for (int f = 0; f < 6; f++)
+        for (int k = 0; k < 4; k++) {
+            snprintf(path, sizeof path, "%s/frame_%04d%s", d1, f, suffix[k]);
+            if (!tu_file_exists(path)) fail_msg("missing %s", path);
+        }
+    snprintf(path, sizeof path, "%s/frame_0006.pfm", d1);
+    assert_false(tu_file_exists(path));
+    snprintf(path, sizeof path, "%s/track.txt", d1);
+    FILE *tf = fopen(path, "r");
+    assert_non_null(tf);
+    char line[64];
+    assert_non_null(fgets(line, sizeof line, tf));
+    assert_string_equal(line, "10,10\n");
+    fclose(tf);
+
+    char args[4096], out[32768];
+    snprintf(args, sizeof args, "compare --reference '%s' --name t2:'%s' --track 10,10 --track 40,30", d1, d2);
+    int st = run(args, out, sizeof out);
+    if (st != 0 || !strstr(out, "| t2 | 6 | 0 | 0 |")) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+    snprintf(args, sizeof args, "compare --reference '%s' --name light:'%s'", d1, d3);
+    st = run(args, out, sizeof out);
+    if (st != 0 || !strstr(out, "| light | 6 |")) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+
+    /* a shorter run into the same folder removes the extra frames */
+    char shortseq[512];
+    snprintf(shortseq, sizeof shortseq, "%s/short.seq.json", g_tmp);
+    write_file(shortseq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [32, 24]}");
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' -q --direct-only --shadow-size 64", shortseq, d2);
+    st = run(args, out, sizeof out);
+    if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+    snprintf(path, sizeof path, "%s/frame_0001.view", d2);
+    assert_true(tu_file_exists(path));
+    snprintf(path, sizeof path, "%s/frame_0002.pfm", d2);
+    assert_false(tu_file_exists(path));
+    snprintf(path, sizeof path, "%s/frame_0005.depth.pfm", d2);
+    assert_false(tu_file_exists(path));
+    snprintf(path, sizeof path, "%s/track.txt", d2);
+    assert_false(tu_file_exists(path));
+}
+
+static void expect_cli(const char *args, int status, const char *needle)
+{
+    char out[16384];
+    int st = run(args, out, sizeof out);
+    if (st != status || !strstr(out, needle))
+        fail_msg("softgi %s\n  exit %d (want %d), output:\n%s\n  (want it to contain '%s')", args, st, status, out,
+                 needle);
+}
+
+static void test_cli_errors(void **state)
+{
+    (void)state;
+    char seq[512], args[2048];
+    expect_cli("sequence", 2, "give the sequence file");
+    expect_cli("sequence /nonexistent/a.seq.json", 1, "/nonexistent/a.seq.json: cannot open the sequence file");
+
+    snprintf(seq, sizeof seq, "%s/bad.seq.json", g_tmp);
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,");
+    snprintf(args, sizeof args, "sequence '%s'", seq);
+    expect_cli(args, 1, "bad.seq.json: JSON ends too early");
+
+    write_file(seq, "{\"scene\": \"missing.gltf\", \"frames\": 3}");
+    expect_cli(args, 1, "missing.gltf");
+
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,"
+                    " \"lights\": [{\"light\": 4, \"keys\": [{\"frame\": 0, \"intensity\": 2}]}]}");
+    expect_cli(args, 1, "lights[0]: the scene has no light 4 (it has 1)");
+
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,"
+                    " \"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"direction\": [0,1,0]}]}]}");
+    expect_cli(args, 1, "is a point light, it has no direction");
+
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"camera\": [{\"frame\": 0,"
+                    " \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}");
+    snprintf(args, sizeof args, "sequence '%s' --camera 0,0,0:0,0,1:40", seq);
+    expect_cli(args, 2, "--camera: ");
+
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"lights\": [{\"type\": \"point\","
+                    " \"position\": [0.2,0.3,0.2], \"intensity\": 1}]}");
+    snprintf(args, sizeof args, "sequence '%s' --light point:0,0,0:1,1,1:1", seq);
+    expect_cli(args, 2, "--light: ");
+
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"track\": [[60, 40]]}");
+    snprintf(args, sizeof args, "sequence '%s' --size 32x24", seq);
+    expect_cli(args, 2, "track[0]: pixel (60, 40) is outside the 32x24 image");
+
+    /* with a "size" in the file, --size scales the tracked pixels */
+    char dir[512], path[1024], line[64];
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 1, \"size\": [64, 48],"
+                    " \"track\": [[60, 40]]}");
+    snprintf(dir, sizeof dir, "%s/scaled", g_tmp);
+    snprintf(args, sizeof args, "sequence '%s' --size 32x24 -q --direct-only --shadow-size 64 -o '%s'", seq, dir);
+    expect_cli(args, 0, "");
+    snprintf(path, sizeof path, "%s/track.txt", dir);
+    FILE *tf = fopen(path, "r");
+    assert_non_null(tf);
+    assert_non_null(fgets(line, sizeof line, tf));
+    fclose(tf);
+    assert_string_equal(line, "30,20\n");
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(g_tmp, sizeof g_tmp, "/tmp/softgi_test_sequence_XXXXXX");
+    return mkdtemp(g_tmp) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_tmp);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_shipped_files), cmocka_unit_test(test_parse_fields),
+        cmocka_unit_test(test_bad_inputs),    cmocka_unit_test(test_interpolation),
+        cmocka_unit_test(test_end_to_end),    cmocka_unit_test(test_cli_errors),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

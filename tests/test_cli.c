@@ -53,6 +53,7 @@ static void test_usage_errors(void **state)
     expect("render --visibility ism", 2, "--visibility 'ism'");
     expect("render --vpls 0", 2, "--vpls");
     expect("render --bounces 0", 2, "--bounces");
+    expect("render --vpls 1000000 -q -o /dev/null/x.png", 2, "use fewer VPLs or --visibility raytrace");
     expect("render --frob", 2, "unknown option '--frob'");
     expect("render a.gltf b.gltf", 2, "unexpected argument");
     expect("render --size", 2, "--size needs a value");

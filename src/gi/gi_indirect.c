@@ -8,6 +8,8 @@
 #include "gi_frame.h"
 
 #define GI__DEFAULT_CLAMP 400.0f
+/* Paraboloid maps are 2 bytes a texel: 32768 maps of 128^2 = 1 GiB. */
+#define GI__MAX_MAP_BYTES ((size_t)4 << 30)
 
 static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
@@ -51,6 +53,12 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
              ind->split_e && ind->combined && ind->filtered;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
+    if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "%u VPLs need %.1f GiB of %ux%u paraboloid maps (softgi allows %.0f GiB); use fewer VPLs "
+                            "or --visibility raytrace",
+                            o.vpls, (double)rs_para_atlas_bytes(o.para_res, o.vpls) / (1u << 30), o.para_res,
+                            o.para_res, (double)GI__MAX_MAP_BYTES / (1u << 30));
     if (ok && !o.visibility_raytrace) {
         rs_para_options po;
         memset(&po, 0, sizeof po);

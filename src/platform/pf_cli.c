@@ -11,7 +11,7 @@ void pf_cli_usage(FILE *out)
     fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
           "       softgi reference [SCENE.gltf|SCENE.glb] [options]   (path-traced reference)\n"
           "       softgi sequence SEQUENCE.json [options]             (render a camera/light sequence)\n"
-          "       softgi bench frame [--threads N] [--frames N] [--scenes DIR]\n"
+          "       softgi bench frame [--threads N] [--frames N] [--scenes DIR] [--vpls N] [--tiles NxM]\n"
           "       softgi compare ...                                  (softgi compare --help)\n"
           "       softgi bench raster [--threads N] [--frames N] [--scenes DIR] [--isa ISA]\n"
           "\n"

@@ -15,6 +15,10 @@ int app_fail(const pf_error *err);
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
 
+struct gi_indirect_options;
+/* The many-light options given on the command line (--method, --vpls, ...). */
+pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);
+
 /* `softgi render`: load, override, build, render, write. Returns the exit status. */
 int app_render(const pf_options *opts);
 

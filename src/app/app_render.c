@@ -53,20 +53,7 @@ int app_render(const pf_options *o)
     if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, o->shadow_size, &err);
     if (r == PF_OK && !o->direct_only) {
         gi_indirect_options io;
-        memset(&io, 0, sizeof io);
-        io.method = gi_vpl_method_find(o->method);
-        if (!io.method)
-            r = pf_error_set(&err, PF_ERR_ARGUMENT, "--method '%s': softgi knows %s", o->method, gi_vpl_method_names());
-        io.vpls = o->vpls;
-        io.bounces = o->bounces;
-        io.tiles_n = o->tiles_n;
-        io.tiles_m = o->tiles_m;
-        io.no_interleave = o->no_interleave;
-        io.visibility_raytrace = o->visibility_raytrace;
-        io.clamp = o->clamp_set ? o->clamp : -1.0f;
-        io.filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
-                    : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
-                                                            : GI_FILTER_NONE;
+        r = app_indirect_options(o, &io, &err);
         if (r == PF_OK) r = gi_frame_enable_indirect(&frame, &io, o->indirect_only, &err);
         if (r != PF_OK) gi_frame_free(&frame);
     }

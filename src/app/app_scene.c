@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "gi_indirect.h"
 #include "pf_gltf.h"
 
 extern const unsigned char softgi_default_scene[];
@@ -59,5 +60,24 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
     }
     if (scene->light_count == 0 && !o->quiet)
         fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    return PF_OK;
+}
+
+pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)
+{
+    memset(io, 0, sizeof *io);
+    io->method = gi_vpl_method_find(o->method);
+    if (!io->method)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--method '%s': softgi knows %s", o->method, gi_vpl_method_names());
+    io->vpls = o->vpls;
+    io->bounces = o->bounces;
+    io->tiles_n = o->tiles_n;
+    io->tiles_m = o->tiles_m;
+    io->no_interleave = o->no_interleave;
+    io->visibility_raytrace = o->visibility_raytrace;
+    io->clamp = o->clamp_set ? o->clamp : -1.0f;
+    io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
+                 : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
+                                                         : GI_FILTER_NONE;
     return PF_OK;
 }

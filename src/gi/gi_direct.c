@@ -67,10 +67,7 @@ static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
         if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
         pf_vec3 pos = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
         pf_vec3 nrm = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
-        const uint32_t *tri = &s->indices[3 * g->prim[p]];
-        pf_vec3 p0 = s->positions[tri[0]];
-        pf_vec3 ng = pf_v3_normalize(
-            pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
+        pf_vec3 ng = pf_scene_face_normal(s, g->prim[p]);
         float e[3] = {0, 0, 0};
         for (uint32_t l = 0; l < s->light_count && l < f->shadows.count; l++) {
             gi_light_sample ls;

@@ -33,3 +33,13 @@ none:
     out->irradiance = pf_v3(0.0f, 0.0f, 0.0f);
     return 0;
 }
+
+pf_ray gi_light_shadow_ray(const gi_light_sample *ls, pf_vec3 p, pf_vec3 ng)
+{
+    pf_ray r;
+    r.org = pf_rt_offset_origin(p, ng, ls->wi);
+    r.dir = ls->wi;
+    r.tnear = 0.0f;
+    r.tfar = isinf(ls->distance) ? INFINITY : ls->distance * (1.0f - 1.0e-4f);
+    return r;
+}

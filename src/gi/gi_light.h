@@ -14,6 +14,7 @@
 #ifndef GI_LIGHT_H
 #define GI_LIGHT_H
 
+#include "pf_rt.h"
 #include "pf_scene.h"
 
 typedef struct gi_light_sample {
@@ -28,5 +29,10 @@ float gi_light_spot_factor(const pf_light *light, float cos_angle);
 /* Unshadowed irradiance at point p with unit normal n. Returns 0 (and zero
  * irradiance) when the light cannot reach the point's front side. */
 int gi_light_irradiance(const pf_light *light, pf_vec3 p, pf_vec3 n, gi_light_sample *out);
+
+/* The shadow ray for a light sample at surface point p with geometric
+ * normal ng: from p pushed off the surface towards the light, stopping just
+ * short of the light (a light lying on a surface does not shadow itself). */
+pf_ray gi_light_shadow_ray(const gi_light_sample *ls, pf_vec3 p, pf_vec3 ng);
 
 #endif

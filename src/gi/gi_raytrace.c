@@ -76,17 +76,8 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
                 pf_vec3 pos = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
                 pf_vec3 nrm = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
                 if (!gi_light_irradiance(&s->lights[l], pos, nrm, &ls[m])) continue;
-                const uint32_t *tri = &s->indices[3 * g->prim[p]];
-                pf_vec3 p0 = s->positions[tri[0]];
-                pf_vec3 ng = pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0));
-                ng = pf_v3_normalize(ng);
-                pf_ray r;
-                r.org = pf_rt_offset_origin(pos, ng, ls[m].wi);
-                r.dir = ls[m].wi;
-                r.tnear = 0.0f;
-                /* stop just short of the light: a light on a surface does not shadow itself */
-                r.tfar = isinf(ls[m].distance) ? INFINITY : ls[m].distance * (1.0f - 1.0e-4f);
-                rays[m] = r;
+                pf_vec3 ng = pf_scene_face_normal(s, g->prim[p]);
+                rays[m] = gi_light_shadow_ray(&ls[m], pos, ng);
                 pix[m] = x0 + i;
                 m++;
             }

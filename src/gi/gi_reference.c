@@ -110,12 +110,7 @@ static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t
             /* The shadow ray exactly as the renderer's (gi_raytrace.c): from the
              * point offset to the light's side, stopping just short of the light
              * so that a light lying on a surface does not shadow itself. */
-            pf_ray r;
-            r.org = pf_rt_offset_origin(P->p, P->ng, ls[q].wi);
-            r.dir = ls[q].wi;
-            r.tnear = 0.0f;
-            r.tfar = isinf(ls[q].distance) ? INFINITY : ls[q].distance * (1.0f - 1.0e-4f);
-            rays[q] = r;
+            rays[q] = gi_light_shadow_ray(&ls[q], P->p, P->ng);
             who[q] = lanes[j];
             q++;
         }

@@ -142,6 +142,13 @@ pf_vec3 pf_camera_ray_dir(const pf_camera *cam, uint32_t width, uint32_t height,
     return pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx), pf_v3_scale(cam->up, sy)));
 }
 
+pf_vec3 pf_scene_face_normal(const pf_scene *s, uint32_t prim)
+{
+    const uint32_t *tri = &s->indices[3 * prim];
+    pf_vec3 p0 = s->positions[tri[0]];
+    return pf_v3_normalize(pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
+}
+
 void pf_scene_surface(const pf_scene *s, uint32_t prim, float u, float v, float lod, pf_surface *out)
 {
     const uint32_t *tri = &s->indices[3 * prim];

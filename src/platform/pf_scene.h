@@ -153,6 +153,9 @@ pf_result pf_scene_add_light(pf_scene *scene, const pf_light *light, pf_error *e
 /* A camera looking from eye to target with a +Y-up roll, fovy in radians. */
 pf_result pf_camera_look_at(pf_camera *cam, pf_vec3 eye, pf_vec3 target, float yfov, pf_error *err);
 
+/* Unit geometric normal of triangle `prim` (counter-clockwise front). */
+pf_vec3 pf_scene_face_normal(const pf_scene *scene, uint32_t prim);
+
 /* The surface of triangle `prim` at barycentrics (u, v) (weights of
  * vertices 1 and 2), texture filtered at mip level `lod`. Shared by the
  * ray-traced and the rasterized paths so both interpolate identically. */

@@ -146,9 +146,7 @@ static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera 
     for (x = 0; x < g->width; x++) {
         size_t i = (size_t)y * g->width + x;
         if (g->prim[i] == RS_GBUFFER_EMPTY || nx[x] != 0.0f || ny[x] != 0.0f || nz[x] != 0.0f) continue;
-        const uint32_t *tri = &s->indices[3 * g->prim[i]];
-        pf_vec3 p0 = s->positions[tri[0]];
-        pf_vec3 ng = pf_v3_normalize(pf_v3_cross(pf_v3_sub(s->positions[tri[1]], p0), pf_v3_sub(s->positions[tri[2]], p0)));
+        pf_vec3 ng = pf_scene_face_normal(s, g->prim[i]);
         pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx[x]), pf_v3_scale(cam->up, sy)));
         if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
         nx[x] = ng.x, ny[x] = ng.y, nz[x] = ng.z;

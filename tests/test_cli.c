@@ -61,6 +61,7 @@ static void test_usage_errors(void **state)
     expect("render --size 640", 2, "expected WxH");
     expect("render --size 64x99999", 2, "--size height");
     expect("render --size 12ax10", 2, "--size width");
+    expect("render --size 16384x16384", 2, "at most 67108864 pixels");
     expect("render --threads 0", 2, "--threads '0'");
     expect("render --threads 100000", 2, "--threads");
     expect("render --threads -1", 2, "--threads");

@@ -267,6 +267,10 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                 wbuf[x - val] = 0;
                 r = pf__uint("--size width", wbuf, 1, 16384, &o->width, err);
                 if (r == PF_OK) r = pf__uint("--size height", x + 1, 1, 16384, &o->height, err);
+                /* a frame keeps ~130 bytes a pixel (G-buffer, split buffers, irradiance): 8 GiB here */
+                if (r == PF_OK && (uint64_t)o->width * o->height > (uint64_t)1 << 26)
+                    r = pf_error_set(err, PF_ERR_ARGUMENT,
+                                     "--size %ux%u: at most 67108864 pixels (e.g. 8192x8192)", o->width, o->height);
             }
         } else if (!strcmp(a, "--camera")) {
             r = pf_cli_parse_camera(val, &o->camera_eye, &o->camera_target, &o->camera_fovy_deg, err);

@@ -143,16 +143,13 @@ static void test_render_outputs_and_threads(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(g_tmp, sizeof g_tmp, "/tmp/softgi-test-cli-XXXXXX");
-    return mkdtemp(g_tmp) ? 0 : -1;
+    return tu_tmpdir_create(g_tmp, sizeof g_tmp, "softgi-test-cli");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_tmp);
-    return system(cmd) == 0 ? 0 : -1;
+    return tu_tmpdir_remove(g_tmp);
 }
 
 int main(void)

@@ -591,16 +591,13 @@ static void test_compare_sequences(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(g_tmp, sizeof g_tmp, "/tmp/softgi_test_metrics_XXXXXX");
-    return mkdtemp(g_tmp) ? 0 : -1;
+    return tu_tmpdir_create(g_tmp, sizeof g_tmp, "softgi-test-metrics");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_tmp);
-    return system(cmd) == 0 ? 0 : -1;
+    return tu_tmpdir_remove(g_tmp);
 }
 
 int main(void)

@@ -75,6 +75,21 @@ static inline int tu_file_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
+/* A fresh temporary folder /tmp/<tag>-XXXXXX into buf (0 on success), and
+ * its recursive removal (0 on success): cmocka group setup/teardown bodies. */
+static inline int tu_tmpdir_create(char *buf, size_t size, const char *tag)
+{
+    snprintf(buf, size, "/tmp/%s-XXXXXX", tag);
+    return mkdtemp(buf) ? 0 : -1;
+}
+
+static inline int tu_tmpdir_remove(const char *dir)
+{
+    char cmd[4200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
 /* Loads a scene for a test: 0 with a SKIP message when the file is absent
  * (the shared scenes live beside the repo, not in it), 1 when loaded; a
  * file that exists but fails to load fails the test. Needs <cmocka.h>

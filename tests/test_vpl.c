@@ -321,6 +321,54 @@ static uint64_t gi_hashes(uint32_t threads, uint64_t stage[8])
     return all;
 }
 
+/* The accumulation's and the filter's SIMD paths give the scalar path's bits: whole GI
+ * frames with the scalar, AVX2 and AVX-512 raster contexts (the
+ * accumulation follows the context's path), on the Cornell box and Sibenik. */
+static void simd_frame(const char *path, rs_simd simd, uint64_t *h_acc, uint64_t *h_final)
+{
+    fx x;
+    pf_error err;
+    if (!tu_load_or_skip(&x.scene, path)) {
+        *h_acc = *h_final = 0;
+        return;
+    }
+    pf_camera cam;
+    if (x.scene.camera_count) cam = x.scene.cameras[0];
+    else {
+        assert_int_equal(pf_camera_look_at(&cam, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err), PF_OK);
+        pf_light L = {.type = PF_LIGHT_POINT, .position = {0, 0, 0}, .color = {1, 1, 1}, .intensity = 50};
+        assert_int_equal(pf_scene_add_light(&x.scene, &L, &err), PF_OK);
+    }
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.vpls = 96;
+    fx_begin(&x, 2, 83, 61, &cam, &io); /* tile widths not multiples of 8: SIMD and scalar tails */
+    rs_context_set_simd(x.rs, simd);
+    gi_frame_render_raster(&x.f);
+    *h_acc = pf_imageio_hash(x.f.ind.split_e, 3 * 83 * 61) ^ pf_imageio_hash(x.f.ind.filtered, 3 * 83 * 61) * 3;
+    *h_final = pf_imageio_hash(x.f.final, 3 * 83 * 61);
+    fx_end(&x);
+}
+
+static void test_accumulate_simd_identical(void **state)
+{
+    (void)state;
+    const char *paths[2] = {CORNELL, SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"};
+    for (int p = 0; p < 2; p++) {
+        uint64_t a0, f0;
+        simd_frame(paths[p], RS_SIMD_SCALAR, &a0, &f0);
+        if (a0 == 0 && f0 == 0) continue; /* skipped */
+        const rs_simd simds[2] = {RS_SIMD_AVX2, RS_SIMD_AVX512};
+        for (int k = 0; k < 2; k++) {
+            if (pf_isa_detect() < (simds[k] == RS_SIMD_AVX2 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+            uint64_t a, fh;
+            simd_frame(paths[p], simds[k], &a, &fh);
+            if (a != a0 || fh != f0)
+                fail_msg("%s: %s accumulation or filter differs from scalar", paths[p], rs_simd_name(simds[k]));
+        }
+    }
+}
+
 /* Golden: 80x60 Cornell box GI frame (64 VPLs, 4x4 tiles, paraboloid maps,
  * scalar raster, Embree pinned to sse2): vpls, maps, split, accumulated,
  * combined, filtered, direct, final. */
@@ -425,7 +473,8 @@ int main(void)
         cmocka_unit_test(test_one_vpl_raytrace),  cmocka_unit_test(test_one_vpl_paraboloid),
         cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
-        cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_ir_converges_to_reference),
+        cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
+        cmocka_unit_test(test_ir_converges_to_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

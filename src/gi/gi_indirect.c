@@ -7,6 +7,11 @@
 
 #include "gi_frame.h"
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define GI_HAVE_X86 1
+#endif
+
 #define GI__DEFAULT_CLAMP 400.0f
 /* Paraboloid maps are 2 bytes a texel: 32768 maps of 128^2 = 1 GiB. */
 #define GI__MAX_MAP_BYTES ((size_t)4 << 30)
@@ -65,7 +70,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         po.resolution = o.para_res;
         r = rs_para_context_create(&ind->para, s, &po, err);
         if (r != PF_OK) return r;
-        ind->atlas = malloc(rs_para_atlas_bytes(o.para_res, o.vpls));
+        /* +64 bytes: the SIMD accumulation gathers 4 bytes at a 2-byte texel */
+        ind->atlas = malloc(rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
         ind->frames = calloc(o.vpls, sizeof(rs_para_frame));
         ind->range = rs_para_default_range(s);
         ok = ind->atlas && ind->frames;
@@ -238,6 +244,121 @@ static pf_vec3 gi__vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b
     return pf_v3_scale(v->intensity, G);
 }
 
+#ifdef GI_HAVE_X86
+/* The accumulation of 8 consecutive tile pixels against the tile's VPLs with
+ * AVX2 — gi__vpl_irradiance and rs_para_visible_at written lane-wise with
+ * the same operations in the same order (sqrt and division are correctly
+ * rounded in both; floor, min/max and the integer texel arithmetic are
+ * exact), so every lane gets the scalar path's bits. Paraboloid visibility
+ * only; e[3*8] receives the (unweighted) sums of lanes 0..7. */
+__attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indirect *ind, const float *px,
+                                                                    const float *py, const float *pz, const float *nx,
+                                                                    const float *ny, const float *nz, uint32_t a0,
+                                                                    uint32_t a1, float e[24])
+{
+    const uint32_t R = ind->opt.para_res;
+    const size_t map = (size_t)R * R;
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 Px = _mm256_loadu_ps(px), Py = _mm256_loadu_ps(py), Pz = _mm256_loadu_ps(pz);
+    const __m256 Nx = _mm256_loadu_ps(nx), Ny = _mm256_loadu_ps(ny), Nz = _mm256_loadu_ps(nz);
+    const __m256 b = _mm256_set1_ps(ind->b);
+    const __m256 k4 = _mm256_set1_ps(4.0f / (float)R), tanmax = _mm256_set1_ps(RS_PARA_TAN_MAX);
+    const __m256 step = _mm256_set1_ps(ind->range / RS_PARA_CODES);
+    const __m256 qbias = _mm256_set1_ps(2.0f * ind->range / RS_PARA_CODES);
+    const __m256 h = _mm256_set1_ps(0.5f * (float)R), rmax = _mm256_set1_ps((float)R - 1.0f);
+    const __m256 shrink = _mm256_set1_ps(1.0f - 1.5f / (float)R);
+    const __m256i iR = _mm256_set1_epi32((int)R), iR2 = _mm256_set1_epi32((int)(R * R));
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    __m256 sx = zero, sy = zero, sz = zero;
+    for (uint32_t q = a0; q < a1; q++) {
+        uint32_t vi = ind->assign[q];
+        const gi_vpl *v = &ind->vpls.v[vi];
+        const rs_para_frame *f = &ind->frames[vi];
+        /* gi__vpl_irradiance */
+        __m256 dx = _mm256_sub_ps(_mm256_set1_ps(v->pos.x), Px), dy = _mm256_sub_ps(_mm256_set1_ps(v->pos.y), Py),
+               dz = _mm256_sub_ps(_mm256_set1_ps(v->pos.z), Pz);
+        __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+        __m256 ok = _mm256_cmp_ps(r2, zero, _CMP_GT_OQ);
+        __m256 r = _mm256_sqrt_ps(r2), inv = _mm256_div_ps(one, r);
+        __m256 wx = _mm256_mul_ps(dx, inv), wy = _mm256_mul_ps(dy, inv), wz = _mm256_mul_ps(dz, inv);
+        __m256 c1 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(Nx, wx), _mm256_mul_ps(Ny, wy)), _mm256_mul_ps(Nz, wz));
+        __m256 c2d = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(v->nrm.x), wx), _mm256_mul_ps(_mm256_set1_ps(v->nrm.y), wy)),
+            _mm256_mul_ps(_mm256_set1_ps(v->nrm.z), wz));
+        __m256 c2 = _mm256_sub_ps(zero, c2d); /* -dot: exact negation */
+        ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(c1, zero, _CMP_GT_OQ), _mm256_cmp_ps(c2, zero, _CMP_GT_OQ)));
+        if (_mm256_movemask_ps(ok) == 0) continue;
+        __m256 G = _mm256_div_ps(_mm256_mul_ps(c1, c2), r2);
+        G = _mm256_blendv_ps(G, b, _mm256_cmp_ps(G, b, _CMP_GT_OQ));
+        /* rs_para_visible_at */
+        __m256 qx = _mm256_sub_ps(Px, _mm256_set1_ps(f->o.x)), qy = _mm256_sub_ps(Py, _mm256_set1_ps(f->o.y)),
+               qz = _mm256_sub_ps(Pz, _mm256_set1_ps(f->o.z));
+#define GI__DOT3(ax, ay, az)                                                                                           \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, _mm256_set1_ps(ax)), _mm256_mul_ps(qy, _mm256_set1_ps(ay))),          \
+                  _mm256_mul_ps(qz, _mm256_set1_ps(az)))
+        __m256 lx = GI__DOT3(f->t.x, f->t.y, f->t.z), ly = GI__DOT3(f->b.x, f->b.y, f->b.z),
+               lz = GI__DOT3(f->n.x, f->n.y, f->n.z);
+#undef GI__DOT3
+        __m256 front = _mm256_cmp_ps(lz, zero, _CMP_GT_OQ);
+        __m256 dist = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(lx, lx), _mm256_mul_ps(ly, ly)),
+                                                   _mm256_mul_ps(lz, lz)));
+        __m256 den = _mm256_add_ps(dist, lz);
+        __m256 u = _mm256_div_ps(lx, den), vv = _mm256_div_ps(ly, den);
+        __m256 wt = _mm256_div_ps(_mm256_mul_ps(dist, k4),
+                                  _mm256_add_ps(one, _mm256_add_ps(_mm256_mul_ps(u, u), _mm256_mul_ps(vv, vv))));
+        __m256 c = _mm256_and_ps(c1, absmask);
+        __m256 s = _mm256_sqrt_ps(_mm256_max_ps(zero, _mm256_sub_ps(one, _mm256_mul_ps(c, c))));
+        __m256 tan_t = _mm256_blendv_ps(tanmax, _mm256_div_ps(s, c),
+                                        _mm256_cmp_ps(c, _mm256_div_ps(s, tanmax), _CMP_GT_OQ));
+        /* rs__texel_of_uv: pass 0, then pass 1 for lanes whose texel centre is outside the disc */
+        __m256i idx = _mm256_setzero_si256();
+        __m256 pu = u, pv = vv;
+        __m256i done = _mm256_setzero_si256();
+        for (int pass = 0; pass < 2; pass++) {
+            __m256 fi = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pu, one), h));
+            __m256 fj = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pv, one), h));
+            /* pf_clampf(x, 0, R-1): x < 0 ? 0 : (x > R-1 ? R-1 : x) */
+            fi = _mm256_blendv_ps(_mm256_blendv_ps(fi, rmax, _mm256_cmp_ps(fi, rmax, _CMP_GT_OQ)), zero,
+                                  _mm256_cmp_ps(fi, zero, _CMP_LT_OQ));
+            fj = _mm256_blendv_ps(_mm256_blendv_ps(fj, rmax, _mm256_cmp_ps(fj, rmax, _CMP_GT_OQ)), zero,
+                                  _mm256_cmp_ps(fj, zero, _CMP_LT_OQ));
+            __m256i ii = _mm256_cvttps_epi32(fi), jj = _mm256_cvttps_epi32(fj);
+            __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(jj, iR), ii);
+            __m256i ai = _mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(ii, ii), _mm256_set1_epi32(1)), iR);
+            __m256i aj = _mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(jj, jj), _mm256_set1_epi32(1)), iR);
+            __m256i d2 = _mm256_add_epi32(_mm256_mullo_epi32(ai, ai), _mm256_mullo_epi32(aj, aj));
+            __m256i inside = pass == 0 ? _mm256_xor_si256(_mm256_cmpgt_epi32(d2, iR2), _mm256_set1_epi32(-1))
+                                       : _mm256_set1_epi32(-1);
+            __m256i take = _mm256_andnot_si256(done, inside);
+            idx = _mm256_blendv_epi8(idx, t, take);
+            done = _mm256_or_si256(done, take);
+            if (pass == 0) {
+                if (_mm256_movemask_ps(_mm256_castsi256_ps(done)) == 0xff) break;
+                __m256 rr = _mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(pu, pu), _mm256_mul_ps(pv, pv)));
+                __m256 kk = _mm256_div_ps(shrink, _mm256_blendv_ps(one, rr, _mm256_cmp_ps(rr, zero, _CMP_GT_OQ)));
+                pu = _mm256_mul_ps(pu, kk);
+                pv = _mm256_mul_ps(pv, kk);
+            }
+        }
+        const uint16_t *mp = ind->atlas + vi * map;
+        __m256i code = _mm256_and_si256(_mm256_i32gather_epi32((const int *)mp, idx, 2), _mm256_set1_epi32(0xffff));
+        __m256i empty = _mm256_cmpgt_epi32(code, _mm256_set1_epi32((int)RS_PARA_MAX_CODE));
+        __m256 decoded = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(code), one), step);
+        __m256 limit = _mm256_add_ps(decoded, _mm256_add_ps(_mm256_mul_ps(wt, _mm256_add_ps(one, tan_t)), qbias));
+        __m256 vis = _mm256_or_ps(_mm256_castsi256_ps(empty), _mm256_cmp_ps(dist, limit, _CMP_LE_OQ));
+        vis = _mm256_and_ps(_mm256_and_ps(vis, front), ok);
+        sx = _mm256_add_ps(sx, _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.x), G)));
+        sy = _mm256_add_ps(sy, _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.y), G)));
+        sz = _mm256_add_ps(sz, _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.z), G)));
+    }
+    float bx[8], by[8], bz[8];
+    _mm256_storeu_ps(bx, sx);
+    _mm256_storeu_ps(by, sy);
+    _mm256_storeu_ps(bz, sz);
+    for (int i = 0; i < 8; i++) e[3 * i] = bx[i], e[3 * i + 1] = by[i], e[3 * i + 2] = bz[i];
+}
+#endif
+
 static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
 {
     (void)worker;
@@ -251,7 +372,25 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     uint32_t a0 = ind->assign_start[t], a1 = ind->assign_start[t + 1];
     const uint32_t R = ind->opt.para_res;
     const size_t map = (size_t)R * R;
-    for (uint32_t a = 0; a < ind->tile_w[t]; a++) {
+    uint32_t a = 0;
+#ifdef GI_HAVE_X86
+    if (ind->para && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
+        for (; a + 8 <= ind->tile_w[t]; a += 8) {
+            uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
+            float e8[24];
+            gi__accumulate8_avx2(ind, ind->split_px + k, ind->split_py + k, ind->split_pz + k, ind->split_nx + k,
+                                 ind->split_ny + k, ind->split_nz + k, a0, a1, e8);
+            for (int i = 0; i < 8; i++) {
+                float *e = ind->split_e + 3 * (size_t)(k + (uint32_t)i);
+                int valid = ind->split_valid[k + (uint32_t)i] != 0;
+                e[0] = valid ? e8[3 * i] * weight : 0.0f;
+                e[1] = valid ? e8[3 * i + 1] * weight : 0.0f;
+                e[2] = valid ? e8[3 * i + 2] * weight : 0.0f;
+            }
+        }
+    }
+#endif
+    for (; a < ind->tile_w[t]; a++) {
         uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
         float *e = ind->split_e + 3 * (size_t)k;
         e[0] = e[1] = e[2] = 0.0f;
@@ -305,6 +444,58 @@ void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_r
 
 /* ---------------------------------------------------------- 9. filter */
 
+#ifdef GI_HAVE_X86
+/* Laine's box filter for 8 interior pixels x..x+7 of row y (every window
+ * pixel on screen horizontally), lane-wise with the scalar loop's operations
+ * in its order: the same bits. Rows outside the image are skipped for all
+ * lanes, as the scalar loop does. */
+__attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, int x, int y, float *out)
+{
+    const gi_indirect *ind = &f->ind;
+    const rs_gbuffer *g = &f->gbuf;
+    const int H = (int)f->height, n = (int)ind->n, m = (int)ind->m;
+    const size_t i0 = (size_t)y * f->width + (size_t)x;
+    const __m256 a2 = _mm256_set1_ps(ind->alpha * ind->alpha), beta = _mm256_set1_ps(ind->opt.beta);
+    const __m256 px = _mm256_loadu_ps(g->pos_x + i0), py = _mm256_loadu_ps(g->pos_y + i0),
+                 pz = _mm256_loadu_ps(g->pos_z + i0);
+    const __m256 nx = _mm256_loadu_ps(g->nrm_x + i0), ny = _mm256_loadu_ps(g->nrm_y + i0),
+                 nz = _mm256_loadu_ps(g->nrm_z + i0);
+    const __m256i empty = _mm256_set1_epi32((int)RS_GBUFFER_EMPTY);
+    const __m256i idx3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, ws = ar, one = _mm256_set1_ps(1.0f);
+    for (int dy = 0; dy < m; dy++) {
+        int ty = y + dy - m / 2;
+        if (ty < 0 || ty >= H) continue;
+        for (int dx = 0; dx < n; dx++) {
+            size_t j = (size_t)ty * f->width + (size_t)(x + dx - n / 2);
+            __m256i prim = _mm256_loadu_si256((const __m256i *)(g->prim + j));
+            __m256 valid = _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(prim, empty), _mm256_set1_epi32(-1)));
+            __m256 ddx = _mm256_sub_ps(_mm256_loadu_ps(g->pos_x + j), px);
+            __m256 ddy = _mm256_sub_ps(_mm256_loadu_ps(g->pos_y + j), py);
+            __m256 ddz = _mm256_sub_ps(_mm256_loadu_ps(g->pos_z + j), pz);
+            __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ddx, ddx), _mm256_mul_ps(ddy, ddy)), _mm256_mul_ps(ddz, ddz));
+            __m256 nd = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_loadu_ps(g->nrm_x + j)),
+                                                    _mm256_mul_ps(ny, _mm256_loadu_ps(g->nrm_y + j))),
+                                      _mm256_mul_ps(nz, _mm256_loadu_ps(g->nrm_z + j)));
+            __m256 take = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(d2, a2, _CMP_LT_OQ), _mm256_cmp_ps(nd, beta, _CMP_GT_OQ)));
+            const float *e = ind->combined + 3 * j;
+            ar = _mm256_add_ps(ar, _mm256_and_ps(take, _mm256_i32gather_ps(e, idx3, 4)));
+            ag = _mm256_add_ps(ag, _mm256_and_ps(take, _mm256_i32gather_ps(e + 1, idx3, 4)));
+            ab = _mm256_add_ps(ab, _mm256_and_ps(take, _mm256_i32gather_ps(e + 2, idx3, 4)));
+            ws = _mm256_add_ps(ws, _mm256_and_ps(take, one));
+        }
+    }
+    float r[8], gg[8], b[8], w[8];
+    _mm256_storeu_ps(r, ar), _mm256_storeu_ps(gg, ag), _mm256_storeu_ps(b, ab), _mm256_storeu_ps(w, ws);
+    for (int k = 0; k < 8; k++) {
+        size_t i = i0 + (size_t)k;
+        float *o = out + 3 * (size_t)k;
+        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, ind->combined + 3 * i, 3 * sizeof(float));
+        else o[0] = r[k] / w[k], o[1] = gg[k] / w[k], o[2] = b[k] / w[k];
+    }
+}
+#endif
+
 static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -313,7 +504,22 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     const rs_gbuffer *g = &f->gbuf;
     const int W = (int)f->width, H = (int)f->height, n = (int)ind->n, m = (int)ind->m;
     const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
+    /* SIMD for the interior of the row: windows [x - n/2, x + 7 + n - 1 - n/2] on screen */
+    int simd_x0 = W, simd_x1 = W;
+#ifdef GI_HAVE_X86
+    if (ind->opt.filter == GI_FILTER_BOX && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
+        simd_x0 = n / 2;
+        simd_x1 = W - (n - 1 - n / 2) - 7; /* last x with x + 7 + (n - 1 - n/2) < W */
+    }
+#endif
     for (int x = 0; x < W; x++) {
+#ifdef GI_HAVE_X86
+        if (x >= simd_x0 && x < simd_x1) {
+            gi__filter8_avx2(f, x, (int)y, ind->filtered + 3 * ((size_t)y * f->width + (size_t)x));
+            x += 7;
+            continue;
+        }
+#endif
         size_t i = (size_t)y * f->width + (size_t)x;
         float *out = ind->filtered + 3 * i;
         if (g->prim[i] == RS_GBUFFER_EMPTY || ind->opt.filter == GI_FILTER_NONE) {

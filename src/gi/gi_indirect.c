@@ -164,18 +164,25 @@ done:
 
 /* ---------------------------------------------------------- 5. split */
 
+/* Image row y -> its tile row: tile column i holds pixels x = a n + i, so
+ * walking each tile column avoids a division per pixel (gi_split_index's
+ * mapping, written incrementally). */
 static void gi__split_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
     const rs_gbuffer *g = &f->gbuf;
-    for (uint32_t x = 0; x < f->width; x++) {
-        size_t i = (size_t)y * f->width + x;
-        uint32_t k = gi_split_index(ind, f->width, x, y);
-        ind->split_px[k] = g->pos_x[i], ind->split_py[k] = g->pos_y[i], ind->split_pz[k] = g->pos_z[i];
-        ind->split_nx[k] = g->nrm_x[i], ind->split_ny[k] = g->nrm_y[i], ind->split_nz[k] = g->nrm_z[i];
-        ind->split_valid[k] = g->prim[i] != RS_GBUFFER_EMPTY;
+    const size_t row = (size_t)y * f->width;
+    for (uint32_t i = 0; i < ind->n && i < f->width; i++) {
+        uint32_t t = (y % ind->m) * ind->n + i;
+        uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
+        for (uint32_t x = i; x < f->width; x += ind->n, k++) {
+            size_t s = row + x;
+            ind->split_px[k] = g->pos_x[s], ind->split_py[k] = g->pos_y[s], ind->split_pz[k] = g->pos_z[s];
+            ind->split_nx[k] = g->nrm_x[s], ind->split_ny[k] = g->nrm_y[s], ind->split_nz[k] = g->nrm_z[s];
+            ind->split_valid[k] = g->prim[s] != RS_GBUFFER_EMPTY;
+        }
     }
 }
 
@@ -434,9 +441,12 @@ static void gi__combine_row(void *p, uint32_t y, uint32_t worker)
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
-    for (uint32_t x = 0; x < f->width; x++) {
-        uint32_t k = gi_split_index(ind, f->width, x, y);
-        memcpy(ind->combined + 3 * ((size_t)y * f->width + x), ind->split_e + 3 * (size_t)k, 3 * sizeof(float));
+    const size_t row = (size_t)y * f->width;
+    for (uint32_t i = 0; i < ind->n && i < f->width; i++) { /* as gi__split_row */
+        uint32_t t = (y % ind->m) * ind->n + i;
+        uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
+        for (uint32_t x = i; x < f->width; x += ind->n, k++)
+            memcpy(ind->combined + 3 * (row + x), ind->split_e + 3 * (size_t)k, 3 * sizeof(float));
     }
 }
 

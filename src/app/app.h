@@ -15,6 +15,11 @@ int app_fail(const pf_error *err);
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
 
+/* Writes the PNG (--output, or `default_png`) and the linear PFM (--hdr, or
+ * the PNG's path with .pfm) of an image; the paths written go to png/pfm. */
+pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
+                          uint32_t height, char png[4096], char pfm[4096], pf_error *err);
+
 struct gi_indirect_options;
 /* The many-light options given on the command line (--method, --vpls, ...). */
 pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);

@@ -67,10 +67,6 @@ int app_reference(const pf_options *o)
     uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
     pf_isa isa;
     if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
-    if (o->indirect_only && o->direct_only) {
-        pf_error_set(&err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
-        return app_fail(&err);
-    }
     if (o->bounces > GI_REFERENCE_MAX_BOUNCES) {
         pf_error_set(&err, PF_ERR_ARGUMENT, "--bounces: %u is too many (at most %u)", o->bounces,
                      GI_REFERENCE_MAX_BOUNCES);
@@ -122,17 +118,9 @@ int app_reference(const pf_options *o)
     char png[4096], pfm[4096];
     if (r == PF_OK) {
         t0 = pf_time_now();
-        if (o->out_path) snprintf(png, sizeof png, "%s", o->out_path);
-        else snprintf(png, sizeof png, "out/%s-reference.png", stem);
-        if (o->hdr_path) snprintf(pfm, sizeof pfm, "%s", o->hdr_path);
-        else {
-            snprintf(pfm, sizeof pfm, "%s", png);
-            char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
-            if (dot && (!slash || dot > slash)) *dot = 0;
-            strncat(pfm, ".pfm", sizeof pfm - strlen(pfm) - 1);
-        }
-        r = pf_imageio_write_png(png, image, width, height, o->exposure, &err);
-        if (r == PF_OK) r = pf_imageio_write_pfm(pfm, image, width, height, &err);
+        char def[4096];
+        snprintf(def, sizeof def, "out/%s-reference.png", stem);
+        r = app_write_image(o, def, image, width, height, png, pfm, &err);
         pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     }
     int status = 0;

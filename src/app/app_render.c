@@ -72,18 +72,9 @@ int app_render(const pf_options *o)
 
     /* Output */
     t0 = pf_time_now();
-    char png[4096], pfm[4096];
-    if (o->out_path) snprintf(png, sizeof png, "%s", o->out_path);
-    else snprintf(png, sizeof png, "out/%s.png", stem);
-    if (o->hdr_path) snprintf(pfm, sizeof pfm, "%s", o->hdr_path);
-    else {
-        snprintf(pfm, sizeof pfm, "%s", png);
-        char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
-        if (dot && (!slash || dot > slash)) *dot = 0;
-        strncat(pfm, ".pfm", sizeof pfm - strlen(pfm) - 1);
-    }
-    r = pf_imageio_write_png(png, frame.final, width, height, o->exposure, &err);
-    if (r == PF_OK) r = pf_imageio_write_pfm(pfm, frame.final, width, height, &err);
+    char png[4096], pfm[4096], def[4096];
+    snprintf(def, sizeof def, "out/%s.png", stem);
+    r = app_write_image(o, def, frame.final, width, height, png, pfm, &err);
     if (r == PF_OK && o->dump_dir) r = gi_frame_dump_stages(&frame, o->dump_dir, &err);
     pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     int status = 0;

@@ -7,6 +7,7 @@
 #include "app.h"
 #include "gi_indirect.h"
 #include "pf_gltf.h"
+#include "pf_imageio.h"
 
 extern const unsigned char softgi_default_scene[];
 extern const unsigned long softgi_default_scene_size;
@@ -80,4 +81,20 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
                                                          : GI_FILTER_NONE;
     return PF_OK;
+}
+
+pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
+                          uint32_t height, char png[4096], char pfm[4096], pf_error *err)
+{
+    snprintf(png, 4096, "%s", o->out_path ? o->out_path : default_png);
+    if (o->hdr_path) snprintf(pfm, 4096, "%s", o->hdr_path);
+    else {
+        snprintf(pfm, 4096, "%s", png);
+        char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
+        if (dot && (!slash || dot > slash)) *dot = 0;
+        strncat(pfm, ".pfm", 4096 - strlen(pfm) - 1);
+    }
+    pf_result r = pf_imageio_write_png(png, rgb, width, height, o->exposure, err);
+    if (r == PF_OK) r = pf_imageio_write_pfm(pfm, rgb, width, height, err);
+    return r;
 }

@@ -14,86 +14,66 @@
 #include "pf_imageio.h"
 #include "test_util.h"
 
-#define BIN SOFTGI_BINARY
 #define DATA SOFTGI_TEST_DATA "/gltf/"
 
 static char g_tmp[256];
 
-static int run(const char *args, char *out, size_t size)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s %s", BIN, args);
-    int st = tu_run(cmd, out, size);
-    if (st < 0 || st > 2) fail_msg("'%s' ended abnormally (status %d):\n%s", cmd, st, out);
-    return st;
-}
-
-/* Runs and checks exit status and a message substring. */
-static void expect(const char *args, int status, const char *needle)
-{
-    char out[16384];
-    int st = run(args, out, sizeof out);
-    if (st != status || (needle && !strstr(out, needle)))
-        fail_msg("softgi %s\n  exit %d (want %d), output:\n%s\n  (want it to contain '%s')", args, st, status, out,
-                 needle ? needle : "");
-}
-
 static void test_usage_errors(void **state)
 {
     (void)state;
-    expect("--help", 0, "usage: softgi render");
-    expect("--version", 0, "softgi ");
-    expect("", 2, "no command given");
-    expect("frobnicate", 2, "unknown command 'frobnicate'");
-    expect("render --indirect-only --direct-only", 2, "exclude each other");
-    expect("render --tiles 4", 2, "expected NxM");
-    expect("render --tiles 0x4", 2, "--tiles n");
-    expect("render --clamp -1", 2, "--clamp");
-    expect("render --filter gauss", 2, "--filter 'gauss'");
-    expect("render --visibility ism", 2, "--visibility 'ism'");
-    expect("render --vpls 0", 2, "--vpls");
-    expect("render --bounces 0", 2, "--bounces");
-    expect("render --vpls 1000000 -q -o /dev/null/x.png", 2, "use fewer VPLs or --visibility raytrace");
-    expect("render --frob", 2, "unknown option '--frob'");
-    expect("render a.gltf b.gltf", 2, "unexpected argument");
-    expect("render --size", 2, "--size needs a value");
-    expect("render --size 0x10", 2, "--size width '0'");
-    expect("render --size 640", 2, "expected WxH");
-    expect("render --size 64x99999", 2, "--size height");
-    expect("render --size 12ax10", 2, "--size width");
-    expect("render --size 16384x16384", 2, "at most 67108864 pixels");
-    expect("render --threads 0", 2, "--threads '0'");
-    expect("render --threads 100000", 2, "--threads");
-    expect("render --threads -1", 2, "--threads");
-    expect("render --isa avx9000", 2, "--isa 'avx9000'");
-    expect("render --exposure inf", 2, "--exposure");
-    expect("render --exposure 1e99", 2, "--exposure");
-    expect("render --camera nan,0,0:0,0,1:60", 2, "--camera");
-    expect("render --camera 0,0,0:0,0,0:60", 2, "eye and target must differ");
-    expect("render --camera 0,0,0:0,0,1:180", 2, "fovy");
-    expect("render --camera 0,0,0:0,0,1", 2, "--camera");
-    expect("render --light point:1,2:1,1,1:1", 2, "expected point:x,y,z:r,g,b:I");
-    expect("render --light point:1,2,3:1,1,1:-1", 2, "must be >= 0");
-    expect("render --light spot:0,1,0:0,-1,0:40,30:1,1,1:1", 2, "inner < outer");
-    expect("render --light spot:0,1,0:0,0,0:10,30:1,1,1:1", 2, "direction must not be zero");
-    expect("render --light dir:0,-1,0:1,1,1", 2, "expected dir:dx,dy,dz:r,g,b:E");
-    expect("render --light area:0,0,0:1,1,1:1", 2, "type must be point, spot or dir");
+    tu_softgi_expect("--help", 0, "usage: softgi render");
+    tu_softgi_expect("--version", 0, "softgi ");
+    tu_softgi_expect("", 2, "no command given");
+    tu_softgi_expect("frobnicate", 2, "unknown command 'frobnicate'");
+    tu_softgi_expect("render --indirect-only --direct-only", 2, "exclude each other");
+    tu_softgi_expect("render --tiles 4", 2, "expected NxM");
+    tu_softgi_expect("render --tiles 0x4", 2, "--tiles n");
+    tu_softgi_expect("render --clamp -1", 2, "--clamp");
+    tu_softgi_expect("render --filter gauss", 2, "--filter 'gauss'");
+    tu_softgi_expect("render --visibility ism", 2, "--visibility 'ism'");
+    tu_softgi_expect("render --vpls 0", 2, "--vpls");
+    tu_softgi_expect("render --bounces 0", 2, "--bounces");
+    tu_softgi_expect("render --vpls 1000000 -q -o /dev/null/x.png", 2, "use fewer VPLs or --visibility raytrace");
+    tu_softgi_expect("render --frob", 2, "unknown option '--frob'");
+    tu_softgi_expect("render a.gltf b.gltf", 2, "unexpected argument");
+    tu_softgi_expect("render --size", 2, "--size needs a value");
+    tu_softgi_expect("render --size 0x10", 2, "--size width '0'");
+    tu_softgi_expect("render --size 640", 2, "expected WxH");
+    tu_softgi_expect("render --size 64x99999", 2, "--size height");
+    tu_softgi_expect("render --size 12ax10", 2, "--size width");
+    tu_softgi_expect("render --size 16384x16384", 2, "at most 67108864 pixels");
+    tu_softgi_expect("render --threads 0", 2, "--threads '0'");
+    tu_softgi_expect("render --threads 100000", 2, "--threads");
+    tu_softgi_expect("render --threads -1", 2, "--threads");
+    tu_softgi_expect("render --isa avx9000", 2, "--isa 'avx9000'");
+    tu_softgi_expect("render --exposure inf", 2, "--exposure");
+    tu_softgi_expect("render --exposure 1e99", 2, "--exposure");
+    tu_softgi_expect("render --camera nan,0,0:0,0,1:60", 2, "--camera");
+    tu_softgi_expect("render --camera 0,0,0:0,0,0:60", 2, "eye and target must differ");
+    tu_softgi_expect("render --camera 0,0,0:0,0,1:180", 2, "fovy");
+    tu_softgi_expect("render --camera 0,0,0:0,0,1", 2, "--camera");
+    tu_softgi_expect("render --light point:1,2:1,1,1:1", 2, "expected point:x,y,z:r,g,b:I");
+    tu_softgi_expect("render --light point:1,2,3:1,1,1:-1", 2, "must be >= 0");
+    tu_softgi_expect("render --light spot:0,1,0:0,-1,0:40,30:1,1,1:1", 2, "inner < outer");
+    tu_softgi_expect("render --light spot:0,1,0:0,0,0:10,30:1,1,1:1", 2, "direction must not be zero");
+    tu_softgi_expect("render --light dir:0,-1,0:1,1,1", 2, "expected dir:dx,dy,dz:r,g,b:E");
+    tu_softgi_expect("render --light area:0,0,0:1,1,1:1", 2, "type must be point, spot or dir");
 }
 
 static void test_bad_scenes(void **state)
 {
     (void)state;
-    expect("render /nonexistent/scene.gltf", 1, "no such file");
-    expect("render " SOFTGI_TEST_DATA, 1, "not a regular file");
-    expect("render " DATA "bad_json.gltf", 1, "not a loadable glTF");
-    expect("render " DATA "bad_truncated.glb", 1, "bad_truncated.glb");
-    expect("render " DATA "bad_nan.gltf", 1, "not finite");
-    expect("render " DATA "bad_index_range.gltf", 1, "out of range");
-    expect("render " DATA "bad_accessor_past_view.gltf", 1, "past the end");
-    expect("render " DATA "bad_missing_texture.gltf", 1, "could not be loaded");
-    expect("render " DATA "bad_only_degenerate.gltf", 1, "degenerate");
+    tu_softgi_expect("render /nonexistent/scene.gltf", 1, "no such file");
+    tu_softgi_expect("render " SOFTGI_TEST_DATA, 1, "not a regular file");
+    tu_softgi_expect("render " DATA "bad_json.gltf", 1, "not a loadable glTF");
+    tu_softgi_expect("render " DATA "bad_truncated.glb", 1, "bad_truncated.glb");
+    tu_softgi_expect("render " DATA "bad_nan.gltf", 1, "not finite");
+    tu_softgi_expect("render " DATA "bad_index_range.gltf", 1, "out of range");
+    tu_softgi_expect("render " DATA "bad_accessor_past_view.gltf", 1, "past the end");
+    tu_softgi_expect("render " DATA "bad_missing_texture.gltf", 1, "could not be loaded");
+    tu_softgi_expect("render " DATA "bad_only_degenerate.gltf", 1, "degenerate");
     /* a scene without a camera needs --camera */
-    expect("render " DATA "quad_u16.gltf -o /dev/null/x.png", 1, "has no camera");
+    tu_softgi_expect("render " DATA "quad_u16.gltf -o /dev/null/x.png", 1, "has no camera");
 }
 
 static void test_render_outputs_and_threads(void **state)
@@ -101,10 +81,10 @@ static void test_render_outputs_and_threads(void **state)
     (void)state;
     char args[1024], out1[16384], out2[16384];
     snprintf(args, sizeof args, "render --size 96x72 --isa sse2 --threads 1 --hash -o %s/a/b/c1.png", g_tmp);
-    assert_int_equal(run(args, out1, sizeof out1), 0);
+    assert_int_equal(tu_softgi_run(args, out1, sizeof out1), 0);
     snprintf(args, sizeof args, "render --size 96x72 --isa sse2 --threads 2 --hash -o %s/c2.png --hdr %s/c2.pfm", g_tmp,
              g_tmp);
-    assert_int_equal(run(args, out2, sizeof out2), 0);
+    assert_int_equal(tu_softgi_run(args, out2, sizeof out2), 0);
     const char *h1 = strstr(out1, "hash "), *h2 = strstr(out2, "hash ");
     assert_non_null(h1);
     assert_non_null(h2);
@@ -131,13 +111,13 @@ static void test_render_outputs_and_threads(void **state)
     char out3[16384];
     snprintf(args, sizeof args,
              "render --size 96x72 --isa sse2 --hash -q -o %s/d.png --light dir:0.3,-1,0.2:1,1,1:2", g_tmp);
-    assert_int_equal(run(args, out3, sizeof out3), 0);
+    assert_int_equal(tu_softgi_run(args, out3, sizeof out3), 0);
     assert_int_not_equal(strncmp(strstr(out3, "hash "), h1, 21), 0);
     /* an unwritable output is a clean error */
-    expect("render --size 8x8 -q -o /proc/softgi-test/x.png", 1, "cannot");
+    tu_softgi_expect("render --size 8x8 -q -o /proc/softgi-test/x.png", 1, "cannot");
     /* a scene without a camera renders once one is given */
     snprintf(args, sizeof args, "render " DATA "quad_u16.gltf --camera 0,0,3:0,0,0:50 --light point:0,0,2:1,1,1:1 --size 16x16 -q -o %s/q.png", g_tmp);
-    assert_int_equal(run(args, out3, sizeof out3), 0);
+    assert_int_equal(tu_softgi_run(args, out3, sizeof out3), 0);
 }
 
 static int setup(void **state)

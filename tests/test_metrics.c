@@ -25,7 +25,6 @@
 #include "pf_imageio.h"
 #include "test_util.h"
 
-#define BIN SOFTGI_BINARY
 
 static char g_tmp[256];
 
@@ -317,22 +316,19 @@ static void test_view_depth_files(void **state)
 
 /* ---------------------------------------------------------------- the command */
 
+/* `softgi compare ARGS` */
 static int run(const char *args, char *out, size_t size)
 {
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s compare %s", BIN, args);
-    int st = tu_run(cmd, out, size);
-    if (st < 0 || st > 2) fail_msg("'%s' ended abnormally (status %d):\n%s", cmd, st, out);
-    return st;
+    char a[4096];
+    snprintf(a, sizeof a, "compare %s", args);
+    return tu_softgi_run(a, out, size);
 }
 
 static void expect(const char *args, int status, const char *needle)
 {
-    char out[16384];
-    int st = run(args, out, sizeof out);
-    if (st != status || (needle && !strstr(out, needle)))
-        fail_msg("softgi compare %s\n  exit %d (want %d), output:\n%s\n  (want it to contain '%s')", args, st, status,
-                 out, needle ? needle : "");
+    char a[4096];
+    snprintf(a, sizeof a, "compare %s", args);
+    tu_softgi_expect(a, status, needle);
 }
 
 #define SW 16

@@ -23,7 +23,6 @@
 #include "pf_sequence.h"
 #include "test_util.h"
 
-#define BIN SOFTGI_BINARY
 
 static char g_tmp[256];
 
@@ -48,15 +47,6 @@ static void expect_bad(const char *json, pf_result code, const char *needle)
     assert_int_equal(s.frames, 0); /* emptied */
     assert_null(s.lights);
     pf_sequence_free(&s);
-}
-
-static int run(const char *args, char *out, size_t size)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "%s %s", BIN, args);
-    int st = tu_run(cmd, out, size);
-    if (st < 0 || st > 2) fail_msg("'%s' ended abnormally (status %d):\n%s", cmd, st, out);
-    return st;
 }
 
 static void write_file(const char *path, const char *text)
@@ -463,7 +453,7 @@ static void run_sequence(const char *seq, const char *dir, const char *extra, in
 {
     char args[2048], out[32768];
     snprintf(args, sizeof args, "sequence '%s' -o '%s' " FAST " --hash %s", seq, dir, extra);
-    int st = run(args, out, sizeof out);
+    int st = tu_softgi_run(args, out, sizeof out);
     if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
     for (int f = 0; f < 6; f++) {
         char key[32];
@@ -536,10 +526,10 @@ static void test_end_to_end(void **state)
 
     char args[4096], out[32768];
     snprintf(args, sizeof args, "compare --reference '%s' --name t2:'%s' --track 10,10 --track 40,30", d1, d2);
-    int st = run(args, out, sizeof out);
+    int st = tu_softgi_run(args, out, sizeof out);
     if (st != 0 || !strstr(out, "| t2 | 6 | 0 | 0 |")) fail_msg("softgi %s: exit %d\n%s", args, st, out);
     snprintf(args, sizeof args, "compare --reference '%s' --name light:'%s'", d1, d3);
-    st = run(args, out, sizeof out);
+    st = tu_softgi_run(args, out, sizeof out);
     if (st != 0 || !strstr(out, "| light | 6 |")) fail_msg("softgi %s: exit %d\n%s", args, st, out);
 
     /* a shorter run into the same folder removes the extra frames */
@@ -547,7 +537,7 @@ static void test_end_to_end(void **state)
     snprintf(shortseq, sizeof shortseq, "%s/short.seq.json", g_tmp);
     write_file(shortseq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [32, 24]}");
     snprintf(args, sizeof args, "sequence '%s' -o '%s' -q --direct-only --shadow-size 64", shortseq, d2);
-    st = run(args, out, sizeof out);
+    st = tu_softgi_run(args, out, sizeof out);
     if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
     snprintf(path, sizeof path, "%s/frame_0001.view", d2);
     assert_true(tu_file_exists(path));
@@ -559,51 +549,42 @@ static void test_end_to_end(void **state)
     assert_false(tu_file_exists(path));
 }
 
-static void expect_cli(const char *args, int status, const char *needle)
-{
-    char out[16384];
-    int st = run(args, out, sizeof out);
-    if (st != status || !strstr(out, needle))
-        fail_msg("softgi %s\n  exit %d (want %d), output:\n%s\n  (want it to contain '%s')", args, st, status, out,
-                 needle);
-}
-
 static void test_cli_errors(void **state)
 {
     (void)state;
     char seq[512], args[2048];
-    expect_cli("sequence", 2, "give the sequence file");
-    expect_cli("sequence /nonexistent/a.seq.json", 1, "/nonexistent/a.seq.json: cannot open the sequence file");
+    tu_softgi_expect("sequence", 2, "give the sequence file");
+    tu_softgi_expect("sequence /nonexistent/a.seq.json", 1, "/nonexistent/a.seq.json: cannot open the sequence file");
 
     snprintf(seq, sizeof seq, "%s/bad.seq.json", g_tmp);
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,");
     snprintf(args, sizeof args, "sequence '%s'", seq);
-    expect_cli(args, 1, "bad.seq.json: JSON ends too early");
+    tu_softgi_expect(args, 1, "bad.seq.json: JSON ends too early");
 
     write_file(seq, "{\"scene\": \"missing.gltf\", \"frames\": 3}");
-    expect_cli(args, 1, "missing.gltf");
+    tu_softgi_expect(args, 1, "missing.gltf");
 
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,"
                     " \"lights\": [{\"light\": 4, \"keys\": [{\"frame\": 0, \"intensity\": 2}]}]}");
-    expect_cli(args, 1, "lights[0]: the scene has no light 4 (it has 1)");
+    tu_softgi_expect(args, 1, "lights[0]: the scene has no light 4 (it has 1)");
 
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,"
                     " \"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"direction\": [0,1,0]}]}]}");
-    expect_cli(args, 1, "is a point light, it has no direction");
+    tu_softgi_expect(args, 1, "is a point light, it has no direction");
 
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"camera\": [{\"frame\": 0,"
                     " \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 40}]}");
     snprintf(args, sizeof args, "sequence '%s' --camera 0,0,0:0,0,1:40", seq);
-    expect_cli(args, 2, "--camera: ");
+    tu_softgi_expect(args, 2, "--camera: ");
 
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"lights\": [{\"type\": \"point\","
                     " \"position\": [0.2,0.3,0.2], \"intensity\": 1}]}");
     snprintf(args, sizeof args, "sequence '%s' --light point:0,0,0:1,1,1:1", seq);
-    expect_cli(args, 2, "--light: ");
+    tu_softgi_expect(args, 2, "--light: ");
 
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"track\": [[60, 40]]}");
     snprintf(args, sizeof args, "sequence '%s' --size 32x24", seq);
-    expect_cli(args, 2, "track[0]: pixel (60, 40) is outside the 32x24 image");
+    tu_softgi_expect(args, 2, "track[0]: pixel (60, 40) is outside the 32x24 image");
 
     /* with a "size" in the file, --size scales the tracked pixels */
     char dir[512], path[1024], line[64];
@@ -611,7 +592,7 @@ static void test_cli_errors(void **state)
                     " \"track\": [[60, 40]]}");
     snprintf(dir, sizeof dir, "%s/scaled", g_tmp);
     snprintf(args, sizeof args, "sequence '%s' --size 32x24 -q --direct-only --shadow-size 64 -o '%s'", seq, dir);
-    expect_cli(args, 0, "");
+    tu_softgi_expect(args, 0, "");
     snprintf(path, sizeof path, "%s/track.txt", dir);
     FILE *tf = fopen(path, "r");
     assert_non_null(tf);

@@ -59,7 +59,7 @@ static inline void tu_make_scene(pf_scene *s, const tu_quad *quads, uint32_t cou
  * returns the exit status (or -1). */
 static inline int tu_run(const char *cmd, char *out, size_t size)
 {
-    char full[8192];
+    char full[8320];
     snprintf(full, sizeof full, "%s 2>&1", cmd);
     FILE *p = popen(full, "r");
     if (!p) return -1;
@@ -74,6 +74,31 @@ static inline int tu_file_exists(const char *path)
     struct stat st;
     return stat(path, &st) == 0;
 }
+
+#ifdef SOFTGI_BINARY
+/* Runs `softgi ARGS`, output (stdout + stderr) into out; fails the test if
+ * the program ended abnormally (a crash, or a status other than 0, 1, 2).
+ * Needs <cmocka.h> included before this header. */
+static inline int tu_softgi_run(const char *args, char *out, size_t size)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "%s %s", SOFTGI_BINARY, args);
+    int st = tu_run(cmd, out, size);
+    if (st < 0 || st > 2) fail_msg("'%s' ended abnormally (status %d):\n%s", cmd, st, out);
+    return st;
+}
+
+/* Runs `softgi ARGS` and checks its exit status and (unless NULL) that the
+ * output contains `needle`. */
+static inline void tu_softgi_expect(const char *args, int status, const char *needle)
+{
+    char out[16384];
+    int st = tu_softgi_run(args, out, sizeof out);
+    if (st != status || (needle && !strstr(out, needle)))
+        fail_msg("softgi %s\n  exit %d (want %d), output:\n%s\n  (want it to contain '%s')", args, st, status, out,
+                 needle ? needle : "");
+}
+#endif
 
 /* A fresh temporary folder /tmp/<tag>-XXXXXX into buf (0 on success), and
  * its recursive removal (0 on success): cmocka group setup/teardown bodies. */

@@ -18,6 +18,11 @@
 
 static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
+typedef struct gi__lumkey {
+    float lum;
+    uint32_t index;
+} gi__lumkey;
+
 pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_error *err)
 {
     gi_indirect *ind = &f->ind;
@@ -49,6 +54,9 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->tile_h = calloc(T, sizeof(uint32_t));
     ind->assign_start = calloc(T + 1, sizeof(uint32_t));
     ind->assign = calloc(o.vpls, sizeof(uint32_t));
+    ind->sort_keys = calloc(o.vpls, sizeof(gi__lumkey));
+    ind->tile_of = calloc(o.vpls, sizeof(uint32_t));
+    ind->cursor = calloc(T, sizeof(uint32_t));
     float **planes[] = {&ind->split_px, &ind->split_py, &ind->split_pz, &ind->split_nx, &ind->split_ny, &ind->split_nz};
     for (size_t k = 0; k < 6; k++) *planes[k] = calloc(px, sizeof(float));
     ind->split_valid = calloc(px, sizeof(uint32_t));
@@ -56,7 +64,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->combined = calloc(3 * px, sizeof(float));
     ind->filtered = calloc(3 * px, sizeof(float));
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
-             ind->split_e && ind->combined && ind->filtered;
+             ind->split_e && ind->combined && ind->filtered && ind->sort_keys && ind->tile_of && ind->cursor;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
     if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
         return pf_error_set(err, PF_ERR_ARGUMENT,
@@ -73,8 +81,10 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         /* +64 bytes: the SIMD accumulation gathers 4 bytes at a 2-byte texel */
         ind->atlas = malloc(rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
         ind->frames = calloc(o.vpls, sizeof(rs_para_frame));
+        ind->map_pos = calloc(o.vpls, sizeof(pf_vec3));
+        ind->map_nrm = calloc(o.vpls, sizeof(pf_vec3));
         ind->range = rs_para_default_range(s);
-        ok = ind->atlas && ind->frames;
+        ok = ind->atlas && ind->frames && ind->map_pos && ind->map_nrm;
     }
     if (!ok) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the indirect-light buffers");
     /* tile (i, j): columns i, i + n, ... and rows j, j + m, ... */
@@ -97,7 +107,8 @@ void gi_indirect_free(gi_indirect *ind)
     gi_vpl_set_free(&ind->vpls);
     rs_para_context_destroy(ind->para);
     free(ind->atlas);
-    free(ind->frames);
+    free(ind->frames), free(ind->map_pos), free(ind->map_nrm);
+    free(ind->sort_keys), free(ind->tile_of), free(ind->cursor);
     free(ind->tile_x0), free(ind->tile_w), free(ind->tile_h), free(ind->assign), free(ind->assign_start);
     free(ind->split_px), free(ind->split_py), free(ind->split_pz);
     free(ind->split_nx), free(ind->split_ny), free(ind->split_nz), free(ind->split_valid);
@@ -134,32 +145,28 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     gi_indirect *ind = &f->ind;
     ind->maps_rendered = 0;
     if (!ind->para) return;
-    uint32_t R = ind->opt.para_res, n = 0;
-    size_t map = (size_t)R * R;
-    /* moved VPLs are rendered into the slots after the set, then copied to
-     * their own slots, so the call renders them all at once */
-    pf_vec3 *pos = malloc(sizeof(pf_vec3) * (ind->vpls.count + 1)), *nrm = malloc(sizeof(pf_vec3) * (ind->vpls.count + 1));
-    uint32_t *slot = malloc(sizeof(uint32_t) * (ind->vpls.count + 1));
-    uint16_t *tmp = NULL;
-    if (!pos || !nrm || !slot) goto done;
-    for (uint32_t i = 0; i < ind->vpls.count; i++) {
+    const size_t map = (size_t)ind->opt.para_res * ind->opt.para_res;
+    /* Each run of consecutive slots whose VPL is new or moved is rendered in
+     * one call, straight into its slots (the call spreads the run's maps
+     * over the workers); unmoved VPLs keep last frame's maps. */
+    uint32_t N = ind->vpls.count;
+    for (uint32_t i = 0; i < N;) {
         const gi_vpl *v = &ind->vpls.v[i];
-        if (!v->moved && i < ind->atlas_slots) continue;
-        pos[n] = v->pos;
-        nrm[n] = v->nrm;
-        slot[n++] = i;
-        ind->frames[i] = rs_para_frame_make(v->pos, v->nrm);
+        if (!v->moved && i < ind->atlas_slots) {
+            i++;
+            continue;
+        }
+        uint32_t start = i;
+        for (; i < N && (ind->vpls.v[i].moved || i >= ind->atlas_slots); i++) {
+            ind->map_pos[i] = ind->vpls.v[i].pos;
+            ind->map_nrm[i] = ind->vpls.v[i].nrm;
+            ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+        }
+        rs_para_render(ind->atlas + start * map, ind->para, f->jobs, ind->map_pos + start, ind->map_nrm + start,
+                       i - start, ind->range, NULL);
+        ind->maps_rendered += i - start;
     }
-    if (n) {
-        tmp = malloc(rs_para_atlas_bytes(R, n));
-        if (!tmp) goto done;
-        rs_para_render(tmp, ind->para, f->jobs, pos, nrm, n, ind->range, NULL);
-        for (uint32_t k = 0; k < n; k++) memcpy(ind->atlas + slot[k] * map, tmp + k * map, map * sizeof(uint16_t));
-    }
-    ind->atlas_slots = ind->vpls.count;
-    ind->maps_rendered = n;
-done:
-    free(tmp), free(pos), free(nrm), free(slot);
+    ind->atlas_slots = N;
 }
 
 /* ---------------------------------------------------------- 5. split */
@@ -190,10 +197,6 @@ void gi_stage_split(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__split_row, 
 
 /* ---------------------------------------------------------- 6. assign */
 
-typedef struct gi__lumkey {
-    float lum;
-    uint32_t index;
-} gi__lumkey;
 
 static int gi__by_lum(const void *a, const void *b)
 {
@@ -206,13 +209,8 @@ void gi_stage_assign(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     uint32_t T = ind->n * ind->m, N = ind->vpls.count;
-    gi__lumkey *keys = malloc(sizeof(gi__lumkey) * (N + 1));
-    uint32_t *tile_of = malloc(sizeof(uint32_t) * (N + 1));
-    if (!keys || !tile_of) {
-        free(keys), free(tile_of);
-        memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
-        return;
-    }
+    gi__lumkey *keys = ind->sort_keys;
+    uint32_t *tile_of = ind->tile_of;
     for (uint32_t i = 0; i < N; i++) keys[i] = (gi__lumkey){gi__lum(ind->vpls.v[i].intensity), i};
     qsort(keys, N, sizeof *keys, gi__by_lum);
     /* deal in boustrophedon order: 0..T-1, T-1..0, ... so each tile's share
@@ -224,12 +222,8 @@ void gi_stage_assign(gi_frame *f)
     memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
     for (uint32_t i = 0; i < N; i++) ind->assign_start[tile_of[i] + 1]++;
     for (uint32_t t = 0; t < T; t++) ind->assign_start[t + 1] += ind->assign_start[t];
-    uint32_t *cursor = malloc(sizeof(uint32_t) * T);
-    if (cursor) {
-        memcpy(cursor, ind->assign_start, sizeof(uint32_t) * T);
-        for (uint32_t i = 0; i < N; i++) ind->assign[cursor[tile_of[i]]++] = i; /* VPL order within a tile */
-    }
-    free(cursor), free(keys), free(tile_of);
+    memcpy(ind->cursor, ind->assign_start, sizeof(uint32_t) * T);
+    for (uint32_t i = 0; i < N; i++) ind->assign[ind->cursor[tile_of[i]]++] = i; /* VPL order within a tile */
 }
 
 /* ---------------------------------------------------------- 7. accumulate */

@@ -61,6 +61,10 @@ typedef struct gi_indirect {
     rs_para_frame *frames;
     float range;
     uint32_t maps_rendered;   /* this frame */
+    pf_vec3 *map_pos, *map_nrm; /* VPL positions / normals as the map renderer takes them */
+    /* per-frame scratch, allocated once at init for the VPL budget */
+    void *sort_keys;          /* luminance keys for gi_stage_assign */
+    uint32_t *tile_of, *cursor;
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */

@@ -73,6 +73,8 @@ struct rs_scratch {
     float *clip; /* 4 * vertex_count: x, y, z, w per vertex (AoS, 16-byte rows) */
     uint8_t *cluster_visible;
     rs__chunk *chunks; /* chunk_count */
+    rs_stats *tile_stats; /* rs_render: one per tile, grown with the largest target */
+    uint32_t tile_stats_cap;
 };
 
 struct rs_context {
@@ -203,6 +205,7 @@ void rs_scratch_destroy(rs_scratch *s)
     if (!s) return;
     free(s->clip);
     free(s->cluster_visible);
+    free(s->tile_stats);
     if (s->chunks)
         for (uint32_t c = 0; c < s->chunk_count; c++) rs__chunk_free(&s->chunks[c]);
     free(s->chunks);
@@ -1080,8 +1083,10 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     rs__pass_state st;
     if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
     uint32_t tiles = st.tiles_x * st.tiles_y;
-    rs_stats *tile_stats = calloc(tiles, sizeof *tile_stats);
-    if (!tile_stats) abort();
+    rs_scratch *sc = ctx->scratch;
+    if (!rs__grow((void **)&sc->tile_stats, &sc->tile_stats_cap, tiles, sizeof(rs_stats))) abort();
+    rs_stats *tile_stats = sc->tile_stats;
+    memset(tile_stats, 0, sizeof(rs_stats) * tiles);
     rs__tile_ctx tc = {&st, tile_stats};
     pf_jobs *jobs = ctx->jobs;
     uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
@@ -1092,7 +1097,6 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &tc, tiles, 1, &sj, 1);
     pf_jobs_wait(jobs, tj);
     rs__finish_stats(&st, tile_stats, stats);
-    free(tile_stats);
 }
 
 void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t, rs_stats *stats)

@@ -30,7 +30,9 @@ static void test_usage_errors(void **state)
     tu_softgi_expect("render --tiles 0x4", 2, "--tiles n");
     tu_softgi_expect("render --clamp -1", 2, "--clamp");
     tu_softgi_expect("render --filter gauss", 2, "--filter 'gauss'");
-    tu_softgi_expect("render --visibility ism", 2, "--visibility 'ism'");
+    tu_softgi_expect("render --visibility fog", 2, "--visibility 'fog'");
+    tu_softgi_expect("render --param vpls", 2, "--param 'vpls': expected KEY=VALUE");
+    tu_softgi_expect("render --param nosuch=1", 2, "method ir has no such parameter");
     tu_softgi_expect("render --vpls 0", 2, "--vpls");
     tu_softgi_expect("render --bounces 0", 2, "--bounces");
     tu_softgi_expect("render --vpls 1000000 -q -o /dev/null/x.png", 2, "use fewer VPLs or --visibility raytrace");

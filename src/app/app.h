@@ -45,4 +45,12 @@ int app_reference(const pf_options *opts);
  * Parses its own arguments (argv[1] == "compare"). */
 int app_compare(int argc, char **argv);
 
+/* `softgi view [SCENE]`: the interactive GLFW viewer and frame-stage
+ * stepper (app_view.c). */
+int app_view(const pf_options *opts);
+
+/* `softgi evaluate`: Hedman 2017 Table 1 on our sequences, every method
+ * against per-frame references (app_evaluate.c). Parses its own arguments. */
+int app_evaluate(int argc, char **argv);
+
 #endif

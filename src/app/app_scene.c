@@ -76,6 +76,13 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     io->tiles_m = o->tiles_m;
     io->no_interleave = o->no_interleave;
     io->visibility_raytrace = o->visibility_raytrace;
+    io->visibility_ism = o->visibility_ism;
+    if (o->visibility_ism && o->visibility_raytrace)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
+    for (uint32_t i = 0; i < o->param_count; i++) {
+        pf_result r = gi_params_add(&io->params, o->params[i], err);
+        if (r != PF_OK) return r;
+    }
     io->clamp = o->clamp_set ? o->clamp : -1.0f;
     io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL

@@ -11,6 +11,7 @@ int main(int argc, char **argv)
 {
     pf_fpenv_set();
     if (argc > 1 && !strcmp(argv[1], "compare")) return app_compare(argc, argv);
+    if (argc > 1 && !strcmp(argv[1], "evaluate")) return app_evaluate(argc, argv);
     pf_options opts;
     pf_error err;
     pf_result r = pf_cli_parse(&opts, argc, argv, &err);
@@ -30,5 +31,6 @@ int main(int argc, char **argv)
         return !strcmp(opts.scene_path, "frame") ? app_bench_frame(&opts) : app_bench_raster(&opts);
     if (!strcmp(opts.command, "sequence")) return app_sequence(&opts);
     if (!strcmp(opts.command, "reference")) return app_reference(&opts);
+    if (!strcmp(opts.command, "view")) return app_view(&opts);
     return app_render(&opts);
 }

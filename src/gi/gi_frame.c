@@ -44,6 +44,11 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
     f->show_direct = 1;
     pf_result r = rs_gbuffer_init(&f->gbuf, width, height, err);
     if (r != PF_OK) return r;
+    r = gi_area_lights_build(&f->area, scene, err);
+    if (r != PF_OK) {
+        gi_frame_free(f);
+        return r;
+    }
     size_t n = (size_t)width * height * 3;
     f->direct = calloc(n, sizeof(float));
     f->final = calloc(n, sizeof(float));
@@ -71,6 +76,7 @@ void gi_frame_free(gi_frame *f)
     rs_shadow_set_free(&f->shadows);
     free(f->shadow_lights);
     gi_indirect_free(&f->ind);
+    gi_area_lights_free(&f->area);
     free(f->direct);
     free(f->final);
     memset(f, 0, sizeof *f);

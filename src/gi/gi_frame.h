@@ -39,6 +39,7 @@
 #include "rs_gbuffer.h"
 #include "rs_raster.h"
 #include "rs_shadow.h"
+#include "gi_area.h"
 #include "gi_indirect.h"
 
 typedef enum gi_buffer_id {
@@ -69,6 +70,7 @@ typedef struct gi_frame {
     rs_context *raster; /* NULL: only the ray-traced frame is available */
     pf_camera camera;
     uint32_t width, height;
+    gi_area_lights area;   /* the scene's emissive triangles (built at init) */
     /* buffers (owned, frame lifetime) */
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */

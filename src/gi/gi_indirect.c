@@ -39,13 +39,15 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if (!(o.beta > 0.0f)) o.beta = 0.8f;
     if (!o.para_res) o.para_res = RS_PARA_DEFAULT_RES;
     ind->opt = o;
+    if (o.visibility_ism) /* ISM: see gi_ism.c (issue 6) */
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility ism: not implemented yet");
     const pf_scene *s = f->scene;
     float diag = pf_v3_length(pf_v3_sub(s->bounds_max, s->bounds_min));
     ind->b = o.clamp > 0.0f ? o.clamp / (diag * diag) : INFINITY;
     ind->alpha = o.alpha_rel * diag;
     ind->n = o.tiles_n;
     ind->m = o.tiles_m;
-    pf_result r = o.method->create(&ind->method_state, err);
+    pf_result r = o.method->create(&ind->method_state, &o.params, err);
     if (r != PF_OK) return r;
     uint32_t T = ind->n * ind->m;
     size_t px = (size_t)f->width * f->height;
@@ -128,7 +130,8 @@ uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint
 void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    gi_vpl_inputs in = {f->scene, f->rt, f->jobs, &f->camera, ind->frame, ind->opt.vpls, ind->opt.bounces};
+    gi_vpl_inputs in = {f->scene,        f->rt,          f->jobs,   &f->camera, ind->frame, ind->opt.vpls,
+                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area};
     pf_error err;
     if (ind->opt.method->update(ind->method_state, &in, &ind->vpls, &err) != PF_OK) {
         /* only out-of-memory can fail here: render without VPLs, say so once */

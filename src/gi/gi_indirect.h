@@ -35,11 +35,13 @@ typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_
 
 typedef struct gi_indirect_options {
     const gi_vpl_method *method; /* NULL: Instant Radiosity */
+    gi_params params;            /* --param KEY=VALUE for the method */
     uint32_t vpls;               /* budget (0: 256) */
     uint32_t bounces;            /* (0: 3) */
     uint32_t tiles_n, tiles_m;   /* (0: 4 x 4) */
     int no_interleave;           /* 1 x 1 tiles: every pixel sees every VPL */
     int visibility_raytrace;     /* Embree shadow rays instead of paraboloid maps */
+    int visibility_ism;          /* imperfect shadow maps (Ritschel 2008) instead of exact paraboloid maps */
     float clamp;                 /* b = clamp / diagonal^2; 0 = off; < 0 = default 400 */
     gi_filter_kind filter;
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */

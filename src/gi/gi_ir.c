@@ -33,39 +33,15 @@ static const uint32_t gi__primes[] = {2,  3,  5,  7,  11, 13, 17, 19, 23, 29, 31
                                       137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199};
 #define GI__DIMS (sizeof gi__primes / sizeof gi__primes[0])
 
-double gi_halton(uint32_t i, uint32_t base)
-{
-    double f = 1.0, r = 0.0;
-    while (i > 0) {
-        f /= base;
-        r += f * (double)(i % base);
-        i /= base;
-    }
-    return r;
-}
-
-pf_result gi_vpl_set_reserve(gi_vpl_set *set, uint32_t count, pf_error *err)
-{
-    if (count <= set->cap) return PF_OK;
-    gi_vpl *v = realloc(set->v, sizeof(gi_vpl) * count);
-    if (!v) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u VPLs", count);
-    set->v = v;
-    set->cap = count;
-    return PF_OK;
-}
-
-void gi_vpl_set_free(gi_vpl_set *set)
-{
-    free(set->v);
-    memset(set, 0, sizeof *set);
-}
-
 typedef struct gi__ir_state {
     gi_vpl_set prev; /* last frame's set, for the moved flags */
 } gi__ir_state;
 
-static pf_result gi__ir_create(void **state, pf_error *err)
+static pf_result gi__ir_create(void **state, const gi_params *params, pf_error *err)
 {
+    static const char *const known[] = {NULL};
+    pf_result r = gi_params_check(params, "ir", known, err);
+    if (r != PF_OK) return r;
     *state = calloc(1, sizeof(gi__ir_state));
     return *state ? PF_OK : pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
 }
@@ -208,11 +184,3 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
 const gi_vpl_method gi_method_ir = {
     "ir", "Instant Radiosity (Keller 1997; survey Sec. 4.1)", gi__ir_create, gi__ir_update, gi__ir_destroy,
 };
-
-const gi_vpl_method *gi_vpl_method_find(const char *name)
-{
-    if (!name || !strcmp(name, "ir")) return &gi_method_ir;
-    return NULL;
-}
-
-const char *gi_vpl_method_names(void) { return "ir"; }

@@ -22,6 +22,8 @@
 #include "pf_jobs.h"
 #include "pf_rt.h"
 #include "pf_scene.h"
+#include "rs_gbuffer.h"
+#include "gi_area.h"
 
 typedef struct gi_vpl {
     pf_vec3 pos, nrm;
@@ -44,18 +46,44 @@ typedef struct gi_vpl_inputs {
     uint32_t frame;    /* frame number: seeds derive from it and from VPL ids */
     uint32_t budget;   /* VPL budget (--vpls) */
     uint32_t bounces;  /* light bounces (--bounces) */
+    /* This frame's G-buffer (directly visible points; SMC's X, TCAS's
+     * camera samples). NULL when a caller has none (unit tests): methods
+     * that need one then fail with a clear error. */
+    const rs_gbuffer *gbuf;
+    uint32_t width, height;
+    const gi_area_lights *area; /* the scene's emissive triangles (count may be 0); never NULL */
 } gi_vpl_inputs;
+
+/* Method parameters from `--param KEY=VALUE` (repeatable). A method reads
+ * the keys it knows with the gi_param_* helpers and rejects the others with
+ * gi_params_check, so a typo is an error, never silently ignored. */
+#define GI_MAX_PARAMS 32
+typedef struct gi_params {
+    uint32_t count;
+    const char *key[GI_MAX_PARAMS];
+    const char *value[GI_MAX_PARAMS];
+} gi_params;
+
+/* Splits "KEY=VALUE" into p (the strings must outlive p). */
+pf_result gi_params_add(gi_params *p, const char *key_eq_value, pf_error *err);
+/* Fails naming the first key of p that is not in `known` (NULL-terminated). */
+pf_result gi_params_check(const gi_params *p, const char *method, const char *const *known, pf_error *err);
+/* The value of `key` as an integer in [lo, hi] or a finite float in [lo, hi];
+ * *out keeps its default when the key is absent. p may be NULL. */
+pf_result gi_param_u32(const gi_params *p, const char *key, uint32_t lo, uint32_t hi, uint32_t *out, pf_error *err);
+pf_result gi_param_f32(const gi_params *p, const char *key, float lo, float hi, float *out, pf_error *err);
 
 typedef struct gi_vpl_method {
     const char *name;
     const char *paper; /* what it implements, for captions */
-    pf_result (*create)(void **state, pf_error *err);
+    /* params may be NULL (all defaults). */
+    pf_result (*create)(void **state, const gi_params *params, pf_error *err);
     /* Fills `out` (cleared first) with the frame's VPL set. */
     pf_result (*update)(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err);
     void (*destroy)(void *state);
 } gi_vpl_method;
 
-/* The methods softgi has, by name ("ir"). NULL if unknown. */
+/* The methods softgi has, by name ("ir", "iir", ...). NULL if unknown. */
 const gi_vpl_method *gi_vpl_method_find(const char *name);
 /* Comma-separated names, for messages. */
 const char *gi_vpl_method_names(void);
@@ -63,8 +91,14 @@ const char *gi_vpl_method_names(void);
 pf_result gi_vpl_set_reserve(gi_vpl_set *set, uint32_t count, pf_error *err);
 void gi_vpl_set_free(gi_vpl_set *set);
 
-/* The Instant Radiosity baseline (gi_ir.c). */
-extern const gi_vpl_method gi_method_ir;
+/* The methods (one file each). */
+extern const gi_vpl_method gi_method_ir;    /* gi_ir.c: Instant Radiosity (Keller 1997) */
+extern const gi_vpl_method gi_method_iir;   /* gi_iir.c: Incremental Instant Radiosity (Laine 2007) */
+extern const gi_vpl_method gi_method_smc;   /* gi_smc.c: Sequential Monte Carlo IR (Hedman 2017) */
+extern const gi_vpl_method gi_method_mir;   /* gi_mir.c: MIR-style resampled light paths (Hedman 2017 Sec. 5.1) */
+extern const gi_vpl_method gi_method_invtm; /* gi_invtm.c: inverse transform method on RSMs (Ritschel 2011) */
+extern const gi_vpl_method gi_method_tcas;  /* gi_tcas.c: Metropolis-Hastings RSM sampling (Barak 2013) */
+extern const gi_vpl_method gi_method_ssvp;  /* gi_ssvp.c: screen-space VPL propagation (Aranha) */
 
 /* Radical inverse in base `base` of index i (Halton), exact in double. */
 double gi_halton(uint32_t i, uint32_t base);

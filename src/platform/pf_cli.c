@@ -40,7 +40,8 @@ void pf_cli_usage(FILE *out)
           "  --no-interleave         every pixel sees every VPL\n"
           "  --clamp C               bounded geometry term b = C / diagonal^2 (default 400, 0 = off)\n"
           "  --filter box|bilateral|none  indirect-light filter (default box, Laine 2007 Fig. 5)\n"
-          "  --visibility paraboloid|raytrace  VPL visibility (default paraboloid maps)\n"
+          "  --visibility paraboloid|ism|raytrace  VPL visibility (default exact paraboloid maps)\n"
+          "  --param KEY=VALUE       a parameter of the VPL method (repeatable; see README)\n"
           "  --dump-stages DIR       write every stage's buffer as an image\n"
           "  --spp N                 reference: samples per pixel (default 64)\n"
           "  --raytrace              Embree primary rays and shadow rays (the reference\n"
@@ -194,6 +195,7 @@ static pf_result pf__uint(const char *opt, const char *s, uint32_t lo, uint32_t 
 pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
 {
     memset(o, 0, sizeof *o);
+    o->pipeline = -1;
     pf_result r = PF_OK;
     for (int i = 1; i < argc && r == PF_OK; i++) {
         const char *a = argv[i];
@@ -204,7 +206,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                                  "--exposure", "--frames", "--scenes", "--shadow-size",
                                                  "--vpls",     "--tiles",  "--clamp",  "--method",
                                                  "--bounces",  "--filter", "--visibility", "--dump-stages",
-                                                 "--spp"};
+                                                 "--spp",      "--param",  "--screenshot", "--pipeline"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -227,15 +229,28 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--bounces")) r = pf__uint(a, val, 1, 64, &o->bounces, err);
         else if (!strcmp(a, "--spp")) r = pf__uint(a, val, 1, 1u << 20, &o->spp, err);
         else if (!strcmp(a, "--method")) o->method = val;
+        else if (!strcmp(a, "--param")) {
+            if (o->param_count >= 32) r = pf_error_set(err, PF_ERR_ARGUMENT, "--param: at most 32 parameters");
+            else if (!strchr(val, '=') || val[0] == '=')
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--param '%s': expected KEY=VALUE", val);
+            else o->params[o->param_count++] = val;
+        }
         else if (!strcmp(a, "--dump-stages")) o->dump_dir = val;
+        else if (!strcmp(a, "--screenshot")) o->screenshot_path = val;
+        else if (!strcmp(a, "--pipeline")) {
+            if (!strcmp(val, "on")) o->pipeline = 1;
+            else if (!strcmp(val, "off")) o->pipeline = 0;
+            else r = pf_error_set(err, PF_ERR_ARGUMENT, "--pipeline '%s': expected on or off", val);
+        }
         else if (!strcmp(a, "--filter")) {
             o->filter = val;
             if (strcmp(val, "box") && strcmp(val, "bilateral") && strcmp(val, "none"))
                 r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral or none", val);
         } else if (!strcmp(a, "--visibility")) {
             if (!strcmp(val, "raytrace")) o->visibility_raytrace = 1;
+            else if (!strcmp(val, "ism")) o->visibility_ism = 1;
             else if (strcmp(val, "paraboloid"))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid or raytrace", val);
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid, ism or raytrace", val);
         } else if (!strcmp(a, "--clamp")) {
             if (!pf__float(val, strlen(val), &o->clamp) || o->clamp < 0.0f)
                 r = pf_error_set(err, PF_ERR_ARGUMENT, "--clamp '%s': expected a number >= 0 (0 = off)", val);
@@ -293,9 +308,11 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
     if (!o->help && !o->version) {
         if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
         if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0 &&
-            strcmp(o->command, "reference") != 0 && strcmp(o->command, "sequence") != 0)
+            strcmp(o->command, "reference") != 0 && strcmp(o->command, "sequence") != 0 &&
+            strcmp(o->command, "view") != 0)
             return pf_error_set(err, PF_ERR_ARGUMENT,
-                                "unknown command '%s' (softgi knows: render, reference, sequence, bench, compare)",
+                                "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, "
+                                "compare, evaluate)",
                                 o->command);
         if (!strcmp(o->command, "sequence") && !o->scene_path)
             return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");

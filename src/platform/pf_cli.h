@@ -37,9 +37,14 @@ typedef struct pf_options {
     float clamp;             /* bounded geometry term b = clamp / diag^2 (default 400); 0: off */
     int clamp_set;           /* --clamp given */
     const char *method;      /* VPL method (NULL: "ir") */
+    uint32_t param_count;    /* --param KEY=VALUE (repeatable): method parameters */
+    const char *params[32];
+    int visibility_ism;      /* --visibility ism: imperfect shadow maps */
     uint32_t bounces;        /* light bounces (0: 3) */
     const char *filter;      /* "box" (default), "bilateral", "none" */
     const char *dump_dir;    /* --dump-stages DIR */
+    const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
+    int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */

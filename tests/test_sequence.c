@@ -601,6 +601,80 @@ static void test_cli_errors(void **state)
     assert_string_equal(line, "30,20\n");
 }
 
+static int read_all(const char *path, char *buf, size_t size, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    *n = fread(buf, 1, size, f);
+    fclose(f);
+    return 1;
+}
+
+/* `sequence --reference` renders each frame with the path tracer: frame 0 is
+ * byte-identical to `softgi reference` of the same camera and light, and
+ * the run is the same for 1 and 2 threads. `evaluate` then builds its table
+ * from references and a method's frames, and rejects bad options. */
+static void test_reference_and_evaluate(void **state)
+{
+    (void)state;
+    char seq[512], args[4096], out[32768], dir[512], a[1024], b[1024];
+    snprintf(seq, sizeof seq, "%s/light.seq.json", g_tmp);
+    write_file(seq, k_light_seq);
+    char hash1[17] = "", hash2[17] = "";
+    for (int t = 1; t <= 2; t++) {
+        snprintf(dir, sizeof dir, "%s/ref%d", g_tmp, t);
+        snprintf(args, sizeof args,
+                 "sequence '%s' --reference --spp 4 --indirect-only --size 32x24 --isa sse2 --threads %d --hash -o '%s'",
+                 seq, t, dir);
+        int st = tu_softgi_run(args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+        assert_non_null(strstr(out, "path-traced reference"));
+        const char *h = strstr(out, "hash ");
+        assert_non_null(h);
+        assert_int_equal(sscanf(h, "hash %16s", t == 1 ? hash1 : hash2), 1);
+    }
+    assert_string_equal(hash1, hash2);
+    snprintf(a, sizeof a, "%s/single.pfm", g_tmp);
+    snprintf(args, sizeof args,
+             "reference --spp 4 --indirect-only --size 32x24 --isa sse2 -q -o '%s/single.png' --hdr '%s'", g_tmp, a);
+    tu_softgi_expect(args, 0, "");
+    snprintf(b, sizeof b, "%s/ref1/frame_0000.pfm", g_tmp);
+    static char ia[1 << 16], ib[1 << 16];
+    size_t na = 0, nb = 0;
+    assert_true(read_all(a, ia, sizeof ia, &na));
+    assert_true(read_all(b, ib, sizeof ib, &nb));
+    assert_int_equal(na, nb);
+    assert_memory_equal(ia, ib, na);
+    tu_softgi_expect("sequence x.seq.json --reference --raytrace --spp 0", 2, "--spp");
+    tu_softgi_expect("render --reference", 2, "--reference is an option of sequence");
+
+    /* evaluate: table with the method's row; the reference is reused */
+    snprintf(dir, sizeof dir, "%s/ev", g_tmp);
+    snprintf(args, sizeof args,
+             "evaluate --sequences '%s' --methods ir --size 32x24 --spp 4 --vpls 32 --isa sse2 --out '%s'", seq, dir);
+    int st = tu_softgi_run(args, out, sizeof out);
+    if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+    assert_non_null(strstr(out, "reference: 4 spp"));
+    st = tu_softgi_run(args, out, sizeof out);
+    if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+    assert_non_null(strstr(out, "reference: reusing"));
+    snprintf(a, sizeof a, "%s/table.md", dir);
+    static char table[1 << 16];
+    size_t nt = 0;
+    assert_true(read_all(a, table, sizeof table - 1, &nt));
+    table[nt] = 0;
+    assert_non_null(strstr(table, "## light"));
+    assert_non_null(strstr(table, "| ir | 6 |"));
+    snprintf(a, sizeof a, "%s/light/plot.svg", dir);
+    FILE *pf = fopen(a, "r");
+    assert_non_null(pf);
+    fclose(pf);
+    tu_softgi_expect("evaluate --methods ir,nosuch", 2, "unknown method 'nosuch'");
+    tu_softgi_expect("evaluate --frobnicate", 2, "unknown option '--frobnicate'");
+    tu_softgi_expect("evaluate --methods", 2, "--methods needs a value");
+    tu_softgi_expect("evaluate --methods ir,,iir", 2, "empty item");
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -619,6 +693,7 @@ int main(void)
         cmocka_unit_test(test_shipped_files), cmocka_unit_test(test_parse_fields),
         cmocka_unit_test(test_bad_inputs),    cmocka_unit_test(test_interpolation),
         cmocka_unit_test(test_end_to_end),    cmocka_unit_test(test_cli_errors),
+        cmocka_unit_test(test_reference_and_evaluate),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -1,12 +1,426 @@
-/* app_evaluate: `softgi evaluate`, the method evaluation (issue 5).
- * NOT IMPLEMENTED YET: says so and fails. */
+/* app_evaluate: `softgi evaluate`, Hedman 2017 Table 1 (and Fig. 7) on our
+ * sequences: every VPL method against per-frame path-traced references.
+ *
+ *   softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]
+ *                   [--size WxH] [--spp N] [--vpls N] [--threads N]
+ *                   [--full] [--rerun-reference] [--param KEY=VALUE ...] [-q]
+ *
+ * For each sequence file (default: the six in scenes/sequences: the McGuire
+ * Cornell box, Sibenik and the conference room, each with a moving camera and
+ * a moving light):
+ *   1. the reference: `softgi sequence FILE --reference --spp N` into
+ *      OUT/NAME/reference (kept and reused while OUT/NAME/reference/stamp
+ *      records the same size, spp and image kind; --rerun-reference forces it);
+ *   2. every method: `softgi sequence FILE --method M --vpls N` into
+ *      OUT/NAME/M (the method keeps its state over the frames, as in an
+ *      interactive session); a method that fails (e.g. one not implemented)
+ *      is reported in the table and skipped;
+ *   3. `softgi compare --reference OUT/NAME/reference --name M:OUT/NAME/M ...
+ *      --track (the sequence's tracked pixels) --table OUT/NAME/table.md
+ *      --plot OUT/NAME/plot.svg`: |E|, |E'| (Eq. 10), TID and RMSE.
+ * The tables of all sequences are gathered in OUT/table.md.
+ *
+ * By default only the indirect light is rendered and compared (--indirect-only
+ * for references and methods): the direct light is the same shadow-mapped
+ * term for every method, so leaving it in would only add the same error to
+ * each. --full compares the whole images instead.
+ *
+ * Everything runs in this process through the same functions as the
+ * commands (app_sequence, app_compare), with argument vectors built here, so
+ * the options are validated exactly as on the command line. */
+#include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
 
 #include "app.h"
+#include "gi_vpl.h"
+#include "pf_imageio.h"
+#include "pf_timer.h"
+
+#define EV_MAX_ITEMS 32
+#define EV_MAX_ARGS 96
+
+typedef struct ev__args {
+    const char *methods[EV_MAX_ITEMS];
+    uint32_t method_count;
+    const char *sequences[EV_MAX_ITEMS];
+    uint32_t sequence_count;
+    const char *out;
+    const char *size, *spp, *vpls, *threads, *isa;
+    const char *params[EV_MAX_ITEMS];
+    uint32_t param_count;
+    int full, rerun_reference, quiet;
+    char lists[2][4096]; /* storage for split --methods / --sequences */
+    char default_sequences[6][4200];
+} ev__args;
+
+static void ev__usage(FILE *f)
+{
+    fputs("usage: softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]\n"
+          "                       [--size WxH] [--spp N] [--vpls N] [--threads N] [--isa NAME]\n"
+          "                       [--param KEY=VALUE ...] [--full] [--rerun-reference] [-q]\n"
+          "\n"
+          "Hedman et al. 2017, Table 1 on softgi's sequences: for each sequence, per-frame\n"
+          "path-traced references (softgi sequence --reference), every method's frames\n"
+          "(softgi sequence --method M), and softgi compare's |E|, |E'|, TID and RMSE table\n"
+          "and Fig. 7-style plot. Writes OUT/NAME/{reference,METHOD}/frame_NNNN.*,\n"
+          "OUT/NAME/table.md, OUT/NAME/plot.svg and OUT/table.md.\n"
+          "\n"
+          "  --methods LIST      comma-separated VPL methods (default: all of ir, iir, smc, mir,\n"
+          "                      invtm, tcas, ssvp)\n"
+          "  --sequences LIST    comma-separated .seq.json files (default: scenes/sequences/\n"
+          "                      cornell-{camera,light}, sibenik-{camera,light},\n"
+          "                      conference-{camera,light})\n"
+          "  --out DIR           output folder (default out/evaluate)\n"
+          "  --size WxH          image size for every sequence (default 256x192)\n"
+          "  --spp N             reference samples per pixel (default 256)\n"
+          "  --vpls N            VPL budget of every method (default 256)\n"
+          "  --param KEY=VALUE   passed to every method that knows KEY (repeatable)\n"
+          "  --full              compare whole images (default: indirect light only)\n"
+          "  --rerun-reference   render the references even when a matching one exists\n",
+          f);
+}
+
+static int ev__fail(int code, const char *fmt, const char *a, const char *b)
+{
+    fprintf(stderr, "softgi: evaluate: ");
+    fprintf(stderr, fmt, a, b);
+    fprintf(stderr, "\n");
+    return code;
+}
+
+/* Splits a comma-separated list into items (in place in `store`). */
+static int ev__split(const char *list, char *store, size_t store_size, const char **items, uint32_t *count,
+                     const char *what)
+{
+    if (strlen(list) >= store_size) return ev__fail(2, "--%s: the list is too long%s", what, "");
+    strcpy(store, list);
+    *count = 0;
+    for (char *p = store; p;) {
+        char *c = strchr(p, ',');
+        if (c) *c = 0;
+        if (!*p) return ev__fail(2, "--%s '%s': empty item", what, list);
+        if (*count == EV_MAX_ITEMS) return ev__fail(2, "--%s: at most 32 items%s", what, "");
+        items[(*count)++] = p;
+        p = c ? c + 1 : NULL;
+    }
+    return 0;
+}
+
+static int ev__parse(ev__args *a, int argc, char **argv, int *help)
+{
+    memset(a, 0, sizeof *a);
+    a->out = "out/evaluate";
+    a->size = "256x192";
+    a->spp = "256";
+    a->vpls = "256";
+    for (int i = 2; i < argc; i++) {
+        const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
+            *help = 1;
+            return 0;
+        }
+        if (!strcmp(o, "--full")) a->full = 1;
+        else if (!strcmp(o, "--rerun-reference")) a->rerun_reference = 1;
+        else if (!strcmp(o, "-q") || !strcmp(o, "--quiet")) a->quiet = 1;
+        else {
+            static const char *const with_value[] = {"--methods", "--sequences", "--out",   "--size", "--spp",
+                                                     "--vpls",    "--threads",   "--param", "--isa"};
+            int known = 0;
+            for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++) known |= !strcmp(o, with_value[k]);
+            if (!known) return ev__fail(2, "unknown option '%s' (see softgi evaluate --help)%s", o, "");
+            if (!v) return ev__fail(2, "%s needs a value%s", o, "");
+            i++;
+            int rc = 0;
+            if (!strcmp(o, "--methods")) {
+                rc = ev__split(v, a->lists[0], sizeof a->lists[0], a->methods, &a->method_count, "methods");
+                for (uint32_t k = 0; !rc && k < a->method_count; k++)
+                    if (!gi_vpl_method_find(a->methods[k]))
+                        rc = ev__fail(2, "--methods: unknown method '%s' (softgi knows %s)", a->methods[k],
+                                      gi_vpl_method_names());
+            } else if (!strcmp(o, "--sequences"))
+                rc = ev__split(v, a->lists[1], sizeof a->lists[1], a->sequences, &a->sequence_count, "sequences");
+            else if (!strcmp(o, "--out")) a->out = v;
+            else if (!strcmp(o, "--size")) a->size = v;
+            else if (!strcmp(o, "--spp")) a->spp = v;
+            else if (!strcmp(o, "--vpls")) a->vpls = v;
+            else if (!strcmp(o, "--threads")) a->threads = v;
+            else if (!strcmp(o, "--isa")) a->isa = v;
+            else {
+                if (a->param_count == EV_MAX_ITEMS) return ev__fail(2, "--param: at most 32%s%s", "", "");
+                a->params[a->param_count++] = v;
+            }
+            if (rc) return rc;
+        }
+    }
+    if (strlen(a->out) > 2000) return ev__fail(2, "--out: the folder name is too long%s%s", "", "");
+    if (!a->method_count) {
+        static const char *const all[] = {"ir", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
+        for (size_t k = 0; k < sizeof all / sizeof all[0]; k++) a->methods[a->method_count++] = all[k];
+    }
+    if (!a->sequence_count) {
+        static const char *const names[] = {"cornell-camera", "cornell-light",    "sibenik-camera",
+                                            "sibenik-light",  "conference-camera", "conference-light"};
+        for (size_t k = 0; k < 6; k++) {
+            snprintf(a->default_sequences[k], sizeof a->default_sequences[k], "%s/scenes/sequences/%s.seq.json",
+                     SOFTGI_SOURCE_DIR, names[k]);
+            a->sequences[a->sequence_count++] = a->default_sequences[k];
+        }
+    }
+    return 0;
+}
+
+/* The sequence's name: its file name without .seq.json / .json. */
+static void ev__sequence_name(const char *file, char *out, size_t size)
+{
+    const char *base = strrchr(file, '/');
+    snprintf(out, size, "%s", base ? base + 1 : file);
+    char *dot = strstr(out, ".seq.json");
+    if (!dot) dot = strstr(out, ".json");
+    if (dot) *dot = 0;
+}
+
+/* argv builder: the strings must outlive the call they are passed to. */
+typedef struct ev__argv {
+    int argc;
+    char *argv[EV_MAX_ARGS + 1];
+} ev__argv;
+
+static void ev__push(ev__argv *v, const char *s)
+{
+    if (v->argc < EV_MAX_ARGS) v->argv[v->argc++] = (char *)s;
+    v->argv[v->argc] = NULL;
+}
+
+/* The options every `sequence` run shares. */
+static void ev__common(ev__argv *v, const ev__args *a, const char *file, const char *dir)
+{
+    ev__push(v, "softgi");
+    ev__push(v, "sequence");
+    ev__push(v, file);
+    ev__push(v, "-o");
+    ev__push(v, dir);
+    ev__push(v, "--size");
+    ev__push(v, a->size);
+    ev__push(v, "-q");
+    if (!a->full) ev__push(v, "--indirect-only");
+    if (a->threads) {
+        ev__push(v, "--threads");
+        ev__push(v, a->threads);
+    }
+    if (a->isa) {
+        ev__push(v, "--isa");
+        ev__push(v, a->isa);
+    }
+}
+
+static int ev__run_sequence(ev__argv *v)
+{
+    pf_options o;
+    pf_error err;
+    pf_result r = pf_cli_parse(&o, v->argc, v->argv, &err);
+    if (r != PF_OK) {
+        fprintf(stderr, "softgi: evaluate: %s\n", err.message);
+        return pf_result_exit_code(r);
+    }
+    return app_sequence(&o);
+}
+
+/* Appends the lines of `path` to `out` (a missing file appends nothing). */
+static void ev__append_file(FILE *out, const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return;
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, n, out);
+    fclose(f);
+}
+
+static int ev__read_text(const char *path, char *buf, size_t size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    size_t n = fread(buf, 1, size - 1, f);
+    buf[n] = 0;
+    fclose(f);
+    return 1;
+}
+
+static int ev__write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f) return 0;
+    int ok = fputs(text, f) >= 0;
+    if (fclose(f) != 0) ok = 0;
+    return ok;
+}
+
+/* Step 1: the sequence's per-frame references (reused when the stamp says
+ * they were made with the same settings). */
+static int ev__reference(const ev__args *a, const char *file, const char *dir)
+{
+    char stamp_path[2600], want[512], have[512];
+    snprintf(stamp_path, sizeof stamp_path, "%s/stamp", dir);
+    snprintf(want, sizeof want, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
+    if (!a->rerun_reference && ev__read_text(stamp_path, have, sizeof have) && !strcmp(have, want)) {
+        if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
+        return 0;
+    }
+    ev__argv v = {0};
+    ev__common(&v, a, file, dir);
+    ev__push(&v, "--reference");
+    ev__push(&v, "--spp");
+    ev__push(&v, a->spp);
+    double t0 = pf_time_now();
+    int rc = ev__run_sequence(&v);
+    if (rc) return rc;
+    if (!ev__write_text(stamp_path, want)) return ev__fail(1, "%s: cannot write: %s", stamp_path, strerror(errno));
+    if (!a->quiet) printf("  reference: %s spp in %.1f s\n", a->spp, pf_time_now() - t0);
+    return 0;
+}
+
+/* Step 2: one method's frames. Returns 0 or the exit status. */
+static int ev__method(const ev__args *a, const char *file, const char *method, const char *dir)
+{
+    ev__argv v = {0};
+    ev__common(&v, a, file, dir);
+    ev__push(&v, "--method");
+    ev__push(&v, method);
+    ev__push(&v, "--vpls");
+    ev__push(&v, a->vpls);
+    /* parameters go only to methods that know them: try each alone first */
+    const gi_vpl_method *m = gi_vpl_method_find(method);
+    for (uint32_t i = 0; i < a->param_count; i++) {
+        gi_params p = {0};
+        pf_error err;
+        void *state = NULL;
+        if (gi_params_add(&p, a->params[i], &err) != PF_OK) return ev__fail(2, "%s%s", err.message, "");
+        if (m->create(&state, &p, &err) == PF_OK) {
+            m->destroy(state);
+            ev__push(&v, "--param");
+            ev__push(&v, a->params[i]);
+        }
+    }
+    double t0 = pf_time_now();
+    int rc = ev__run_sequence(&v);
+    if (!rc && !a->quiet) printf("  %-6s %.1f s\n", method, pf_time_now() - t0);
+    return rc;
+}
+
+/* Step 3: softgi compare over the methods that rendered. */
+static int ev__compare(const char *seq_dir, const char *ref_dir, char names[][2600], uint32_t count)
+{
+    ev__argv v = {0};
+    char track_args[64][32];
+    char table[2600], plot[2600], track_path[2600];
+    snprintf(table, sizeof table, "%s/table.md", seq_dir);
+    snprintf(plot, sizeof plot, "%s/plot.svg", seq_dir);
+    ev__push(&v, "softgi");
+    ev__push(&v, "compare");
+    ev__push(&v, "--reference");
+    ev__push(&v, ref_dir);
+    for (uint32_t i = 0; i < count; i++) {
+        ev__push(&v, "--name");
+        ev__push(&v, names[i]);
+    }
+    ev__push(&v, "--table");
+    ev__push(&v, table);
+    ev__push(&v, "--plot");
+    ev__push(&v, plot);
+    snprintf(track_path, sizeof track_path, "%s/track.txt", ref_dir);
+    FILE *tf = fopen(track_path, "r");
+    uint32_t nt = 0;
+    if (tf) {
+        while (nt < 64 && fgets(track_args[nt], sizeof track_args[nt], tf)) {
+            track_args[nt][strcspn(track_args[nt], "\r\n")] = 0;
+            if (!track_args[nt][0]) continue;
+            ev__push(&v, "--track");
+            ev__push(&v, track_args[nt]);
+            nt++;
+        }
+        fclose(tf);
+    }
+    fflush(stdout);
+    return app_compare(v.argc, v.argv);
+}
+
+static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
+{
+    int help = 0;
+    int rc = ev__parse(ap, argc, argv, &help);
+    if (rc) return rc;
+    if (help) {
+        ev__usage(stdout);
+        return 0;
+    }
+    const ev__args *a = ap;
+    char all_table[4300];
+    snprintf(all_table, sizeof all_table, "%s/table.md", a->out);
+    pf_error err;
+    if (pf_imageio_make_parent_dirs(all_table, &err) != PF_OK) return app_fail(&err);
+    FILE *summary = fopen(all_table, "w");
+    if (!summary) return ev__fail(1, "%s: cannot write: %s", all_table, strerror(errno));
+    fprintf(summary, "# softgi evaluate\n\nSettings: size %s, reference %s spp, %s VPLs, %s.\n", a->size, a->spp, a->vpls,
+            a->full ? "whole images" : "indirect light only");
+    int worst = 0;
+    for (uint32_t s = 0; s < a->sequence_count; s++) {
+        char name[256], seq_dir[2400], ref_dir[2500];
+        ev__sequence_name(a->sequences[s], name, sizeof name);
+        snprintf(seq_dir, sizeof seq_dir, "%s/%s", a->out, name);
+        snprintf(ref_dir, sizeof ref_dir, "%s/reference", seq_dir);
+        if (!a->quiet) printf("evaluate: %s (%s)\n", name, a->sequences[s]);
+        fprintf(summary, "\n## %s\n\n", name);
+        rc = ev__reference(a, a->sequences[s], ref_dir);
+        if (rc) {
+            fprintf(summary, "The reference failed (exit %d); sequence skipped.\n", rc);
+            worst = rc;
+            continue;
+        }
+        uint32_t ok = 0;
+        for (uint32_t m = 0; m < a->method_count; m++) {
+            char dir[2500];
+            snprintf(dir, sizeof dir, "%s/%s", seq_dir, a->methods[m]);
+            rc = ev__method(a, a->sequences[s], a->methods[m], dir);
+            if (rc) {
+                fprintf(summary, "- `%s` failed (exit %d): see the message above; not in the table.\n",
+                        a->methods[m], rc);
+                continue;
+            }
+            snprintf(names[ok++], sizeof names[0], "%s:%s", a->methods[m], dir);
+        }
+        if (!ok) {
+            fprintf(summary, "No method rendered this sequence.\n");
+            continue;
+        }
+        rc = ev__compare(seq_dir, ref_dir, names, ok);
+        if (rc) {
+            fprintf(summary, "softgi compare failed (exit %d).\n", rc);
+            worst = rc;
+            continue;
+        }
+        char table[2600];
+        snprintf(table, sizeof table, "%s/table.md", seq_dir);
+        fprintf(summary, "\n");
+        ev__append_file(summary, table);
+        fprintf(summary, "\nPlot: `%s/plot.svg`.\n", seq_dir);
+    }
+    if (fclose(summary) != 0) return ev__fail(1, "%s: cannot write: %s", all_table, strerror(errno));
+    if (!a->quiet) printf("evaluate: wrote %s\n", all_table);
+    return worst;
+}
 
 int app_evaluate(int argc, char **argv)
 {
-    (void)argc, (void)argv;
-    fprintf(stderr, "softgi: evaluate: not implemented yet\n");
-    return 1;
+    ev__args *ap = calloc(1, sizeof *ap);
+    char(*names)[2600] = calloc(EV_MAX_ITEMS, sizeof *names);
+    if (!ap || !names) {
+        free(ap), free(names);
+        return ev__fail(1, "out of memory%s%s", "", "");
+    }
+    int rc = ev__run(ap, names, argc, argv);
+    free(ap), free(names);
+    return rc;
 }

@@ -38,6 +38,7 @@
 #include "app.h"
 #include "gi_frame.h"
 #include "gi_metrics.h"
+#include "gi_reference.h"
 #include "pf_imageio.h"
 #include "pf_jobs.h"
 #include "pf_rt.h"
@@ -119,6 +120,30 @@ static void app__cleanup(app__seq_run *s)
     free(s->base_lights);
     free(s->lights);
     pf_sequence_free(&s->seq);
+}
+
+/* --reference: the frame's G-buffer (for the depth file TID reprojects
+ * with) and the path-traced image in place of the VPL frame's. */
+static pf_result app__render_reference(app__seq_run *s, const pf_options *o, pf_error *err)
+{
+    gi_frame *fr = &s->frame;
+    if (o->raytrace) gi_stage_gbuffer_raytrace(fr);
+    else {
+        gi_stage_gbuffer_raster(fr);
+        gi_stage_gbuffer_resolve(fr);
+    }
+    gi_reference_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.spp = o->spp ? o->spp : GI_REFERENCE_DEFAULT_SPP;
+    ro.bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
+    ro.direct_only = o->direct_only;
+    ro.indirect_only = o->indirect_only;
+    fr->times.count = 0;
+    double t0 = pf_time_now();
+    pf_result r = gi_reference_render(fr->final, &s->scene, s->rt, s->jobs, &fr->camera, fr->width, fr->height, &ro,
+                                      err);
+    pf_stage_add(&fr->times, "reference", (pf_time_now() - t0) * 1e3);
+    return r;
 }
 
 static int app__fail_run(app__seq_run *s, const pf_error *err)
@@ -226,7 +251,7 @@ int app_sequence(const pf_options *o)
         r = gi_frame_init(&s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, o->shadow_size, &err);
         s.frame_ready = r == PF_OK;
     }
-    if (r == PF_OK && !o->direct_only) {
+    if (r == PF_OK && !o->direct_only && !o->reference) {
         gi_indirect_options io;
         r = app_indirect_options(o, &io, &err);
         if (r == PF_OK) r = gi_frame_enable_indirect(&s.frame, &io, o->indirect_only, &err);
@@ -238,7 +263,7 @@ int app_sequence(const pf_options *o)
     if (!o->quiet) {
         printf("softgi sequence: %s, scene %s, %u frames, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n",
                seq->name, stem, seq->frames, s.scene.tri_count, nl, width, height, threads, pf_isa_name(isa),
-               o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
+               o->reference ? "path-traced reference" : o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
         if (fr->indirect)
             printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s\n", fr->ind.opt.method->name,
                    fr->ind.opt.vpls, fr->ind.n, fr->ind.m, fr->ind.para ? "paraboloid maps" : "Embree rays");
@@ -268,7 +293,8 @@ int app_sequence(const pf_options *o)
 
         /* render */
         double t0 = pf_time_now();
-        if (o->raytrace) gi_frame_render_raytraced(fr);
+        if (o->reference) r = app__render_reference(&s, o, &err);
+        else if (o->raytrace) gi_frame_render_raytraced(fr);
         else gi_frame_render_raster(fr);
         double t_render = (pf_time_now() - t0) * 1e3;
         for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
@@ -277,6 +303,7 @@ int app_sequence(const pf_options *o)
             for (uint32_t i = 0; i < fr->ind.vpls.count; i++) moved += fr->ind.vpls.v[i].moved != 0;
         moved_sum += moved;
 
+        if (r != PF_OK) break;
         /* write */
         t0 = pf_time_now();
         gi_metrics_view view;

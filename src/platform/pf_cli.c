@@ -216,6 +216,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--version")) o->version = 1;
         else if (!strcmp(a, "--hash")) o->print_hash = 1;
         else if (!strcmp(a, "--raytrace")) o->raytrace = 1;
+        else if (!strcmp(a, "--reference")) o->reference = 1;
         else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
         else if (!strcmp(a, "--hdr")) o->hdr_path = val;
@@ -314,6 +315,9 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                 "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, "
                                 "compare, evaluate)",
                                 o->command);
+        if (o->reference && strcmp(o->command, "sequence") != 0)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--reference is an option of sequence (softgi reference renders "
+                                                      "one image)");
         if (!strcmp(o->command, "sequence") && !o->scene_path)
             return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
         if (o->indirect_only && o->direct_only)

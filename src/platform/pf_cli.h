@@ -46,6 +46,7 @@ typedef struct pf_options {
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
+    int reference;           /* sequence --reference: path-traced frames (gi_reference) instead of the VPL frame */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */
     uint32_t width, height; /* 0: default 640x480 */

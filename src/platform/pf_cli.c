@@ -320,7 +320,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                 o->command);
         if (!strcmp(o->command, "sequence") && !o->scene_path)
             return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
-        if (o->moving_light && strcmp(o->command, "bench") != 0)
+        if (o->moving_light && (strcmp(o->command, "bench") != 0 || !o->scene_path || strcmp(o->scene_path, "frame")))
             return pf_error_set(err, PF_ERR_ARGUMENT, "--moving-light: only bench frame takes it");
         if (o->indirect_only && o->direct_only)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");

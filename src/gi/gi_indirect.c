@@ -176,7 +176,15 @@ static void gi__vpl_update_job(void *ctx, uint32_t item, uint32_t worker)
 void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
 {
     gi_indirect *ind = &f->ind;
-    if (!f->indirect || !ind->opt.pipeline || !ind->have_set || ind->pending) return;
+    if (!f->indirect || !ind->opt.pipeline || !ind->have_set) return;
+    if (ind->next_ready) { /* the set made during the last frame becomes this frame's */
+        gi_vpl_set t = ind->vpls;
+        ind->vpls = ind->vpls_next;
+        ind->vpls_next = t;
+        ind->next_ready = 0;
+        ind->maps_current = 0;
+    }
+    if (ind->pending) return;
     if (!gbuffer_ready && !gi_vpl_method_gbuffer_free(ind->opt.method)) return;
     ind->pipe_camera = f->camera;
     gi_vpl_inputs in = {f->scene,        f->rt,
@@ -197,10 +205,7 @@ void gi_stage_vpl_update_end(gi_frame *f)
     gi_indirect *ind = &f->ind;
     if (!ind->pending) return;
     ind->pending = 0;
-    gi_vpl_set t = ind->vpls;
-    ind->vpls = ind->vpls_next;
-    ind->vpls_next = t;
-    ind->maps_current = 0;
+    ind->next_ready = 1; /* swapped in at the next frame's begin, so `vpls` stays this frame's set */
     pf_stage_add(&f->times, "VPL update", ind->pipe_ms);
 }
 

@@ -42,7 +42,9 @@
  * system (no extra thread): it starts before the G-buffer for methods that
  * never read the G-buffer (gi_vpl_method_gbuffer_free: Instant Radiosity),
  * else right after the G-buffer is resolved, and runs alongside the
- * remaining stages; after the frame's pf_jobs_wait_all the two sets swap.
+ * remaining stages; the two sets swap at the start of the next frame (so
+ * after a frame `vpls` is still the set it shaded with, for the dumps and
+ * the moved counts).
  * The update for frame N sees exactly what the unpipelined update of frame
  * N sees (frame number N, frame N's lights, camera and G-buffer), so what
  * lags is only its result: frame N >= 1 is shaded with the VPL set of frame
@@ -85,6 +87,7 @@ typedef struct gi_indirect {
     gi_vpl_set vpls_next;
     int have_set;             /* an update has run (frame 0 done) */
     int pending;              /* an update job was added this frame */
+    int next_ready;           /* vpls_next holds the finished set for the next frame */
     pf_camera pipe_camera;    /* the job's copies of this frame's inputs */
     gi_vpl_inputs pipe_in;
     double pipe_ms;           /* the job's own time (written by the job, read after wait_all) */
@@ -120,11 +123,12 @@ pf_result gi_indirect_init(struct gi_frame *f, const gi_indirect_options *opt, p
 void gi_indirect_free(gi_indirect *ind);
 
 void gi_stage_vpl_update(struct gi_frame *f);
-/* Pipelining (no-ops unless opt.pipeline): begin adds the update job for
- * this frame's inputs when it may start (gbuffer_ready: the G-buffer of
- * this frame is resolved; before that only G-buffer-free methods start);
- * end, after pf_jobs_wait_all, swaps the sets and records the job's time as
- * the "VPL update" stage. */
+/* Pipelining (no-ops unless opt.pipeline): begin, called at the start of
+ * the frame (gbuffer_ready 0) and again after the G-buffer (1), first makes
+ * the set finished during the last frame this frame's set, then adds the
+ * update job for this frame's inputs once it may start (before the G-buffer
+ * only for G-buffer-free methods); end, after pf_jobs_wait_all, records the
+ * job's time as the "VPL update" stage. */
 void gi_stage_vpl_update_begin(struct gi_frame *f, int gbuffer_ready);
 void gi_stage_vpl_update_end(struct gi_frame *f);
 /* Whether a method's update never reads the G-buffer (a list kept in

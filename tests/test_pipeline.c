@@ -7,7 +7,10 @@
  *   the unpipelined frame N rendered with the unpipelined frame N-1's VPL
  *   set (frame N's G-buffer, lights and shadow maps, no update); the VPL
  *   sets themselves match; and the lag is real (frame N differs from the
- *   unpipelined frame N). Both with paraboloid maps and with Embree rays.
+ *   unpipelined frame N). Both with paraboloid maps and with Embree rays,
+ *   and with a test method that reads the G-buffer (so the pipelined
+ *   update starts after the G-buffer and must see frame N's), the camera
+ *   moving too.
  * - pipelined output is identical with 1 and 2 threads (frame by frame, and
  *   a `softgi sequence --pipeline on` run, raster and ray-traced);
  * - bench frame's new options parse, and bad values are errors. */
@@ -28,6 +31,22 @@
 #define H 48
 #define FRAMES 5
 
+/* A method that reads the G-buffer: Instant Radiosity whose intensities are
+ * scaled by a factor from the depth at the image centre, so its output
+ * depends on which frame's G-buffer it saw. Not G-buffer-free, so the
+ * pipelined frame starts it after the G-buffer. */
+static pf_result probe_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+{
+    if (!in->gbuf) return pf_error_set(err, PF_ERR_ARGUMENT, "probe: no G-buffer");
+    pf_result r = gi_method_ir.update(state, in, out, err);
+    if (r != PF_OK) return r;
+    float d = in->gbuf->depth[(size_t)(in->height / 2) * in->width + in->width / 2];
+    float k = 1.0f + 0.5f * (isfinite(d) ? d : 0.0f);
+    for (uint32_t i = 0; i < out->count; i++) out->v[i].intensity = pf_v3_scale(out->v[i].intensity, k);
+    return PF_OK;
+}
+static const gi_vpl_method k_probe = {"probe", "test", NULL, probe_update, NULL};
+
 typedef struct fx {
     pf_scene scene;
     pf_vec3 light0;
@@ -37,7 +56,7 @@ typedef struct fx {
     gi_frame f;
 } fx;
 
-static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis)
+static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis, int probe)
 {
     pf_error err;
     assert_int_equal(pf_gltf_load(&x->scene, CORNELL, NULL, &err), PF_OK);
@@ -56,6 +75,14 @@ static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis)
     io.para_res = 32;
     io.pipeline = pipeline;
     io.visibility_raytrace = raytrace_vis;
+    if (probe) {
+        static gi_vpl_method m;
+        m = k_probe;
+        m.create = gi_method_ir.create;
+        m.destroy = gi_method_ir.destroy;
+        io.method = &m;
+        assert_false(gi_vpl_method_gbuffer_free(&m));
+    }
     assert_int_equal(gi_frame_enable_indirect(&x->f, &io, 0, &err), PF_OK);
 }
 
@@ -68,11 +95,14 @@ static void fx_end(fx *x)
     pf_scene_free(&x->scene);
 }
 
-/* The light of frame n: a small circle under the ceiling light's spot. */
+/* The light of frame n: a small circle under the ceiling light's spot; the
+ * camera steps sideways. */
 static void fx_set_frame(fx *x, uint32_t n)
 {
     float a = 0.9f * (float)n;
     x->scene.lights[0].position = pf_v3_add(x->light0, pf_v3(0.06f * cosf(a), -0.02f * (float)n, 0.06f * sinf(a)));
+    x->f.camera = x->scene.cameras[0];
+    x->f.camera.eye = pf_v3_add(x->f.camera.eye, pf_v3_scale(x->f.camera.right, 0.03f * (float)n));
 }
 
 /* gi_frame_render_raster without step 3: the frame shades with whatever
@@ -93,16 +123,24 @@ static void render_without_update(gi_frame *f)
     pf_jobs_wait_all(f->jobs);
 }
 
-#define assert_sets_equal(a, b, what, n) sets_equal_at(a, b, what, n, __LINE__)
-static void sets_equal_at(const gi_vpl_set *a, const gi_vpl_set *b, const char *what, uint32_t n, int line)
+/* Equal VPL sets: positions, normals, intensities and ids bit for bit;
+ * moved flags too unless `skip_moved`. */
+#define assert_sets_equal(a, b, what, n, skip_moved) sets_equal_at(a, b, what, n, skip_moved, __LINE__)
+static void sets_equal_at(const gi_vpl_set *a, const gi_vpl_set *b, const char *what, uint32_t n, int skip_moved,
+                          int line)
 {
-    if (a->count != b->count || !a->count || memcmp(a->v, b->v, sizeof(gi_vpl) * a->count))
+    if (a->count != b->count || !a->count)
         fail_msg("line %d, frame %u: VPL sets differ: %s (%u vs %u VPLs)", line, n, what, a->count, b->count);
+    for (uint32_t i = 0; i < a->count; i++) {
+        gi_vpl x = a->v[i], y = b->v[i];
+        if (skip_moved) x.moved = y.moved = 0;
+        if (memcmp(&x, &y, sizeof x)) fail_msg("line %d, frame %u: VPL %u differs: %s", line, n, i, what);
+    }
 }
 
 static int images_equal(const float *a, const float *b) { return !memcmp(a, b, sizeof(float) * 3 * W * H); }
 
-static void lag_case(int raytrace_vis)
+static void lag_case(int raytrace_vis, int probe)
 {
     const size_t px = (size_t)W * H * 3;
     float *piped[FRAMES];
@@ -112,7 +150,7 @@ static void lag_case(int raytrace_vis)
 
     /* pipelined, 2 threads: every frame's image and shading set */
     fx p;
-    fx_begin(&p, 2, 1, raytrace_vis);
+    fx_begin(&p, 2, 1, raytrace_vis, probe);
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&p, n);
         gi_frame_render_raster(&p.f);
@@ -131,19 +169,19 @@ static void lag_case(int raytrace_vis)
 
     /* pipelined, 1 thread: the same frames, bit for bit */
     fx q;
-    fx_begin(&q, 1, 1, raytrace_vis);
+    fx_begin(&q, 1, 1, raytrace_vis, probe);
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&q, n);
         gi_frame_render_raster(&q.f);
         if (!images_equal(q.f.final, piped[n])) fail_msg("pipelined frame %u differs between 1 and 2 threads", n);
-        assert_sets_equal(&q.f.ind.vpls, &sets[n], "pipelined, 1 vs 2 threads", n);
+        assert_sets_equal(&q.f.ind.vpls, &sets[n], "pipelined, 1 vs 2 threads", n, 0);
     }
     fx_end(&q);
 
     /* unpipelined, 1 thread: frame N with frame N-1's set equals pipelined
      * frame N; the normal unpipelined frame N does not (the lag is real) */
     fx u;
-    fx_begin(&u, 1, 0, raytrace_vis);
+    fx_begin(&u, 1, 0, raytrace_vis, probe);
     gi_vpl_set prev = {0, 0, NULL};
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&u, n);
@@ -151,12 +189,15 @@ static void lag_case(int raytrace_vis)
             render_without_update(&u.f); /* frame N's inputs, frame N-1's set */
             if (!images_equal(u.f.final, piped[n]))
                 fail_msg("pipelined frame %u != unpipelined frame %u with frame %u's VPLs", n, n, n - 1);
-            assert_sets_equal(&sets[n], &prev, "pipelined frame N vs unpipelined frame N-1", n);
+            /* frame 1 shades with frame 0's set a second time: nothing in it moved */
+            assert_sets_equal(&sets[n], &prev, "pipelined frame N vs unpipelined frame N-1", n, n == 1);
+            if (n == 1)
+                for (uint32_t i = 0; i < sets[1].count; i++) assert_int_equal(sets[1].v[i].moved, 0);
         }
         gi_frame_render_raster(&u.f);
         if (n == 0) {
             if (!images_equal(u.f.final, piped[0])) fail_msg("pipelined frame 0 != unpipelined frame 0");
-            assert_sets_equal(&u.f.ind.vpls, &sets[0], "frame 0, pipelined vs not", n);
+            assert_sets_equal(&u.f.ind.vpls, &sets[0], "frame 0, pipelined vs not", n, 0);
         } else if (images_equal(u.f.final, piped[n])) {
             fail_msg("frame %u: pipelined equals unpipelined although the light moved (no lag?)", n);
         }
@@ -175,13 +216,19 @@ static void lag_case(int raytrace_vis)
 static void test_lag_paraboloid(void **state)
 {
     (void)state;
-    lag_case(0);
+    lag_case(0, 0);
 }
 
 static void test_lag_raytrace(void **state)
 {
     (void)state;
-    lag_case(1);
+    lag_case(1, 0);
+}
+
+static void test_lag_gbuffer_method(void **state)
+{
+    (void)state;
+    lag_case(0, 1);
 }
 
 /* Pipelined frame 1 shades with frame 0's set again: its paraboloid maps
@@ -190,7 +237,7 @@ static void test_maps_reused(void **state)
 {
     (void)state;
     fx p;
-    fx_begin(&p, 2, 1, 0);
+    fx_begin(&p, 2, 1, 0, 0);
     uint32_t maps[3];
     for (uint32_t n = 0; n < 3; n++) {
         fx_set_frame(&p, n);
@@ -200,6 +247,16 @@ static void test_maps_reused(void **state)
     assert_int_equal(maps[0], p.f.ind.vpls.count);
     assert_int_equal(maps[1], 0);
     assert_true(maps[2] > 0); /* frame 1's set: the light moved, IR regenerated it */
+    fx_end(&p);
+    /* a static light: after frame 0 nothing moves and no map is rendered */
+    fx_begin(&p, 2, 1, 0, 0);
+    for (uint32_t n = 0; n < 4; n++) {
+        gi_frame_render_raster(&p.f);
+        uint32_t moved = 0;
+        for (uint32_t i = 0; i < p.f.ind.vpls.count; i++) moved += p.f.ind.vpls.v[i].moved != 0;
+        assert_int_equal(moved, n ? 0 : p.f.ind.vpls.count);
+        assert_int_equal(p.f.ind.maps_rendered, n ? 0 : p.f.ind.vpls.count);
+    }
     fx_end(&p);
 }
 
@@ -288,6 +345,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lag_paraboloid), cmocka_unit_test(test_lag_raytrace),
+        cmocka_unit_test(test_lag_gbuffer_method),
         cmocka_unit_test(test_maps_reused),    cmocka_unit_test(test_sequence_cli),
         cmocka_unit_test(test_bench_frame_options),
     };

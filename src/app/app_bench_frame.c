@@ -13,9 +13,10 @@
  *   --param values, 4x4 interleaved tiles (or --tiles), box filter,
  *   visibility by paraboloid maps (or --visibility raytrace|ism);
  * - pipelining: with --pipeline on or off only that; without --pipeline
- *   every configuration is measured both ways in the same run (off, then
- *   on, same job pool, Embree scene and rasterizer), and the gain of the
- *   frame median is printed per VPL count and thread count;
+ *   every configuration is measured both ways in the same run (two frames,
+ *   off and on, sharing the job pool, Embree scene and rasterizer, their
+ *   frames alternating), and the gain of the frame median is printed per
+ *   VPL count and thread count;
  * - one warm-up frame (the first frame: every VPL is new, so every
  *   paraboloid map is rendered; reported on its own), then --frames frames
  *   (default 15). With the static light IR returns the same VPL set and the
@@ -127,86 +128,91 @@ static pf_vec3 bf__light_at(const bf_scene *bs, const pf_scene *scene, int movin
     return pf_v3_add(bs->light_pos, pf_v3(r * cosf(a), 0.0f, r * sinf(a)));
 }
 
-/* One configuration: a frame on an already built Embree scene and raster
- * context, a warm-up frame, then `frames` measured frames. `light` is the
- * scene's one light (moved before each frame with --moving-light). */
+/* One VPL count on an already built Embree scene and raster context, for
+ * each pipelining mode in modes[0..nmodes): one gi_frame per mode, a
+ * warm-up frame, then `frames` measured frames. The modes' frames alternate
+ * (frame i of every mode, then frame i + 1), so a change in the machine's
+ * load during the run falls on both alike. `light` is the scene's one light
+ * (moved before each frame with --moving-light; every mode's frame i sees
+ * the same position). */
 static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scene *bs, pf_rt *rt, rs_context *rs,
-                             pf_jobs *jobs, uint32_t threads, uint32_t vpls, int pipeline, const pf_options *o,
-                             uint32_t frames, bf_result *out, pf_error *err)
+                             pf_jobs *jobs, uint32_t threads, uint32_t vpls, const int *modes, uint32_t nmodes,
+                             const pf_options *o, uint32_t frames, bf_result *out, pf_error *err)
 {
-    memset(out, 0, sizeof *out);
-    out->scene = bs->name;
-    out->vpl_budget = vpls;
-    out->threads = threads;
-    out->pipeline = pipeline;
     pf_camera cam;
     pf_result r = pf_camera_look_at(&cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), err);
     if (r != PF_OK) return r;
     light->position = bf__light_at(bs, lit, o->moving_light, 0);
-    gi_frame f;
-    if ((r = gi_frame_init(&f, lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) return r;
-    gi_indirect_options io;
-    /* the command line's method, --param and --visibility; --vpls and
-     * --pipeline are this configuration's (defaults as `softgi render`) */
-    if ((r = app_indirect_options(o, &io, err)) != PF_OK) {
-        gi_frame_free(&f);
-        return r;
+    gi_frame f[2];
+    double *frame_ms[2] = {NULL, NULL}, *stage_ms[2] = {NULL, NULL}; /* stage_ms: [stage][frame] */
+    uint32_t ready = 0;
+    for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+        memset(&out[m], 0, sizeof out[m]);
+        out[m].scene = bs->name;
+        out[m].vpl_budget = vpls;
+        out[m].threads = threads;
+        out[m].pipeline = modes[m];
+        if ((r = gi_frame_init(&f[m], lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) break;
+        ready++;
+        /* the command line's method, --param and --visibility; --vpls and
+         * --pipeline are this configuration's (defaults as `softgi render`) */
+        gi_indirect_options io;
+        r = app_indirect_options(o, &io, err);
+        io.vpls = vpls;
+        io.pipeline = modes[m];
+        if (r == PF_OK) r = gi_frame_enable_indirect(&f[m], &io, 0, err);
+        frame_ms[m] = malloc(sizeof(double) * frames);
+        stage_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
+        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m]))
+            r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
     }
-    io.vpls = vpls;
-    io.pipeline = pipeline;
-    if ((r = gi_frame_enable_indirect(&f, &io, 0, err)) != PF_OK) {
-        gi_frame_free(&f);
-        return r;
-    }
-    double *frame_ms = malloc(sizeof(double) * frames);
-    double *stage_ms = malloc(sizeof(double) * frames * PF_MAX_STAGES); /* [stage][frame] */
-    if (!frame_ms || !stage_ms) {
-        free(frame_ms), free(stage_ms);
-        gi_frame_free(&f);
-        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
-    }
-    for (uint32_t i = 0; i <= frames; i++) { /* i == 0: the first frame, every map rendered */
+    for (uint32_t i = 0; i <= frames && r == PF_OK; i++) { /* i == 0: the first frame, every map rendered */
         light->position = bf__light_at(bs, lit, o->moving_light, i);
-        double t0 = pf_time_now();
-        gi_frame_render_raster(&f);
-        double ms = (pf_time_now() - t0) * 1e3;
-        uint32_t moved = bf__moved(&f);
-        if (i == 0) {
-            out->first = f.times;
-            out->first_ms = ms;
-            out->first_moved = moved;
-            out->first_maps = f.ind.maps_rendered;
-            out->vpl_count = f.ind.vpls.count;
-            out->stages.count = 0;
-            if (!out->vpl_count) { /* e.g. a method that failed its update (its message is above) */
-                free(frame_ms), free(stage_ms);
-                gi_frame_free(&f);
-                return pf_error_set(err, PF_ERR_ARGUMENT, "method %s made no VPLs in the first frame",
-                                    io.method ? io.method->name : "ir");
+        for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+            bf_result *res = &out[m];
+            double t0 = pf_time_now();
+            gi_frame_render_raster(&f[m]);
+            double ms = (pf_time_now() - t0) * 1e3;
+            uint32_t moved = bf__moved(&f[m]);
+            if (i == 0) {
+                res->first = f[m].times;
+                res->first_ms = ms;
+                res->first_moved = moved;
+                res->first_maps = f[m].ind.maps_rendered;
+                res->vpl_count = f[m].ind.vpls.count;
+                res->stages.count = 0;
+                if (!res->vpl_count) /* e.g. a method that failed its update (its message is above) */
+                    r = pf_error_set(err, PF_ERR_ARGUMENT, "method %s made no VPLs in the first frame",
+                                     f[m].ind.opt.method->name);
+                continue;
             }
-            continue;
-        }
-        out->moved_after += moved;
-        out->maps_after += f.ind.maps_rendered;
-        frame_ms[i - 1] = ms;
-        /* stages matched by name, so a stage that a frame skips counts 0 ms */
-        for (uint32_t s = 0; s < f.times.count; s++) {
-            uint32_t k = 0;
-            while (k < out->stages.count && strcmp(out->stages.name[k], f.times.name[s])) k++;
-            if (k == out->stages.count) {
-                out->stages.name[k] = f.times.name[s];
-                out->stages.count++;
-                for (uint32_t j = 0; j < frames; j++) stage_ms[k * frames + j] = 0.0;
+            res->moved_after += moved;
+            res->maps_after += f[m].ind.maps_rendered;
+            frame_ms[m][i - 1] = ms;
+            /* stages matched by name, so a stage that a frame skips counts 0 ms */
+            for (uint32_t s = 0; s < f[m].times.count; s++) {
+                uint32_t k = 0;
+                while (k < res->stages.count && strcmp(res->stages.name[k], f[m].times.name[s])) k++;
+                if (k == res->stages.count) {
+                    res->stages.name[k] = f[m].times.name[s];
+                    res->stages.count++;
+                    for (uint32_t j = 0; j < frames; j++) stage_ms[m][k * frames + j] = 0.0;
+                }
+                stage_ms[m][k * frames + i - 1] = f[m].times.ms[s];
             }
-            stage_ms[k * frames + i - 1] = f.times.ms[s];
         }
     }
-    for (uint32_t k = 0; k < out->stages.count; k++) out->stages.ms[k] = bf__median(stage_ms + k * frames, frames);
-    out->frame_ms = bf__median(frame_ms, frames);
-    out->fps = 1e3 / out->frame_ms;
-    free(frame_ms), free(stage_ms);
-    gi_frame_free(&f);
-    return PF_OK;
+    for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+        for (uint32_t k = 0; k < out[m].stages.count; k++)
+            out[m].stages.ms[k] = bf__median(stage_ms[m] + k * frames, frames);
+        out[m].frame_ms = bf__median(frame_ms[m], frames);
+        out[m].fps = 1e3 / out[m].frame_ms;
+    }
+    for (uint32_t m = 0; m < nmodes; m++) {
+        free(frame_ms[m]), free(stage_ms[m]);
+        if (m < ready) gi_frame_free(&f[m]);
+    }
+    return r;
 }
 
 /* Every configuration of one scene: one Embree scene, raster context and job
@@ -225,7 +231,8 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
     light.intensity = bs->light_intensity;
     lit.lights = &light;
     lit.light_count = 1;
-    int modes[2] = {0, 1}, nmodes = 2; /* pipelining off, then on */
+    int modes[2] = {0, 1}; /* pipelining off, then on */
+    uint32_t nmodes = 2;
     if (o->pipeline >= 0) modes[0] = o->pipeline, nmodes = 1;
     pf_result r = PF_OK;
     for (uint32_t t = 0; t < nthreads && r == PF_OK; t++) {
@@ -235,16 +242,15 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
         if (!jobs) r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", thread_list[t]);
         if (r == PF_OK) r = pf_rt_create(&rt, &lit, isa, thread_list[t], err);
         if (r == PF_OK) r = rs_context_create(&rs, &lit, jobs, rs_simd_for_isa(isa), err);
-        for (uint32_t v = 0; v < nvpls && r == PF_OK; v++)
-            for (int m = 0; m < nmodes && r == PF_OK; m++) {
-                bf_result *res = &results[(v * nthreads + t) * nmodes + m];
-                r = bf__measure(&lit, &light, bs, rt, rs, jobs, thread_list[t], vpl_list[v], modes[m], o, frames,
-                                res, err);
-                if (r == PF_OK)
-                    fprintf(stderr, "  %s, %u VPLs, %u thread%s, pipeline %s: first frame %.0f ms, then %.1f ms/frame\n",
-                            bs->name, vpl_list[v], thread_list[t], thread_list[t] > 1 ? "s" : "",
-                            modes[m] ? "on" : "off", res->first_ms, res->frame_ms);
-            }
+        for (uint32_t v = 0; v < nvpls && r == PF_OK; v++) {
+            bf_result *res = &results[(v * nthreads + t) * nmodes];
+            r = bf__measure(&lit, &light, bs, rt, rs, jobs, thread_list[t], vpl_list[v], modes, nmodes, o, frames,
+                            res, err);
+            for (uint32_t m = 0; m < nmodes && r == PF_OK; m++)
+                fprintf(stderr, "  %s, %u VPLs, %u thread%s, pipeline %s: first frame %.0f ms, then %.1f ms/frame\n",
+                        bs->name, vpl_list[v], thread_list[t], thread_list[t] > 1 ? "s" : "",
+                        res[m].pipeline ? "on" : "off", res[m].first_ms, res[m].frame_ms);
+        }
         rs_context_destroy(rs);
         pf_rt_destroy(rt);
         if (jobs) pf_jobs_destroy(jobs);

@@ -183,6 +183,10 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
         ind->vpls_next = t;
         ind->next_ready = 0;
         ind->maps_current = 0;
+    } else if (!gbuffer_ready && !ind->pending) {
+        /* the first pipelined frame after frame 0 shades with frame 0's set
+         * again: nothing in it moved since the last frame */
+        for (uint32_t i = 0; i < ind->vpls.count; i++) ind->vpls.v[i].moved = 0;
     }
     if (ind->pending) return;
     if (!gbuffer_ready && !gi_vpl_method_gbuffer_free(ind->opt.method)) return;

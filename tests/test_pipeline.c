@@ -315,6 +315,17 @@ static void test_sequence_cli(void **state)
     assert_string_equal(rt1, rt2);
     assert_string_not_equal(rt1, on1);
     tu_softgi_expect("render --pipeline sometimes", 2, "--pipeline 'sometimes': expected on or off");
+    /* one frame renders the same with pipelining on and off (frame 0 runs the update in place) */
+    char hr[2][17];
+    for (int k = 0; k < 2; k++) {
+        char args[1024], out[16384];
+        snprintf(args, sizeof args, "render --size 48x36 --vpls 32 --shadow-size 128 --isa sse2 -q --hash -o '%s/r%d.png' "
+                 "--pipeline %s", g_tmp, k, k ? "on" : "off");
+        if (tu_softgi_run(args, out, sizeof out) != 0) fail_msg("softgi %s:\n%s", args, out);
+        const char *h = strstr(out, "hash ");
+        if (!h || sscanf(h, "hash %16s", hr[k]) != 1) fail_msg("no hash in:\n%s", out);
+    }
+    assert_string_equal(hr[0], hr[1]);
 }
 
 static void test_bench_frame_options(void **state)

@@ -44,7 +44,7 @@ void pf_cli_usage(FILE *out)
           "  --param KEY=VALUE       a parameter of the VPL method (repeatable; see README)\n"
           "  --dump-stages DIR       write every stage's buffer as an image\n"
           "  --pipeline on|off       overlap the next frame's VPL update with this frame\n"
-          "                          (one frame of VPL delay; default off)\n"
+          "                          (one frame of VPL delay; default off; bench frame: both)\n"
           "  --spp N                 reference: samples per pixel (default 64)\n"
           "  --raytrace              Embree primary rays and shadow rays (the reference\n"
           "                          path) instead of the rasterized G-buffer and shadow maps\n"

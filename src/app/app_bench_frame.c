@@ -1,5 +1,6 @@
 /* app_bench_frame: `softgi bench frame` — the whole many-light frame, stage
- * by stage (issue 4).
+ * by stage (issue 4), and what frame pipelining gains (issue 7; Laine 2007
+ * Sec. 3 and 6: VPL management overlapped with the frame).
  *
  * For Sibenik and the conference room (from --scenes, default
  * ../shared/scenes, textures ignored) at 1024x768, with 256 and 2048 VPLs
@@ -8,20 +9,37 @@
  *   (0, 0, 0), 50 W/sr; the conference room, whose unit is 1/0.003 m:
  *   (300, 550, -100), 2e5 W/sr); cameras as `softgi bench raster`;
  * - the rasterized frame (gi_frame_render_raster) with indirect light on:
- *   Instant Radiosity, 4x4 interleaved tiles (or --tiles), box filter;
+ *   the VPL method of --method (default ir: Instant Radiosity) with its
+ *   --param values, 4x4 interleaved tiles (or --tiles), box filter,
+ *   visibility by paraboloid maps (or --visibility raytrace|ism);
+ * - pipelining: with --pipeline on or off only that; without --pipeline
+ *   every configuration is measured both ways in the same run (two frames,
+ *   off and on, sharing the job pool, Embree scene and rasterizer, their
+ *   frames alternating), and the gain of the frame median is printed per
+ *   VPL count and thread count;
  * - one warm-up frame (the first frame: every VPL is new, so every
  *   paraboloid map is rendered; reported on its own), then --frames frames
- *   (default 15). The light never moves, so IR returns the same VPL set and
- *   the frame re-renders no map: the moved-VPL and rendered-map counts after
+ *   (default 15). With the static light IR returns the same VPL set and the
+ *   frame re-renders no map: the moved-VPL and rendered-map counts after
  *   the first frame are printed to show it (they should be 0).
+ * - --moving-light: before frame i (0 = the warm-up frame) the light is
+ *   moved to its position + r (cos(2 pi i / 16), 0, sin(2 pi i / 16)), a
+ *   horizontal circle (glTF's y is up) of radius r = 1% of the scene's
+ *   bounding-box diagonal, so every frame has a changed light: every method
+ *   must update its VPLs and the light's cube shadow map is re-rendered.
+ *   The moved VPLs and rendered maps per frame are printed (means).
  * Each stage's figure is the median over the frames of its time in
  * f->times; "frame" is the median wall-clock time of the whole
  * gi_frame_render_raster call (so it is not the sum of the stage medians).
- * Shares are stage median / frame median.
+ * Shares are stage median / frame median. The "VPL update" row is the
+ * method's update (VPL management, Laine's steps 1-4) on its own row; with
+ * pipelining it is the update job's own time, which overlaps the other
+ * stages (its share then says how much of the frame it hides in).
  * Output: one table per scene (stages as rows, configurations as columns,
  * ms and share of the frame), the target line (issue 4: IR with 256 VPLs and
  * a static light at >= 15 frames/s on 2 threads) and one JSON line (prefix
  * "json: "). */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,7 +52,10 @@
 
 #define BF_W 1024
 #define BF_H 768
-#define BF_MAX_CONFIGS 4 /* per scene: 2 VPL counts x 2 thread counts */
+#define BF_MAX_CONFIGS 8 /* per scene: 2 VPL counts x 2 thread counts x pipelining off/on */
+#define BF_LIGHT_PERIOD 16 /* --moving-light: frames per circle */
+#define BF_LIGHT_RADIUS 0.01f /* --moving-light: circle radius / scene diagonal */
+#define BF_UPDATE_STAGE "VPL update" /* gi_frame.c's / gi_indirect.c's name for step 3 */
 #define BF_TARGET_FPS 15.0
 #define BF_TARGET_VPLS 256u
 #define BF_TARGET_THREADS 2u
@@ -60,6 +81,7 @@ static const bf_scene k_scenes[] = {
 typedef struct bf_result {
     const char *scene;
     uint32_t vpl_budget, vpl_count, threads;
+    int pipeline;
     /* medians over the measured frames */
     pf_stage_times stages; /* names in the order the frame ran them, ms = median */
     double frame_ms, fps;
@@ -97,73 +119,100 @@ static uint32_t bf__moved(const gi_frame *f)
     return n;
 }
 
-/* One configuration: a frame on an already built Embree scene and raster
- * context, a warm-up frame, then `frames` measured frames. */
-static pf_result bf__measure(const pf_scene *lit, const bf_scene *bs, pf_rt *rt, rs_context *rs, pf_jobs *jobs,
-                             uint32_t threads, uint32_t vpls, const pf_options *o, uint32_t frames, bf_result *out,
-                             pf_error *err)
+/* The bench light's position before frame i (see the top comment). */
+static pf_vec3 bf__light_at(const bf_scene *bs, const pf_scene *scene, int moving, uint32_t i)
 {
-    memset(out, 0, sizeof *out);
-    out->scene = bs->name;
-    out->vpl_budget = vpls;
-    out->threads = threads;
+    if (!moving) return bs->light_pos;
+    float r = BF_LIGHT_RADIUS * pf_v3_length(pf_v3_sub(scene->bounds_max, scene->bounds_min));
+    float a = 2.0f * PF_PI * (float)(i % BF_LIGHT_PERIOD) / (float)BF_LIGHT_PERIOD;
+    return pf_v3_add(bs->light_pos, pf_v3(r * cosf(a), 0.0f, r * sinf(a)));
+}
+
+/* One VPL count on an already built Embree scene and raster context, for
+ * each pipelining mode in modes[0..nmodes): one gi_frame per mode, a
+ * warm-up frame, then `frames` measured frames. The modes' frames alternate
+ * (frame i of every mode, then frame i + 1), so a change in the machine's
+ * load during the run falls on both alike. `light` is the scene's one light
+ * (moved before each frame with --moving-light; every mode's frame i sees
+ * the same position). */
+static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scene *bs, pf_rt *rt, rs_context *rs,
+                             pf_jobs *jobs, uint32_t threads, uint32_t vpls, const int *modes, uint32_t nmodes,
+                             const pf_options *o, uint32_t frames, bf_result *out, pf_error *err)
+{
     pf_camera cam;
     pf_result r = pf_camera_look_at(&cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), err);
     if (r != PF_OK) return r;
-    gi_frame f;
-    if ((r = gi_frame_init(&f, lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) return r;
-    gi_indirect_options io;
-    memset(&io, 0, sizeof io); /* zero = defaults: IR, 3 bounces, box filter, 128^2 paraboloid maps */
-    io.vpls = vpls;
-    io.tiles_n = o->tiles_n;
-    io.tiles_m = o->tiles_m;
-    io.clamp = -1.0f; /* the default clamp, as `softgi render` */
-    if ((r = gi_frame_enable_indirect(&f, &io, 0, err)) != PF_OK) {
-        gi_frame_free(&f);
-        return r;
+    light->position = bf__light_at(bs, lit, o->moving_light, 0);
+    gi_frame f[2];
+    double *frame_ms[2] = {NULL, NULL}, *stage_ms[2] = {NULL, NULL}; /* stage_ms: [stage][frame] */
+    uint32_t ready = 0;
+    for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+        memset(&out[m], 0, sizeof out[m]);
+        out[m].scene = bs->name;
+        out[m].vpl_budget = vpls;
+        out[m].threads = threads;
+        out[m].pipeline = modes[m];
+        if ((r = gi_frame_init(&f[m], lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) break;
+        ready++;
+        /* the command line's method, --param and --visibility; --vpls and
+         * --pipeline are this configuration's (defaults as `softgi render`) */
+        gi_indirect_options io;
+        r = app_indirect_options(o, &io, err);
+        io.vpls = vpls;
+        io.pipeline = modes[m];
+        if (r == PF_OK) r = gi_frame_enable_indirect(&f[m], &io, 0, err);
+        frame_ms[m] = malloc(sizeof(double) * frames);
+        stage_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
+        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m]))
+            r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
     }
-    double *frame_ms = malloc(sizeof(double) * frames);
-    double *stage_ms = malloc(sizeof(double) * frames * PF_MAX_STAGES); /* [stage][frame] */
-    if (!frame_ms || !stage_ms) {
-        free(frame_ms), free(stage_ms);
-        gi_frame_free(&f);
-        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
-    }
-    for (uint32_t i = 0; i <= frames; i++) { /* i == 0: the first frame, every map rendered */
-        double t0 = pf_time_now();
-        gi_frame_render_raster(&f);
-        double ms = (pf_time_now() - t0) * 1e3;
-        uint32_t moved = bf__moved(&f);
-        if (i == 0) {
-            out->first = f.times;
-            out->first_ms = ms;
-            out->first_moved = moved;
-            out->first_maps = f.ind.maps_rendered;
-            out->vpl_count = f.ind.vpls.count;
-            out->stages.count = 0;
-            continue;
-        }
-        out->moved_after += moved;
-        out->maps_after += f.ind.maps_rendered;
-        frame_ms[i - 1] = ms;
-        /* stages matched by name, so a stage that a frame skips counts 0 ms */
-        for (uint32_t s = 0; s < f.times.count; s++) {
-            uint32_t k = 0;
-            while (k < out->stages.count && strcmp(out->stages.name[k], f.times.name[s])) k++;
-            if (k == out->stages.count) {
-                out->stages.name[k] = f.times.name[s];
-                out->stages.count++;
-                for (uint32_t j = 0; j < frames; j++) stage_ms[k * frames + j] = 0.0;
+    for (uint32_t i = 0; i <= frames && r == PF_OK; i++) { /* i == 0: the first frame, every map rendered */
+        light->position = bf__light_at(bs, lit, o->moving_light, i);
+        for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+            bf_result *res = &out[m];
+            double t0 = pf_time_now();
+            gi_frame_render_raster(&f[m]);
+            double ms = (pf_time_now() - t0) * 1e3;
+            uint32_t moved = bf__moved(&f[m]);
+            if (i == 0) {
+                res->first = f[m].times;
+                res->first_ms = ms;
+                res->first_moved = moved;
+                res->first_maps = f[m].ind.maps_rendered;
+                res->vpl_count = f[m].ind.vpls.count;
+                res->stages.count = 0;
+                if (!res->vpl_count) /* e.g. a method that failed its update (its message is above) */
+                    r = pf_error_set(err, PF_ERR_ARGUMENT, "method %s made no VPLs in the first frame",
+                                     f[m].ind.opt.method->name);
+                continue;
             }
-            stage_ms[k * frames + i - 1] = f.times.ms[s];
+            res->moved_after += moved;
+            res->maps_after += f[m].ind.maps_rendered;
+            frame_ms[m][i - 1] = ms;
+            /* stages matched by name, so a stage that a frame skips counts 0 ms */
+            for (uint32_t s = 0; s < f[m].times.count; s++) {
+                uint32_t k = 0;
+                while (k < res->stages.count && strcmp(res->stages.name[k], f[m].times.name[s])) k++;
+                if (k == res->stages.count) {
+                    res->stages.name[k] = f[m].times.name[s];
+                    res->stages.count++;
+                    for (uint32_t j = 0; j < frames; j++) stage_ms[m][k * frames + j] = 0.0;
+                }
+                stage_ms[m][k * frames + i - 1] = f[m].times.ms[s];
+            }
         }
     }
-    for (uint32_t k = 0; k < out->stages.count; k++) out->stages.ms[k] = bf__median(stage_ms + k * frames, frames);
-    out->frame_ms = bf__median(frame_ms, frames);
-    out->fps = 1e3 / out->frame_ms;
-    free(frame_ms), free(stage_ms);
-    gi_frame_free(&f);
-    return PF_OK;
+    for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
+        for (uint32_t k = 0; k < out[m].stages.count; k++)
+            out[m].stages.ms[k] = bf__median(stage_ms[m] + k * frames, frames);
+        out[m].frame_ms = bf__median(frame_ms[m], frames);
+        out[m].fps = 1e3 / out[m].frame_ms;
+    }
+    for (uint32_t m = 0; m < nmodes; m++) {
+        free(frame_ms[m]), free(stage_ms[m]);
+        if (m < ready) gi_frame_free(&f[m]);
+    }
+    return r;
 }
 
 /* Every configuration of one scene: one Embree scene, raster context and job
@@ -182,6 +231,9 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
     light.intensity = bs->light_intensity;
     lit.lights = &light;
     lit.light_count = 1;
+    int modes[2] = {0, 1}; /* pipelining off, then on */
+    uint32_t nmodes = 2;
+    if (o->pipeline >= 0) modes[0] = o->pipeline, nmodes = 1;
     pf_result r = PF_OK;
     for (uint32_t t = 0; t < nthreads && r == PF_OK; t++) {
         pf_jobs *jobs = pf_jobs_create(thread_list[t]);
@@ -191,11 +243,13 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
         if (r == PF_OK) r = pf_rt_create(&rt, &lit, isa, thread_list[t], err);
         if (r == PF_OK) r = rs_context_create(&rs, &lit, jobs, rs_simd_for_isa(isa), err);
         for (uint32_t v = 0; v < nvpls && r == PF_OK; v++) {
-            bf_result *res = &results[v * nthreads + t];
-            r = bf__measure(&lit, bs, rt, rs, jobs, thread_list[t], vpl_list[v], o, frames, res, err);
-            if (r == PF_OK)
-                fprintf(stderr, "  %s, %u VPLs, %u thread%s: first frame %.0f ms, then %.1f ms/frame\n", bs->name,
-                        vpl_list[v], thread_list[t], thread_list[t] > 1 ? "s" : "", res->first_ms, res->frame_ms);
+            bf_result *res = &results[(v * nthreads + t) * nmodes];
+            r = bf__measure(&lit, &light, bs, rt, rs, jobs, thread_list[t], vpl_list[v], modes, nmodes, o, frames,
+                            res, err);
+            for (uint32_t m = 0; m < nmodes && r == PF_OK; m++)
+                fprintf(stderr, "  %s, %u VPLs, %u thread%s, pipeline %s: first frame %.0f ms, then %.1f ms/frame\n",
+                        bs->name, vpl_list[v], thread_list[t], thread_list[t] > 1 ? "s" : "",
+                        res[m].pipeline ? "on" : "off", res[m].first_ms, res[m].frame_ms);
         }
         rs_context_destroy(rs);
         pf_rt_destroy(rt);
@@ -205,17 +259,19 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
 }
 
 /* One scene's table: stages as rows, its configurations as columns, each
- * "ms share". 28 + 4 x 17 = 96 columns. */
+ * "ms share" (up to 28 + 8 x 17 = 164 columns), then the pipelining gains. */
 static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_result *res, uint32_t n,
-                            uint32_t frames)
+                            uint32_t frames, int moving)
 {
-    printf("\n%s: %u triangles, point light (%g, %g, %g) %g W/sr; median of %u frames, ms and share of the frame\n",
-           bs->name, scene->tri_count, (double)bs->light_pos.x, (double)bs->light_pos.y, (double)bs->light_pos.z,
-           (double)bs->light_intensity, frames);
+    float r = BF_LIGHT_RADIUS * pf_v3_length(pf_v3_sub(scene->bounds_max, scene->bounds_min));
+    printf("\n%s: %u triangles, point light (%g, %g, %g) %g W/sr", bs->name, scene->tri_count,
+           (double)bs->light_pos.x, (double)bs->light_pos.y, (double)bs->light_pos.z, (double)bs->light_intensity);
+    if (moving) printf(" moving on a circle of radius %g (%u frames a turn)", (double)r, BF_LIGHT_PERIOD);
+    printf("; median of %u frames, ms and share of the frame\n", frames);
     printf("%-28s", "stage");
     for (uint32_t c = 0; c < n; c++) {
         char h[32];
-        snprintf(h, sizeof h, "%u VPLs %u thr", res[c].vpl_budget, res[c].threads);
+        snprintf(h, sizeof h, "%uV %ut pipe %s", res[c].vpl_budget, res[c].threads, res[c].pipeline ? "on" : "off");
         printf("  %15s", h);
     }
     printf("\n");
@@ -236,12 +292,22 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].frame_ms, "100%");
     printf("\n%-28s", "frames/s");
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].fps, "");
-    printf("\n%-28s", "VPLs (IR set)");
+    printf("\n%-28s", "VPL management (update) ms");
+    for (uint32_t c = 0; c < n; c++)
+        printf("  %8.2f %6s", bf__stage_ms(&res[c].stages, BF_UPDATE_STAGE), res[c].pipeline ? "overl." : "serial");
+    printf("\n%-28s", "VPLs (set)");
     for (uint32_t c = 0; c < n; c++) printf("  %8u %6s", res[c].vpl_count, "");
-    printf("\n%-28s", "moved VPLs after frame 1");
-    for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].moved_after, "");
-    printf("\n%-28s", "maps rendered after frame 1");
-    for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].maps_after, "");
+    if (moving) {
+        printf("\n%-28s", "moved VPLs/frame after 1st");
+        for (uint32_t c = 0; c < n; c++) printf("  %8.1f %6s", (double)res[c].moved_after / frames, "");
+        printf("\n%-28s", "maps rendered/frame after 1st");
+        for (uint32_t c = 0; c < n; c++) printf("  %8.1f %6s", (double)res[c].maps_after / frames, "");
+    } else {
+        printf("\n%-28s", "moved VPLs after frame 1");
+        for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].moved_after, "");
+        printf("\n%-28s", "maps rendered after frame 1");
+        for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].maps_after, "");
+    }
     printf("\nfirst frame (all VPLs new):\n%-28s", "  frame (wall clock) ms");
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].first_ms, "");
     printf("\n%-28s", "  " BF_MAPS_STAGE " ms");
@@ -254,6 +320,15 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
         printf("  %8.3f %6s", res[c].first_maps ? bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_maps : 0.0,
                "");
     printf("\n");
+    /* pipelining gains: consecutive off/on pairs of one VPL count and thread count */
+    for (uint32_t c = 0; c + 1 < n; c++) {
+        const bf_result *off = &res[c], *on = &res[c + 1];
+        if (off->pipeline || !on->pipeline || off->vpl_budget != on->vpl_budget || off->threads != on->threads)
+            continue;
+        printf("pipelining, %u VPLs, %u thread%s: frame %.2f -> %.2f ms (%+.1f%%), %.2f -> %.2f frames/s\n",
+               off->vpl_budget, off->threads, off->threads > 1 ? "s" : "", off->frame_ms, on->frame_ms,
+               100.0 * (on->frame_ms - off->frame_ms) / off->frame_ms, off->fps, on->fps);
+    }
 }
 
 /* Stage names are static literals, but quote them properly anyway. */
@@ -280,8 +355,9 @@ static void bf__json_stages(const pf_stage_times *t)
 }
 
 /* bench frame honours --threads, --frames, --scenes, --isa, --vpls (one
- * count instead of 256 and 2048) and --tiles; any other frame option would
- * silently change what is measured, so it is refused. */
+ * count instead of 256 and 2048), --tiles, --method, --param, --visibility,
+ * --pipeline and --moving-light; any other frame option would silently
+ * change what is measured, so it is refused. */
 static pf_result bf__check_options(const pf_options *o, pf_error *err)
 {
     const char *bad = o->width                 ? "--size"
@@ -289,8 +365,6 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
                       : o->direct_only         ? "--direct-only"
                       : o->indirect_only       ? "--indirect-only"
                       : o->no_interleave       ? "--no-interleave"
-                      : o->visibility_raytrace ? "--visibility"
-                      : o->method              ? "--method"
                       : o->bounces             ? "--bounces"
                       : o->clamp_set           ? "--clamp"
                       : o->filter              ? "--filter"
@@ -307,8 +381,15 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
     if (bad)
         return pf_error_set(err, PF_ERR_ARGUMENT,
                             "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
-                            "--tiles)",
+                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light)",
                             bad);
+    /* the method and its parameters now, before minutes of scene loading */
+    gi_indirect_options io;
+    pf_result r = app_indirect_options(o, &io, err);
+    if (r != PF_OK) return r;
+    void *state = NULL;
+    if ((r = io.method->create(&state, &io.params, err)) != PF_OK) return r;
+    io.method->destroy(state);
     return PF_OK;
 }
 
@@ -318,17 +399,22 @@ int app_bench_frame(const pf_options *o)
     pf_isa isa;
     if (bf__check_options(o, &err) != PF_OK || pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     const char *dir = o->scenes_dir ? o->scenes_dir : "../shared/scenes";
+    const char *method = o->method ? o->method : "ir";
+    const char *visibility = o->visibility_raytrace ? "raytrace" : o->visibility_ism ? "ism" : "paraboloid";
     uint32_t frames = o->frames ? o->frames : 15;
     uint32_t thread_list[2] = {1, 2}, nthreads = 2;
     if (o->threads) thread_list[0] = o->threads, nthreads = 1;
     uint32_t vpl_list[2] = {256, 2048}, nvpls = 2;
     if (o->vpls) vpl_list[0] = o->vpls, nvpls = 1;
+    uint32_t nmodes = o->pipeline >= 0 ? 1 : 2;
     uint32_t tn = o->tiles_n ? o->tiles_n : 4, tm = o->tiles_m ? o->tiles_m : 4;
-    uint32_t per_scene = nvpls * nthreads;
+    uint32_t per_scene = nvpls * nthreads * nmodes;
     bf_result results[BF_SCENES * BF_MAX_CONFIGS];
-    printf("softgi bench frame: %dx%d, isa %s, raster path %s, Instant Radiosity, %ux%u tiles, static point light,\n"
-           "1 warm-up frame then median of %u\n",
-           BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), tn, tm, frames);
+    printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, %s point "
+           "light,\npipelining %s, 1 warm-up frame then median of %u\n",
+           BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm,
+           o->moving_light ? "moving" : "static", o->pipeline < 0 ? "off and on" : o->pipeline ? "on" : "off",
+           frames);
     fflush(stdout);
     for (size_t k = 0; k < BF_SCENES; k++) {
         char path[4096];
@@ -341,7 +427,7 @@ int app_bench_frame(const pf_options *o)
         }
         bf_result *res = &results[k * per_scene];
         pf_result r = bf__scene(&scene, &k_scenes[k], vpl_list, nvpls, thread_list, nthreads, isa, o, frames, res, &err);
-        if (r == PF_OK) bf__print_table(&k_scenes[k], &scene, res, per_scene, frames);
+        if (r == PF_OK) bf__print_table(&k_scenes[k], &scene, res, per_scene, frames, o->moving_light);
         pf_scene_free(&scene);
         if (r != PF_OK) {
             fprintf(stderr, "softgi: bench frame: %s: %s\n", k_scenes[k].name, err.message);
@@ -352,34 +438,48 @@ int app_bench_frame(const pf_options *o)
     uint32_t n = (uint32_t)BF_SCENES * per_scene;
     int static_ok = 1;
     for (uint32_t i = 0; i < n; i++) static_ok &= results[i].moved_after == 0 && results[i].maps_after == 0;
-    printf("\nstatic light: %s\n", static_ok ? "no VPL moved and no map was re-rendered after the first frame"
-                                             : "WARNING: VPLs moved or maps were re-rendered after the first frame");
+    if (o->moving_light)
+        printf("\nmoving light: the VPL counts above say how many VPLs moved and maps were re-rendered per frame\n");
+    else
+        printf("\nstatic light: %s\n", static_ok ? "no VPL moved and no map was re-rendered after the first frame"
+                                                 : "WARNING: VPLs moved or maps were re-rendered after the first frame");
 
-    /* target (issue 4) */
+    /* target (issue 4): IR, static light, without pipelining */
     printf("target: IR %u VPLs, static light, %ux%u tiles, >= %.0f frames/s on %u threads:\n", BF_TARGET_VPLS, tn, tm,
            BF_TARGET_FPS, BF_TARGET_THREADS);
+    int target_run = !strcmp(method, "ir") && !o->moving_light;
     for (size_t k = 0; k < BF_SCENES; k++) {
         const bf_result *t = NULL;
-        for (uint32_t i = 0; i < per_scene; i++) {
+        for (uint32_t i = 0; i < per_scene && target_run; i++) {
             const bf_result *r = &results[k * per_scene + i];
-            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS) t = r;
+            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS && (!t || !r->pipeline)) t = r;
         }
         if (t)
-            printf("  %-11s %.2f frames/s (%.2f ms): %s\n", k_scenes[k].name, t->fps, t->frame_ms,
-                   t->fps >= BF_TARGET_FPS ? "met" : "NOT met");
+            printf("  %-11s %.2f frames/s (%.2f ms, pipeline %s): %s\n", k_scenes[k].name, t->fps, t->frame_ms,
+                   t->pipeline ? "on" : "off", t->fps >= BF_TARGET_FPS ? "met" : "NOT met");
         else
-            printf("  %-11s not measured (needs %u threads and %u VPLs)\n", k_scenes[k].name, BF_TARGET_THREADS,
-                   BF_TARGET_VPLS);
+            printf("  %-11s not measured (needs IR, a static light, %u threads and %u VPLs)\n", k_scenes[k].name,
+                   BF_TARGET_THREADS, BF_TARGET_VPLS);
     }
 
-    printf("json: {\"bench\":\"frame\",\"width\":%d,\"height\":%d,\"isa\":\"%s\",\"method\":\"ir\",\"tiles\":[%u,%u],"
-           "\"frames\":%u,\"static_ok\":%s,\"results\":[",
-           BF_W, BF_H, pf_isa_name(isa), tn, tm, frames, static_ok ? "true" : "false");
+    printf("json: {\"bench\":\"frame\",\"width\":%d,\"height\":%d,\"isa\":\"%s\",\"method\":",
+           BF_W, BF_H, pf_isa_name(isa));
+    bf__json_string(method);
+    printf(",\"params\":[");
+    for (uint32_t i = 0; i < o->param_count; i++) {
+        if (i) putchar(',');
+        bf__json_string(o->params[i]);
+    }
+    printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"tiles\":[%u,%u],\"frames\":%u,"
+           "\"static_ok\":%s,\"results\":[",
+           visibility, o->pipeline < 0 ? "both" : o->pipeline ? "on" : "off", o->moving_light ? "true" : "false", tn,
+           tm, frames, static_ok ? "true" : "false");
     for (uint32_t i = 0; i < n; i++) {
         const bf_result *r = &results[i];
-        printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"frame_ms\":%.3f,\"fps\":%.3f,"
-               "\"stages_ms\":",
-               i ? "," : "", r->scene, r->vpl_budget, r->vpl_count, r->threads, r->frame_ms, r->fps);
+        printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"pipeline\":%s,\"frame_ms\":%.3f,"
+               "\"fps\":%.3f,\"vpl_update_ms\":%.3f,\"stages_ms\":",
+               i ? "," : "", r->scene, r->vpl_budget, r->vpl_count, r->threads, r->pipeline ? "true" : "false",
+               r->frame_ms, r->fps, bf__stage_ms(&r->stages, BF_UPDATE_STAGE));
         bf__json_stages(&r->stages);
         printf(",\"moved_after_first\":%llu,\"maps_after_first\":%llu,\"first_frame_ms\":%.3f,"
                "\"first_frame_maps\":%u,\"first_frame_moved\":%u,\"first_frame_stages_ms\":",
@@ -391,11 +491,12 @@ int app_bench_frame(const pf_options *o)
     printf("],\"target\":{\"vpls\":%u,\"threads\":%u,\"fps\":%.0f", BF_TARGET_VPLS, BF_TARGET_THREADS, BF_TARGET_FPS);
     for (size_t k = 0; k < BF_SCENES; k++) {
         const char *verdict = "\"not measured\"";
-        for (uint32_t i = 0; i < per_scene; i++) {
+        const bf_result *t = NULL;
+        for (uint32_t i = 0; i < per_scene && target_run; i++) {
             const bf_result *r = &results[k * per_scene + i];
-            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS)
-                verdict = r->fps >= BF_TARGET_FPS ? "\"met\"" : "\"not met\"";
+            if (r->vpl_budget == BF_TARGET_VPLS && r->threads == BF_TARGET_THREADS && (!t || !r->pipeline)) t = r;
         }
+        if (t) verdict = t->fps >= BF_TARGET_FPS ? "\"met\"" : "\"not met\"";
         printf(",\"%s\":%s", k_scenes[k].name, verdict);
     }
     printf("}}\n");

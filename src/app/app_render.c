@@ -2,7 +2,9 @@
  *
  * load scene -> apply --camera/--light overrides -> build the Embree scene ->
  * render the frame (gi_frame_render_raytraced) -> write PNG + PFM, printing
- * the time of every step. */
+ * the time of every step. --pipeline on|off (default off) is accepted: it
+ * changes only multi-frame work (one frame renders bit-identically either
+ * way, since frame 0 runs the VPL update in place; gi_indirect.h). */
 #include <stdlib.h>
 #include <string.h>
 

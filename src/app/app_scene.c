@@ -84,6 +84,7 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
         if (r != PF_OK) return r;
     }
     io->clamp = o->clamp_set ? o->clamp : -1.0f;
+    io->pipeline = o->pipeline == 1; /* default off for every command */
     io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
                                                          : GI_FILTER_NONE;

@@ -28,7 +28,13 @@
  * --camera/--light act as in render when the file has no camera keys / no
  * full lights, and are refused when it has: the file would override them
  * silently otherwise). Instant Radiosity regenerates every VPL when a light
- * moves (the expected baseline); a moving camera alone moves none. */
+ * moves (the expected baseline); a moving camera alone moves none.
+ *
+ * --pipeline on (default off): each frame's VPL update runs as a job
+ * alongside the frame and its set is used one frame later (frame 0 is
+ * unchanged; frame N >= 1 shades with frame N-1's set; gi_indirect.h,
+ * "Pipelining"). The moved count printed is that of the set the frame
+ * shaded with. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -265,8 +271,10 @@ int app_sequence(const pf_options *o)
                seq->name, stem, seq->frames, s.scene.tri_count, nl, width, height, threads, pf_isa_name(isa),
                o->reference ? "path-traced reference" : o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
         if (fr->indirect)
-            printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s\n", fr->ind.opt.method->name,
-                   fr->ind.opt.vpls, fr->ind.n, fr->ind.m, fr->ind.para ? "paraboloid maps" : "Embree rays");
+            printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s, pipeline %s\n",
+                   fr->ind.opt.method->name, fr->ind.opt.vpls, fr->ind.n, fr->ind.m,
+                   fr->ind.para ? "paraboloid maps" : "Embree rays",
+                   fr->ind.opt.pipeline ? "on (frames >= 1 shade with the previous frame's VPLs)" : "off");
         printf("load %.1f ms, build %.1f ms; writing %s/frame_NNNN.{pfm,png,view,depth.pfm}\n", t_load * 1e3,
                t_build * 1e3, dir);
     }

@@ -150,11 +150,14 @@ pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, 
     return PF_OK;
 }
 
-/* Steps 3-9 (both frames). */
+/* Steps 3-9 (both frames). Pipelined (after frame 0), step 3 is the
+ * update job for the next frame, started here unless it started before the
+ * G-buffer; steps 4-9 shade with the set made during the previous frame. */
 static void gi__indirect_stages(gi_frame *f)
 {
     if (!f->indirect) return;
-    gi__timed(f, "VPL update", gi_stage_vpl_update);
+    if (f->ind.opt.pipeline && f->ind.have_set) gi_stage_vpl_update_begin(f, 1);
+    else gi__timed(f, "VPL update", gi_stage_vpl_update);
     gi__timed(f, "VPL paraboloid maps", gi_stage_vpl_shadow_maps);
     gi__timed(f, "split", gi_stage_split);
     gi__timed(f, "assign VPLs to tiles", gi_stage_assign);
@@ -166,16 +169,19 @@ static void gi__indirect_stages(gi_frame *f)
 void gi_frame_render_raytraced(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
+    gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     gi__timed(f, "gbuffer (embree)", gi_stage_gbuffer_raytrace);
     if (f->show_direct) gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
     gi__indirect_stages(f);
     gi__timed(f, "compose", gi_stage_compose);
     pf_jobs_wait_all(f->jobs);
+    gi_stage_vpl_update_end(f);
 }
 
 void gi_frame_render_raster(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
+    gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     gi__timed(f, "gbuffer raster (visibility)", gi_stage_gbuffer_raster);
     gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
     if (f->show_direct) {
@@ -185,4 +191,5 @@ void gi_frame_render_raster(gi_frame *f)
     gi__indirect_stages(f);
     gi__timed(f, "compose", gi_stage_compose);
     pf_jobs_wait_all(f->jobs);
+    gi_stage_vpl_update_end(f);
 }

@@ -27,6 +27,12 @@
  * (steps 3-9 run when gi_frame_enable_indirect was called; the ray-traced
  * frame runs them too, with its G-buffer).
  *
+ * With gi_indirect_options.pipeline (--pipeline on), step 3 is the update
+ * for the next frame, run as a job that overlaps the frame (from before step
+ * 1 for methods that never read the G-buffer, else from after step 1) and
+ * steps 4-9 use the set made during the previous frame: Laine 2007 Sec. 3
+ * and 6, one frame of delay in the VPLs (gi_indirect.h, "Pipelining").
+ *
  * Memory: everything a frame writes is allocated once in gi_frame_init
  * (frame lifetime, reused every frame); stages do not allocate. */
 #ifndef GI_FRAME_H

@@ -107,6 +107,7 @@ void gi_indirect_free(gi_indirect *ind)
 {
     if (ind->opt.method && ind->method_state) ind->opt.method->destroy(ind->method_state);
     gi_vpl_set_free(&ind->vpls);
+    gi_vpl_set_free(&ind->vpls_next);
     rs_para_context_destroy(ind->para);
     free(ind->atlas);
     free(ind->frames), free(ind->map_pos), free(ind->map_nrm);
@@ -127,18 +128,89 @@ uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint
 
 /* ---------------------------------------------------------- 3. VPL update */
 
+/* The method's update into `out`; a failure renders without VPLs and says
+ * so (only out-of-memory can fail once init succeeded). */
+static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vpl_set *out)
+{
+    pf_error err;
+    if (ind->opt.method->update(ind->method_state, in, out, &err) != PF_OK) {
+        fprintf(stderr, "softgi: VPL update failed: %s\n", err.message);
+        out->count = 0;
+    }
+}
+
 void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     gi_vpl_inputs in = {f->scene,        f->rt,          f->jobs,   &f->camera, ind->frame, ind->opt.vpls,
                         ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area};
-    pf_error err;
-    if (ind->opt.method->update(ind->method_state, &in, &ind->vpls, &err) != PF_OK) {
-        /* only out-of-memory can fail here: render without VPLs, say so once */
-        fprintf(stderr, "softgi: VPL update failed: %s\n", err.message);
-        ind->vpls.count = 0;
-    }
+    gi__vpl_update_into(ind, &in, &ind->vpls);
     ind->frame++;
+    ind->have_set = 1;
+    ind->maps_current = 0;
+}
+
+int gi_vpl_method_gbuffer_free(const gi_vpl_method *m)
+{
+    /* Instant Radiosity starts its paths at the lights; the camera and the
+     * G-buffer play no part. (Kept here rather than as a field of
+     * gi_vpl_method so that the methods' files need no change.) */
+    return m == &gi_method_ir;
+}
+
+/* The pipelined update: one job of one item. It touches only the method's
+ * state, vpls_next and pipe_ms; the frame's stages meanwhile read `vpls`
+ * and the G-buffer, so nothing is shared that either side writes. The
+ * method may use the job system inside (pf_jobs_wait from a job is
+ * allowed); with one thread the job runs when the frame thread first waits
+ * with nothing else to do (at the latest in pf_jobs_wait_all). */
+static void gi__vpl_update_job(void *ctx, uint32_t item, uint32_t worker)
+{
+    (void)item, (void)worker;
+    gi_indirect *ind = ctx;
+    double t0 = pf_time_now();
+    gi__vpl_update_into(ind, &ind->pipe_in, &ind->vpls_next);
+    ind->pipe_ms = (pf_time_now() - t0) * 1e3;
+}
+
+void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
+{
+    gi_indirect *ind = &f->ind;
+    if (!f->indirect || !ind->opt.pipeline || !ind->have_set) return;
+    if (ind->next_ready) { /* the set made during the last frame becomes this frame's */
+        gi_vpl_set t = ind->vpls;
+        ind->vpls = ind->vpls_next;
+        ind->vpls_next = t;
+        ind->next_ready = 0;
+        ind->maps_current = 0;
+    } else if (!gbuffer_ready && !ind->pending) {
+        /* the first pipelined frame after frame 0 shades with frame 0's set
+         * again: nothing in it moved since the last frame */
+        for (uint32_t i = 0; i < ind->vpls.count; i++) ind->vpls.v[i].moved = 0;
+    }
+    if (ind->pending) return;
+    if (!gbuffer_ready && !gi_vpl_method_gbuffer_free(ind->opt.method)) return;
+    ind->pipe_camera = f->camera;
+    gi_vpl_inputs in = {f->scene,        f->rt,
+                        f->jobs,         &ind->pipe_camera,
+                        ind->frame,      ind->opt.vpls,
+                        ind->opt.bounces, gbuffer_ready ? &f->gbuf : NULL,
+                        f->width,        f->height,
+                        &f->area};
+    ind->pipe_in = in;
+    ind->frame++;
+    ind->pipe_ms = 0.0;
+    ind->pending = 1;
+    pf_jobs_add(f->jobs, gi__vpl_update_job, ind, 1, 1, NULL, 0);
+}
+
+void gi_stage_vpl_update_end(gi_frame *f)
+{
+    gi_indirect *ind = &f->ind;
+    if (!ind->pending) return;
+    ind->pending = 0;
+    ind->next_ready = 1; /* swapped in at the next frame's begin, so `vpls` stays this frame's set */
+    pf_stage_add(&f->times, "VPL update", ind->pipe_ms);
 }
 
 /* ---------------------------------------------------------- 4. VPL shadow maps */
@@ -147,7 +219,9 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     ind->maps_rendered = 0;
-    if (!ind->para) return;
+    /* pipelined frame 1 shades with frame 0's set again: its maps are there */
+    if (!ind->para || ind->maps_current) return;
+    ind->maps_current = 1;
     const size_t map = (size_t)ind->opt.para_res * ind->opt.para_res;
     /* Each run of consecutive slots whose VPL is new or moved is rendered in
      * one call, straight into its slots (the call spreads the run's maps

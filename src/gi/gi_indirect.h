@@ -3,6 +3,11 @@
  * 2004; the bounded geometry term of the survey's Sec. 5):
  *
  *   gi_stage_vpl_update        the VPL method's update (step 3)
+ *   gi_stage_vpl_update_begin  the same update for the next frame, started
+ *   gi_stage_vpl_update_end    as a task that overlaps this frame's stages
+ *                              (--pipeline on: Laine 2007 Sec. 3 and 6, the
+ *                              one-frame delay in VPL positions and
+ *                              intensities; see "Pipelining" below)
  *   gi_stage_vpl_shadow_maps   paraboloid maps, re-rendered only for new or
  *                              moved VPLs (step 4, Laine 2007 Sec. 6)
  *   gi_stage_split             the G-buffer split into n x m interleaved
@@ -24,7 +29,29 @@
  *
  * The receiving surface's albedo is applied at compose: radiance = albedo /
  * pi * E (Sec. 5.1: "the color of the receiving surface is not taken into
- * account at this point"). */
+ * account at this point").
+ *
+ * Pipelining (opt.pipeline; Laine 2007 Sec. 3: "G-buffer rendering and
+ * splitting ... can be performed in parallel with VPL management", Sec. 6:
+ * "allowing one-frame delay in the positions and intensities of the VPLs").
+ * The VPL set is double-buffered: `vpls` is the set this frame shades with
+ * (paraboloid maps, assign, accumulate, the VPL dump), `vpls_next` the set
+ * the method's update writes. Frame 0 runs the update in place, as without
+ * pipelining. Every later frame N shades with the set the update made
+ * during frame N-1 and adds the update for frame N as one job of the job
+ * system (no extra thread): it starts before the G-buffer for methods that
+ * never read the G-buffer (gi_vpl_method_gbuffer_free: Instant Radiosity),
+ * else right after the G-buffer is resolved, and runs alongside the
+ * remaining stages; the two sets swap at the start of the next frame (so
+ * after a frame `vpls` is still the set it shaded with, for the dumps and
+ * the moved counts).
+ * The update for frame N sees exactly what the unpipelined update of frame
+ * N sees (frame number N, frame N's lights, camera and G-buffer), so what
+ * lags is only its result: frame N >= 1 is shaded with the VPL set of frame
+ * N-1 (positions, normals, intensities, moved flags), while its G-buffer,
+ * direct light and shadow maps are frame N's. Pipelined frame N equals the
+ * unpipelined frame N rendered with the unpipelined frame N-1's set
+ * (tests/test_pipeline.c checks it bit for bit). */
 #ifndef GI_INDIRECT_H
 #define GI_INDIRECT_H
 
@@ -47,13 +74,23 @@ typedef struct gi_indirect_options {
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
     float beta;                  /* filter normal threshold (0: 0.8, Laine 2007) */
     uint32_t para_res;           /* paraboloid map resolution (0: 128) */
+    int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
 } gi_indirect_options;
 
 typedef struct gi_indirect {
     gi_indirect_options opt;
     void *method_state;
-    gi_vpl_set vpls;
-    uint32_t frame;
+    gi_vpl_set vpls;          /* the set this frame shades with */
+    uint32_t frame;           /* frame number the next update gets */
+    int maps_current;         /* the atlas already holds the maps of `vpls` */
+    /* pipelining: the set being made for the next frame, and its job */
+    gi_vpl_set vpls_next;
+    int have_set;             /* an update has run (frame 0 done) */
+    int pending;              /* an update job was added this frame */
+    int next_ready;           /* vpls_next holds the finished set for the next frame */
+    pf_camera pipe_camera;    /* the job's copies of this frame's inputs */
+    gi_vpl_inputs pipe_in;
+    double pipe_ms;           /* the job's own time (written by the job, read after wait_all) */
     float b;                  /* bounded geometry term (1/m^2), INFINITY when off */
     float alpha;              /* filter threshold in scene units */
     /* paraboloid maps: one slot per VPL index */
@@ -86,6 +123,17 @@ pf_result gi_indirect_init(struct gi_frame *f, const gi_indirect_options *opt, p
 void gi_indirect_free(gi_indirect *ind);
 
 void gi_stage_vpl_update(struct gi_frame *f);
+/* Pipelining (no-ops unless opt.pipeline): begin, called at the start of
+ * the frame (gbuffer_ready 0) and again after the G-buffer (1), first makes
+ * the set finished during the last frame this frame's set, then adds the
+ * update job for this frame's inputs once it may start (before the G-buffer
+ * only for G-buffer-free methods); end, after pf_jobs_wait_all, records the
+ * job's time as the "VPL update" stage. */
+void gi_stage_vpl_update_begin(struct gi_frame *f, int gbuffer_ready);
+void gi_stage_vpl_update_end(struct gi_frame *f);
+/* Whether a method's update never reads the G-buffer (a list kept in
+ * gi_indirect.c: Instant Radiosity). Unknown methods: 0, the safe answer. */
+int gi_vpl_method_gbuffer_free(const gi_vpl_method *m);
 void gi_stage_vpl_shadow_maps(struct gi_frame *f);
 void gi_stage_split(struct gi_frame *f);
 void gi_stage_assign(struct gi_frame *f);

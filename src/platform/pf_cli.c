@@ -43,6 +43,8 @@ void pf_cli_usage(FILE *out)
           "  --visibility paraboloid|ism|raytrace  VPL visibility (default exact paraboloid maps)\n"
           "  --param KEY=VALUE       a parameter of the VPL method (repeatable; see README)\n"
           "  --dump-stages DIR       write every stage's buffer as an image\n"
+          "  --pipeline on|off       overlap the next frame's VPL update with this frame\n"
+          "                          (one frame of VPL delay; default off; bench frame: both)\n"
           "  --spp N                 reference: samples per pixel (default 64)\n"
           "  --raytrace              Embree primary rays and shadow rays (the reference\n"
           "                          path) instead of the rasterized G-buffer and shadow maps\n"
@@ -50,6 +52,7 @@ void pf_cli_usage(FILE *out)
           "  -q, --quiet             no timing table\n"
           "  --frames N              bench: repetitions per measurement (default 15)\n"
           "  --scenes DIR            bench: folder with sibenik/ and conference/ (default ../shared/scenes)\n"
+          "  --moving-light          bench frame: the light moves on a small circle every frame\n"
           "  -h, --help, --version\n",
           out);
 }
@@ -217,6 +220,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--hash")) o->print_hash = 1;
         else if (!strcmp(a, "--raytrace")) o->raytrace = 1;
         else if (!strcmp(a, "--reference")) o->reference = 1;
+        else if (!strcmp(a, "--moving-light")) o->moving_light = 1;
         else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
         else if (!strcmp(a, "--hdr")) o->hdr_path = val;
@@ -320,6 +324,8 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                                       "one image)");
         if (!strcmp(o->command, "sequence") && !o->scene_path)
             return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
+        if (o->moving_light && (strcmp(o->command, "bench") != 0 || !o->scene_path || strcmp(o->scene_path, "frame")))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--moving-light: only bench frame takes it");
         if (o->indirect_only && o->direct_only)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
         if (!strcmp(o->command, "bench") &&

@@ -45,6 +45,7 @@ typedef struct pf_options {
     const char *dump_dir;    /* --dump-stages DIR */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
+    int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
     int reference;           /* sequence --reference: path-traced frames (gi_reference) instead of the VPL frame */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */

@@ -72,8 +72,10 @@ pf_result gi_dt_init(gi_dt *dt, gi_dt_domain domain, uint32_t cap, pf_error *err
     dt->cavity = calloc(dt->tri_cap, sizeof(uint32_t));
     dt->newt = calloc(dt->tri_cap, sizeof(uint32_t));
     dt->poly = calloc(4 * ((size_t)cap + 8), sizeof(double));
+    dt->order = calloc(cap + 1, sizeof(uint64_t));
+    dt->by_v1 = calloc(cap + 1, sizeof(uint32_t));
     if (!dt->ip || !dt->p || !dt->present || !dt->in_dt || !dt->vt || !dt->tri || !dt->stack || !dt->cavity ||
-        !dt->newt || !dt->poly) {
+        !dt->newt || !dt->poly || !dt->order || !dt->by_v1) {
         gi_dt_free(dt);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory (Delaunay triangulation of %u points)", cap);
     }
@@ -84,7 +86,7 @@ pf_result gi_dt_init(gi_dt *dt, gi_dt_domain domain, uint32_t cap, pf_error *err
 void gi_dt_free(gi_dt *dt)
 {
     free(dt->ip), free(dt->p), free(dt->present), free(dt->in_dt), free(dt->vt), free(dt->tri);
-    free(dt->stack), free(dt->cavity), free(dt->newt), free(dt->poly);
+    free(dt->stack), free(dt->cavity), free(dt->newt), free(dt->poly), free(dt->order), free(dt->by_v1);
     memset(dt, 0, sizeof *dt);
 }
 
@@ -303,12 +305,14 @@ static int gi__insert_core(gi_dt *dt, uint32_t v)
     }
     /* link the fan: (v, a, b) meets (v, b, x) across v-b and (v, y, a) across v-a */
     for (uint32_t i = 0; i < nn; i++) {
+        const gi_dt_tri *A = &dt->tri[dt->newt[i]];
+        dt->by_v1[A->v[1] == GI_DT_INF ? dt->cap : A->v[1]] = dt->newt[i];
+    }
+    for (uint32_t i = 0; i < nn; i++) {
         gi_dt_tri *A = &dt->tri[dt->newt[i]];
-        for (uint32_t j = 0; j < nn; j++) {
-            const gi_dt_tri *B = &dt->tri[dt->newt[j]];
-            if (B->v[1] == A->v[2]) A->n[1] = dt->newt[j];
-            if (B->v[2] == A->v[1]) A->n[2] = dt->newt[j];
-        }
+        uint32_t b = dt->by_v1[A->v[2] == GI_DT_INF ? dt->cap : A->v[2]];
+        A->n[1] = b;
+        dt->tri[b].n[2] = dt->newt[i];
     }
     for (uint32_t k = 0; k < nc; k++) gi__tri_release(dt, dt->cavity[k]);
     for (uint32_t i = 0; i < nn; i++) gi__tri_centre(dt, dt->newt[i]);
@@ -330,6 +334,27 @@ static int gi__insert_core(gi_dt *dt, uint32_t v)
 static int gi__seed(gi_dt *dt, uint32_t *used)
 {
     uint32_t idx[4], n = 0, need = dt->domain == GI_DT_DISC ? 3 : 4;
+    if (dt->domain == GI_DT_SPHERE) {
+        /* the points furthest along the 4 directions of a regular
+         * tetrahedron: on a well-covered sphere their hull contains the
+         * origin, which the great-circle walk of gi__locate needs */
+        static const int dirs[4][3] = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+        uint32_t e[4];
+        for (int k = 0; k < 4; k++) {
+            int64_t best = INT64_MIN;
+            e[k] = GI_DT_INF;
+            for (uint32_t v = 0; v < dt->cap; v++) {
+                if (!dt->present[v]) continue;
+                int64_t d = dt->ip[v][0] * dirs[k][0] + dt->ip[v][1] * dirs[k][1] + dt->ip[v][2] * dirs[k][2];
+                if (d > best) best = d, e[k] = v;
+            }
+        }
+        if (e[0] != GI_DT_INF && e[0] != e[1] && e[0] != e[2] && e[0] != e[3] && e[1] != e[2] && e[1] != e[3] &&
+            e[2] != e[3] && gi__side3(dt->ip[e[0]], dt->ip[e[1]], dt->ip[e[2]], dt->ip[e[3]]) != 0) {
+            memcpy(idx, e, sizeof idx);
+            n = 4;
+        }
+    }
     for (uint32_t v = 0; v < dt->cap && n < need; v++) {
         if (!dt->present[v]) continue;
         if (n == 0) idx[n++] = v;
@@ -372,6 +397,12 @@ static int gi__seed(gi_dt *dt, uint32_t *used)
     return (int)need;
 }
 
+static int gi__cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
 pf_result gi_dt_rebuild(gi_dt *dt, pf_error *err)
 {
     dt->tri_count = 0;
@@ -392,8 +423,22 @@ pf_result gi_dt_rebuild(gi_dt *dt, pf_error *err)
         }
         return PF_OK;
     }
+    /* insertion in Morton order of the grid cells (ties by index), so the
+     * walk of each insertion starts next to its point */
+    uint32_t m = 0;
     for (uint32_t v = 0; v < dt->cap; v++) {
         if (!dt->present[v] || v == used[0] || v == used[1] || v == used[2] || v == used[3]) continue;
+        uint64_t key = 0;
+        for (int b = 0; b < 9; b++)
+            for (int k = 0; k < 3; k++) {
+                uint64_t c = (uint64_t)(dt->ip[v][k] + 16777216) >> 16; /* 9 bits */
+                key |= ((c >> b) & 1u) << (3 * b + k);
+            }
+        dt->order[m++] = key << 32 | v;
+    }
+    qsort(dt->order, m, sizeof(uint64_t), gi__cmp_u64);
+    for (uint32_t k = 0; k < m; k++) {
+        uint32_t v = (uint32_t)dt->order[k];
         int r = gi__insert_core(dt, v);
         if (r < 0) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "Delaunay triangulation: out of triangles");
         if (r == 0) dt->present[v] = 0;
@@ -417,8 +462,133 @@ int gi_dt_insert(gi_dt *dt, uint32_t v, const double p[3], pf_error *err)
     return r;
 }
 
+/* Would triangle (a, b, c) (one may be GI_DT_INF) be a Delaunay triangle
+ * of the hole left by deleting v, judged against the hole's vertices
+ * P[0..m)? Disc: CCW and no vertex in its circumcircle (ghost: in its
+ * half-plane); sphere: v sees it (outward orientation) and no vertex does. */
+static int gi__ear_ok(const gi_dt *dt, uint32_t a, uint32_t b, uint32_t c, uint32_t v, const uint32_t *P, uint32_t m)
+{
+    gi_dt_tri T = {{a, b, c}, {0, 0, 0}, {0, 0, 0}, 0.0, GI__LIVE};
+    int ghost = a == GI_DT_INF || b == GI_DT_INF || c == GI_DT_INF;
+    if (dt->domain == GI_DT_SPHERE) {
+        if (ghost || gi__side3(dt->ip[a], dt->ip[b], dt->ip[c], dt->ip[v]) <= 0) return 0;
+    } else if (!ghost && gi__orient2d(dt->ip[a], dt->ip[b], dt->ip[c]) <= 0)
+        return 0;
+    for (uint32_t k = 0; k < m; k++) {
+        uint32_t w = P[k];
+        if (w == a || w == b || w == c || w == GI_DT_INF) continue;
+        const int64_t *p = dt->ip[w];
+        if (dt->domain == GI_DT_SPHERE) {
+            if (gi__side3(dt->ip[a], dt->ip[b], dt->ip[c], p) > 0) return 0;
+        } else if (ghost) {
+            int g = a == GI_DT_INF ? 0 : b == GI_DT_INF ? 1 : 2;
+            const int64_t *x = dt->ip[T.v[(g + 1) % 3]], *y = dt->ip[T.v[(g + 2) % 3]];
+            int o = gi__orient2d(x, y, p);
+            if (o > 0) return 0;
+            if (o == 0) {
+                int64_t d1 = (p[0] - x[0]) * (y[0] - x[0]) + (p[1] - x[1]) * (y[1] - x[1]);
+                int64_t d2 = (p[0] - y[0]) * (x[0] - y[0]) + (p[1] - y[1]) * (x[1] - y[1]);
+                if (d1 > 0 && d2 > 0) return 0;
+            }
+        } else if (gi__incircle(dt->ip[a], dt->ip[b], dt->ip[c], p) > 0)
+            return 0;
+    }
+    return 1;
+}
+
+static void gi__link_back(gi_dt *dt, uint32_t o, uint32_t from, uint32_t to, uint32_t t)
+{
+    /* o holds the edge to -> from (the reverse of t's from -> to) */
+    for (int x = 0; x < 3; x++)
+        if (dt->tri[o].v[(x + 1) % 3] == to && dt->tri[o].v[(x + 2) % 3] == from) dt->tri[o].n[x] = t;
+}
+
+/* Deletes vertex v locally: its star's polygon is re-triangulated by
+ * clipping Delaunay ears (Devillers' vertex deletion, with the ear test of
+ * gi__ear_ok and the first valid ear in polygon order, so it is
+ * deterministic). 0 if the local update does not apply (tiny sets, or no
+ * valid ear: a degenerate configuration); the caller then rebuilds. */
+static int gi__remove_local(gi_dt *dt, uint32_t v)
+{
+    if (dt->solid == 0 || !dt->in_dt[v]) return 0;
+    uint32_t *P = dt->newt, *own = dt->cavity, *star = dt->stack, m = 0;
+    uint32_t t0 = dt->vt[v], t = t0;
+    do {
+        const gi_dt_tri *T = &dt->tri[t];
+        int i = T->v[0] == v ? 0 : T->v[1] == v ? 1 : 2;
+        if (m + 8 > dt->tri_cap / 3) return 0;
+        P[m] = T->v[(i + 1) % 3];
+        own[m] = T->n[i]; /* across the polygon edge P[m] -> P[m + 1] */
+        star[m++] = t;
+        t = T->n[(i + 1) % 3];
+    } while (t != t0);
+    uint32_t present = 0;
+    for (uint32_t u = 0; u < dt->cap && present < 8; u++) present += dt->in_dt[u];
+    if (present < 6 || m < 3) return 0;
+    /* new triangles go to the tail of the scratch: committed only if every ear is found */
+    uint32_t *made = dt->newt + dt->tri_cap / 3, nm = 0, *Pall = dt->newt + 2 * (dt->tri_cap / 3), mall = m;
+    memcpy(Pall, P, sizeof(uint32_t) * m);
+    while (m > 3) {
+        uint32_t j;
+        for (j = 0; j < m; j++)
+            if (gi__ear_ok(dt, P[j], P[(j + 1) % m], P[(j + 2) % m], v, Pall, mall)) break;
+        if (j == m) {
+            for (uint32_t k = 0; k < nm; k++) gi__tri_release(dt, made[k]);
+            return 0;
+        }
+        uint32_t j1 = (j + 1) % m, j2 = (j + 2) % m;
+        uint32_t nt = gi__tri_new(dt);
+        if (nt == GI_DT_INF) {
+            for (uint32_t k = 0; k < nm; k++) gi__tri_release(dt, made[k]);
+            return 0;
+        }
+        gi_dt_tri *T = &dt->tri[nt];
+        T->v[0] = P[j], T->v[1] = P[j1], T->v[2] = P[j2];
+        T->n[2] = own[j], T->n[0] = own[j1], T->n[1] = GI_DT_INF;
+        made[nm++] = nt;
+        /* the polygon loses P[j1]; edge P[j] -> P[j2] is now owned by nt */
+        own[j] = nt;
+        for (uint32_t k = j1; k + 1 < m; k++) P[k] = P[k + 1], own[k] = own[k + 1];
+        m--;
+    }
+    if (!gi__ear_ok(dt, P[0], P[1], P[2], v, Pall, mall)) {
+        for (uint32_t k = 0; k < nm; k++) gi__tri_release(dt, made[k]);
+        return 0;
+    }
+    uint32_t nt = gi__tri_new(dt);
+    if (nt == GI_DT_INF) {
+        for (uint32_t k = 0; k < nm; k++) gi__tri_release(dt, made[k]);
+        return 0;
+    }
+    dt->tri[nt].v[0] = P[0], dt->tri[nt].v[1] = P[1], dt->tri[nt].v[2] = P[2];
+    dt->tri[nt].n[2] = own[0], dt->tri[nt].n[0] = own[1], dt->tri[nt].n[1] = own[2];
+    made[nm++] = nt;
+    /* commit: back-links from every neighbour, then vertex map, centres */
+    for (uint32_t k = 0; k < nm; k++) {
+        uint32_t a = made[k];
+        for (int e = 0; e < 3; e++) {
+            uint32_t o = dt->tri[a].n[e];
+            if (o == GI_DT_INF) continue;
+            gi__link_back(dt, o, dt->tri[a].v[(e + 1) % 3], dt->tri[a].v[(e + 2) % 3], a);
+        }
+    }
+    for (uint32_t k = 0; k < mall; k++) gi__tri_release(dt, star[k]);
+    for (uint32_t k = 0; k < nm; k++) {
+        gi_dt_tri *T = &dt->tri[made[k]];
+        for (int e = 0; e < 3; e++)
+            if (T->v[e] != GI_DT_INF) dt->vt[T->v[e]] = made[k];
+        gi__tri_centre(dt, made[k]);
+    }
+    dt->last = made[0];
+    dt->solid = dt->solid + nm - mall;
+    dt->present[v] = 0;
+    dt->in_dt[v] = 0;
+    return 1;
+}
+
 pf_result gi_dt_remove(gi_dt *dt, uint32_t v, pf_error *err)
 {
+    if (gi__remove_local(dt, v)) return PF_OK;
     dt->present[v] = 0;
     dt->in_dt[v] = 0;
     return gi_dt_rebuild(dt, err);

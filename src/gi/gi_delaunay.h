@@ -71,6 +71,8 @@ typedef struct gi_dt {
     /* scratch */
     uint32_t *stack, *cavity, *newt;
     double *poly; /* 2 x 2 (cap + 8) doubles: clipping buffers */
+    uint64_t *order; /* rebuild: Morton key << 32 | index */
+    uint32_t *by_v1; /* insertion: the fan triangle (v, x, .) by x (GI_DT_INF at cap) */
 } gi_dt;
 
 pf_result gi_dt_init(gi_dt *dt, gi_dt_domain domain, uint32_t cap, pf_error *err);
@@ -83,9 +85,11 @@ void gi_dt_snap(gi_dt_domain domain, const double in[3], double out[3]);
 /* Sets vertex v's point (snapped) and marks it present; no triangulation
  * change until gi_dt_rebuild or gi_dt_insert. */
 void gi_dt_set_point(gi_dt *dt, uint32_t v, const double p[3]);
-/* Rebuilds the triangulation of the present points, in index order. Points
- * that coincide with an earlier one (after snapping) or that the sphere's
- * hull leaves inside get in_dt = 0; the caller decides what to do. */
+/* Rebuilds the triangulation of the present points (inserted in Morton
+ * order of their grid cells, ties by index: deterministic). Points that
+ * coincide with an earlier one (after snapping) or that the sphere's hull
+ * leaves inside are marked absent (present = 0); the caller decides what
+ * to do with them. */
 pf_result gi_dt_rebuild(gi_dt *dt, pf_error *err);
 /* Adds point p as vertex v (v not present) and updates the triangulation
  * incrementally (Bowyer-Watson). Returns 1 if v became a vertex, 0 if it

@@ -16,6 +16,8 @@
  * - 30 frames of the GI frame with a moving light identical with 1 and 2
  *   threads;
  * - IIR with many VPLs lights the Cornell box like IR (one bounce);
+ * - area lights (the extension): the VPL fluxes add up to the emitter's
+ *   power in a closed box;
  * - bad --param values are errors;
  * - the VPL-management time with a moving point light in Sibenik (printed,
  *   not asserted). */
@@ -576,6 +578,62 @@ static void test_converges_to_ir(void **state)
     assert_true(fabs(sb / sa - 1.0) < 0.01);
 }
 
+/* Area lights (the extension): a closed 2 x 2 x 2 box of albedo 0.5 with a
+ * small emissive quad under its ceiling facing down: every ray hits, so
+ * the VPLs' fluxes (I pi / albedo) add up to the emitter's power pi A Le
+ * exactly (one emitter of uniform radiance: Le / pdf_area is constant). */
+static void test_area_light_power(void **state)
+{
+    (void)state;
+    const float al[4] = {0.5f, 0.5f, 0.5f, 1};
+    tu_quad q[7] = {
+        {{0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0}, PF_ALPHA_OPAQUE, 0.5f},  /* floor, up */
+        {{0, 2, 0}, {1, 0, 0}, {0, 0, 1}, {0}, PF_ALPHA_OPAQUE, 0.5f},   /* ceiling, down */
+        {{-1, 1, 0}, {0, 0, -1}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* walls facing in */
+        {{1, 1, 0}, {0, 0, 1}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f},
+        {{0, 1, -1}, {1, 0, 0}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f},
+        {{0, 1, 1}, {-1, 0, 0}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f},
+        {{0, 1.9f, 0}, {0.2f, 0, 0}, {0, 0, 0.2f}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* emitter, down */
+    };
+    for (int k = 0; k < 7; k++) memcpy(q[k].albedo, al, sizeof al);
+    pf_scene s;
+    pf_error err;
+    tu_make_scene(&s, q, 7);
+    s.materials[6].emission[0] = 4.0f, s.materials[6].emission[1] = 2.0f, s.materials[6].emission[2] = 1.0f;
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    gi_area_lights area;
+    assert_int_equal(gi_area_lights_build(&area, &s, &err), PF_OK);
+    assert_int_equal(area.count, 2);
+    void *st;
+    assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
+    gi_vpl_set v = {0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area};
+    for (uint32_t f = 0; f < 3; f++) {
+        run_frames(st, &in, &v, f, 1);
+        double sum[3] = {0, 0, 0};
+        uint32_t n = 0;
+        for (uint32_t i = 0; i < v.count; i++) {
+            if (v.v[i].id == UINT32_MAX) continue;
+            n++;
+            sum[0] += v.v[i].intensity.x * PI / 0.5, sum[1] += v.v[i].intensity.y * PI / 0.5;
+            sum[2] += v.v[i].intensity.z * PI / 0.5;
+            assert_true(v.v[i].pos.y < 1.9f); /* below the emitter */
+        }
+        double want[3] = {PI * 0.16 * 4.0, PI * 0.16 * 2.0, PI * 0.16 * 1.0};
+        print_message("frame %u: %u VPLs, flux (%.6f, %.6f, %.6f), emitter power (%.6f, %.6f, %.6f)\n", f, n, sum[0],
+                      sum[1], sum[2], want[0], want[1], want[2]);
+        assert_int_equal(n, 256);
+        for (int c = 0; c < 3; c++) assert_true(fabs(sum[c] / want[c] - 1.0) < 1e-4);
+    }
+    gi_method_iir.destroy(st);
+    gi_vpl_set_free(&v);
+    gi_area_lights_free(&area);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
 static void test_bad_params(void **state)
 {
     (void)state;
@@ -684,6 +742,7 @@ int main(void)
         cmocka_unit_test(test_static_light_converges),
         cmocka_unit_test(test_deterministic_threads),
         cmocka_unit_test(test_converges_to_ir),
+        cmocka_unit_test(test_area_light_power),
         cmocka_unit_test(test_bad_params),
         cmocka_unit_test(test_timing_sibenik),
     };

@@ -36,8 +36,17 @@
  *   directional light (EXTENSION, not in the paper): the unit disc scaled to
  *     a disc of the scene's bounding radius R across the beam, 2R before the
  *     scene centre (exactly gi_ir.c's emission disc); power E pi R^2.
- *   area lights (emissive triangles): NOT IMPLEMENTED YET; update() fails
- *     with a clear error when the scene has any.
+ *   area lights (emissive triangles, gi_area.h; EXTENSION, not in the
+ *     paper, whose Sec. 7 says a true area light would need a 4D domain):
+ *     all emitters share one more domain, the unit disc as the cosine lobe
+ *     around the emitter normal (sin(theta) = r, Nusselt); each sample also
+ *     has a point on the emitters, drawn by power (gi_area_sample_point)
+ *     from stable per-sample values (a hash of its VPL id), fixed for its
+ *     life. So the distribution is managed over directions only; the
+ *     points are plain Monte Carlo. Its flux is its Voronoi-area fraction of
+ *     pi Le / pdf_area (an unbiased share of the emitters' power). Emitters
+ *     do not move in softgi, so these VPLs stay valid (the shadow ray from
+ *     the emission point is still cast) and only recalcMin churns.
  *
  * Units match gi_ir.c: a light's power is 4 pi I (point), I integral of
  * the cone factor over the cone (spot), E pi R^2 (directional), in RGB; a
@@ -91,10 +100,14 @@ typedef struct gi__slot {
     pf_vec3 pos, nrm, albedo;
     pf_vec3 intensity;
     double dp[3]; /* sampling point (misses keep theirs; VPLs recompute it each frame) */
+    /* area lights: the emission point (pushed off the emitter), its face
+     * normal and Le / pdf_area (W/(sr m^2) over 1/m^2) */
+    pf_vec3 em_p, em_n, em_w;
 } gi__slot;
 
 /* A light's frame: where its domain sits this frame. */
 typedef struct gi__lframe {
+    int area;               /* the area-light domain (extension) */
     pf_light_type type;
     pf_vec3 pos, dir, t, b; /* dir: spot axis / beam direction; t, b complete the basis */
     float sin_o, cos_o;     /* spot: outer cone */
@@ -104,6 +117,7 @@ typedef struct gi__lframe {
 
 typedef struct gi__domain {
     gi_dt dt;
+    int area;
     pf_light_type type;
     uint32_t quota;
     uint32_t filled; /* the initial fill is done */
@@ -111,7 +125,7 @@ typedef struct gi__domain {
 
 typedef struct gi__iir_state {
     uint32_t recalc_min, recalc_max, albedo_lod;
-    uint32_t budget, nlights;
+    uint32_t budget, nlights, ndom; /* ndom = nlights + 1 when the scene has area lights */
     gi__domain *dom;
     gi__slot *slot;
     uint32_t next_id;
@@ -144,10 +158,10 @@ static pf_result gi__iir_create(void **state, const gi_params *params, pf_error 
 
 static void gi__iir_reset(gi__iir_state *s)
 {
-    for (uint32_t l = 0; l < s->nlights; l++) gi_dt_free(&s->dom[l].dt);
+    for (uint32_t l = 0; l < s->ndom; l++) gi_dt_free(&s->dom[l].dt);
     free(s->dom), free(s->slot), free(s->rays), free(s->hits), free(s->occ), free(s->ray_slot), free(s->area);
     s->dom = NULL, s->slot = NULL, s->rays = NULL, s->hits = NULL, s->occ = NULL, s->ray_slot = NULL, s->area = NULL;
-    s->nlights = 0, s->budget = 0;
+    s->nlights = 0, s->ndom = 0, s->budget = 0;
 }
 
 static void gi__iir_destroy(void *state)
@@ -156,6 +170,17 @@ static void gi__iir_destroy(void *state)
     if (!s) return;
     gi__iir_reset(s);
     free(s);
+}
+
+/* A 32-bit integer hash (lowbias32, Wellons), for stable per-sample values. */
+static uint32_t gi__hash(uint32_t x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
 }
 
 static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
@@ -241,11 +266,23 @@ static pf_ray gi__from_domain(const gi__lframe *f, const double dp[3])
     return r;
 }
 
+/* Area lights: the disc point as the cosine lobe around the emitter's
+ * normal (Nusselt analog, sin(theta) = r), from the sample's emission point. */
+static pf_ray gi__from_domain_area(const gi__slot *q)
+{
+    pf_vec3 t, b;
+    pf_v3_basis(q->em_n, &t, &b);
+    double x = q->dp[0], y = q->dp[1];
+    float z = (float)sqrt(fmax(0.0, 1.0 - (x * x + y * y)));
+    pf_ray r = {q->em_p, 0.0f, pf_v3_normalize(pf_v3_add(pf_v3_add(pf_v3_scale(t, (float)x), pf_v3_scale(b, (float)y)), pf_v3_scale(q->em_n, z))), INFINITY};
+    return r;
+}
+
 /* The emission per unit domain area at sampling point dp, relative to the
  * light's intensity (Sec. 4.7 weights; see the header). */
 static double gi__density(const gi__lframe *f, const pf_light *L, const double dp[3])
 {
-    if (f->type != PF_LIGHT_SPOT) return 1.0;
+    if (f->area || f->type != PF_LIGHT_SPOT) return 1.0;
     double x = dp[0] * f->sin_o, y = dp[1] * f->sin_o;
     double ct = sqrt(fmax(0.0, 1.0 - (x * x + y * y)));
     return gi_light_spot_factor(L, (float)ct) * (double)f->sin_o * f->sin_o / fmax(ct, 1e-6);
@@ -269,6 +306,12 @@ static void gi__iir_validity(gi__iir_state *s, const gi_vpl_inputs *in, uint32_t
     for (uint32_t i = 0; i < s->budget; i++) {
         gi__slot *q = &s->slot[i];
         if (q->kind != GI__VPL || q->light != l) continue;
+        if (f->area) { /* static emitters: the stored sampling point; facing and a shadow ray */
+            pf_vec3 d = pf_v3_sub(q->pos, q->em_p);
+            if (!(pf_v3_dot(q->nrm, d) < 0.0f)) q->kind = GI__EMPTY;
+            else s->rays[nr] = (pf_ray){q->em_p, 0.0f, d, 0.9999f}, s->ray_slot[nr++] = i;
+            continue;
+        }
         pf_vec3 to_light = f->type == PF_LIGHT_DIRECTIONAL ? pf_v3_scale(f->dir, -1.0f) : pf_v3_sub(f->pos, q->pos);
         if (!(pf_v3_dot(q->nrm, to_light) > 0.0f) || !gi__to_domain(f, q->pos, q->dp)) {
             q->kind = GI__EMPTY;
@@ -286,7 +329,7 @@ static void gi__iir_validity(gi__iir_state *s, const gi_vpl_inputs *in, uint32_t
     for (uint32_t i = 0; i < s->budget; i++) {
         gi__slot *q = &s->slot[i];
         if (q->kind != GI__MISS || q->light != l) continue;
-        s->rays[nm] = gi__from_domain(f, q->dp);
+        s->rays[nm] = f->area ? gi__from_domain_area(q) : gi__from_domain(f, q->dp);
         s->ray_slot[nm++] = i;
     }
     pf_rt_intersect(in->rt, s->rays, s->hits, nm);
@@ -360,8 +403,22 @@ static pf_result gi__iir_create_new(gi__iir_state *s, const gi_vpl_inputs *in, u
         q->kind = GI__MISS;
         q->born = 1;
         q->light = (uint16_t)l;
+        q->id = s->next_id++;
         memcpy(q->dp, d->dt.p[v], sizeof q->dp);
-        s->rays[made] = gi__from_domain(f, q->dp);
+        if (f->area) {
+            /* the point on the emitters from stable per-sample values (a hash
+             * of the VPL id), by power as gi_area_sample_point does */
+            uint32_t h[3];
+            for (uint32_t k = 0; k < 3; k++) h[k] = gi__hash(q->id * 3u + k + 0x9e3779b9u);
+            gi_area_sample as;
+            gi_area_sample_point(in->area, (h[0] >> 8) * (1.0 / 16777216.0), (float)((h[1] >> 8) * (1.0 / 16777216.0)),
+                                 (float)((h[2] >> 8) * (1.0 / 16777216.0)), &as);
+            q->em_n = as.n;
+            q->em_p = pf_rt_offset_origin(as.p, as.n, as.n);
+            q->em_w = pf_v3_scale(as.radiance, 1.0f / as.pdf_area);
+            s->rays[made] = gi__from_domain_area(q);
+        } else
+            s->rays[made] = gi__from_domain(f, q->dp);
         s->ray_slot[made++] = v;
         count++;
     }
@@ -382,7 +439,6 @@ static pf_result gi__iir_create_new(gi__iir_state *s, const gi_vpl_inputs *in, u
         q->pos = pf_rt_offset_origin(sf.p, ng, ng);
         q->nrm = n;
         q->albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
-        q->id = s->next_id++;
     }
     return PF_OK;
 }
@@ -399,12 +455,15 @@ static void gi__iir_intensities(gi__iir_state *s, const pf_light *L, uint32_t l,
         s->area[i] *= gi__density(f, L, q->dp);
         wsum += s->area[i];
     }
-    double power = gi__light_power1(L, f->radius);
+    double power = f->area ? 0.0 : gi__light_power1(L, f->radius);
     for (uint32_t i = 0; i < s->budget; i++) {
         gi__slot *q = &s->slot[i];
         if (q->kind != GI__VPL || q->light != l) continue;
-        float phi = wsum > 0.0 ? (float)(power * s->area[i] / wsum) : 0.0f;
-        q->intensity = pf_v3_scale(pf_v3_mul(pf_v3_scale(L->color, phi), q->albedo), PF_INV_PI);
+        float frac = wsum > 0.0 ? (float)(s->area[i] / wsum) : 0.0f;
+        /* area: Phi = frac * pi Le / pdf_area (an unbiased share of the
+         * emitters' power pi sum A Le), so I = Phi albedo / pi = frac Le / pdf albedo */
+        if (f->area) q->intensity = pf_v3_scale(pf_v3_mul(q->em_w, q->albedo), frac);
+        else q->intensity = pf_v3_scale(pf_v3_mul(pf_v3_scale(L->color, (float)power * frac), q->albedo), PF_INV_PI);
     }
 }
 
@@ -412,17 +471,17 @@ static void gi__iir_intensities(gi__iir_state *s, const pf_light *L, uint32_t l,
 
 /* Splits the budget by luminance power (largest remainders, ties to the
  * lower light index). */
-static void gi__iir_quotas(gi__iir_state *s, const pf_scene *sc, float radius)
+static void gi__iir_quotas(gi__iir_state *s, const pf_scene *sc, const gi_area_lights *area, float radius)
 {
-    double p[256], total = 0.0;
-    for (uint32_t l = 0; l < s->nlights; l++) {
-        const pf_light *L = &sc->lights[l];
-        p[l] = fmax(0.0, gi__lum(L->color) * gi__light_power1(L, radius));
+    double p[257], total = 0.0;
+    for (uint32_t l = 0; l < s->ndom; l++) {
+        p[l] = l < s->nlights ? fmax(0.0, gi__lum(sc->lights[l].color) * gi__light_power1(&sc->lights[l], radius))
+                              : area->total_power;
         total += p[l];
     }
     uint32_t given = 0;
-    double frac[256];
-    for (uint32_t l = 0; l < s->nlights; l++) {
+    double frac[257];
+    for (uint32_t l = 0; l < s->ndom; l++) {
         double q = total > 0.0 ? s->budget * p[l] / total : 0.0;
         s->dom[l].quota = (uint32_t)floor(q);
         frac[l] = q - floor(q);
@@ -430,7 +489,7 @@ static void gi__iir_quotas(gi__iir_state *s, const pf_scene *sc, float radius)
     }
     while (total > 0.0 && given < s->budget) {
         uint32_t best = 0;
-        for (uint32_t l = 1; l < s->nlights; l++)
+        for (uint32_t l = 1; l < s->ndom; l++)
             if (frac[l] > frac[best]) best = l;
         s->dom[best].quota++;
         frac[best] = -1.0;
@@ -441,7 +500,8 @@ static void gi__iir_quotas(gi__iir_state *s, const pf_scene *sc, float radius)
 static pf_result gi__iir_setup(gi__iir_state *s, const gi_vpl_inputs *in, pf_error *err)
 {
     const pf_scene *sc = in->scene;
-    int same = s->budget == in->budget && s->nlights == sc->light_count;
+    uint32_t ndom = sc->light_count + (in->area && in->area->count > 0);
+    int same = s->budget == in->budget && s->nlights == sc->light_count && s->ndom == ndom;
     for (uint32_t l = 0; same && l < s->nlights; l++) same = s->dom[l].type == sc->lights[l].type;
     if (same) return PF_OK;
     gi__iir_reset(s);
@@ -449,7 +509,7 @@ static pf_result gi__iir_setup(gi__iir_state *s, const gi_vpl_inputs *in, pf_err
     uint32_t B = in->budget;
     s->budget = B;
     s->nlights = sc->light_count;
-    s->dom = calloc(s->nlights ? s->nlights : 1, sizeof *s->dom);
+    s->dom = calloc(ndom ? ndom : 1, sizeof *s->dom);
     s->slot = calloc(B + 1, sizeof *s->slot);
     s->rays = calloc(B + 1, sizeof *s->rays);
     s->hits = calloc(B + 1, sizeof *s->hits);
@@ -460,15 +520,17 @@ static pf_result gi__iir_setup(gi__iir_state *s, const gi_vpl_inputs *in, pf_err
         gi__iir_reset(s);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     }
-    for (uint32_t l = 0; l < s->nlights; l++) {
-        s->dom[l].type = sc->lights[l].type;
-        gi_dt_domain dom = sc->lights[l].type == PF_LIGHT_POINT ? GI_DT_SPHERE : GI_DT_DISC;
+    for (uint32_t l = 0; l < ndom; l++) {
+        s->dom[l].area = l >= s->nlights;
+        s->dom[l].type = l < s->nlights ? sc->lights[l].type : PF_LIGHT_POINT;
+        gi_dt_domain dom = l < s->nlights && sc->lights[l].type == PF_LIGHT_POINT ? GI_DT_SPHERE : GI_DT_DISC;
         pf_result r = gi_dt_init(&s->dom[l].dt, dom, B, err);
         if (r != PF_OK) {
-            s->nlights = l;
+            s->ndom = l;
             gi__iir_reset(s);
             return r;
         }
+        s->ndom = l + 1;
     }
     return PF_OK;
 }
@@ -506,19 +568,18 @@ static pf_result gi__iir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 {
     gi__iir_state *s = state;
     out->count = 0;
-    if (in->area && in->area->count > 0)
-        return pf_error_set(err, PF_ERR_UNSUPPORTED,
-                            "--method iir: area lights (emissive triangles) are not implemented yet");
     if (in->budget == 0) return PF_OK;
     pf_result r = gi__iir_setup(s, in, err);
     if (r != PF_OK) return r;
     const pf_scene *sc = in->scene;
     float radius = 0.5f * pf_v3_length(pf_v3_sub(sc->bounds_max, sc->bounds_min)) * 1.001f; /* as gi_ir.c */
     for (uint32_t i = 0; i < s->budget; i++) s->slot[i].born = 0;
-    gi__iir_quotas(s, sc, radius);
-    for (uint32_t l = 0; l < s->nlights; l++) {
-        const pf_light *L = &sc->lights[l];
-        gi__lframe f = gi__light_frame(L, sc);
+    gi__iir_quotas(s, sc, in->area, radius);
+    for (uint32_t l = 0; l < s->ndom; l++) {
+        const pf_light *L = l < s->nlights ? &sc->lights[l] : NULL;
+        gi__lframe f;
+        if (L) f = gi__light_frame(L, sc);
+        else memset(&f, 0, sizeof f), f.area = 1, f.radius = radius;
         gi__iir_validity(s, in, l, &f);                                 /* step 1 */
         if ((r = gi__iir_delete_invalid(s, l, err)) != PF_OK) return r; /* step 2 */
         if ((r = gi__iir_delete_for_room(s, l, err)) != PF_OK) return r;

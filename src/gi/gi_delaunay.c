@@ -61,7 +61,7 @@ pf_result gi_dt_init(gi_dt *dt, gi_dt_domain domain, uint32_t cap, pf_error *err
     memset(dt, 0, sizeof *dt);
     dt->domain = domain;
     dt->cap = cap;
-    dt->tri_cap = 2 * cap + 64;
+    dt->tri_cap = 4 * cap + 64; /* 2n triangles, plus a whole fan before the cavity is freed */
     dt->ip = calloc(cap + 1, sizeof *dt->ip);
     dt->p = calloc(cap + 1, sizeof *dt->p);
     dt->present = calloc(cap + 1, 1);

@@ -16,8 +16,11 @@
  * - 30 frames of the GI frame with a moving light identical with 1 and 2
  *   threads;
  * - IIR with many VPLs lights the Cornell box like IR (one bounce);
+ * - two lights in a closed box: the budget split 3:1 by power and the VPL
+ *   fluxes adding up to the lights' powers (gi_ir.c's units);
  * - area lights (the extension): the VPL fluxes add up to the emitter's
  *   power in a closed box;
+ * - local vertex deletion gives the same triangulation as a rebuild;
  * - bad --param values are errors;
  * - the VPL-management time with a moving point light in Sibenik (printed,
  *   not asserted). */
@@ -32,6 +35,7 @@
 
 #include "gi_delaunay.h"
 #include "gi_frame.h"
+#include "gi_light.h"
 #include "gi_vpl.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
@@ -578,13 +582,8 @@ static void test_converges_to_ir(void **state)
     assert_true(fabs(sb / sa - 1.0) < 0.01);
 }
 
-/* Area lights (the extension): a closed 2 x 2 x 2 box of albedo 0.5 with a
- * small emissive quad under its ceiling facing down: every ray hits, so
- * the VPLs' fluxes (I pi / albedo) add up to the emitter's power pi A Le
- * exactly (one emitter of uniform radiance: Le / pdf_area is constant). */
-static void test_area_light_power(void **state)
+static void closed_box(pf_scene *s, int emitter)
 {
-    (void)state;
     const float al[4] = {0.5f, 0.5f, 0.5f, 1};
     tu_quad q[7] = {
         {{0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0}, PF_ALPHA_OPAQUE, 0.5f},  /* floor, up */
@@ -596,10 +595,77 @@ static void test_area_light_power(void **state)
         {{0, 1.9f, 0}, {0.2f, 0, 0}, {0, 0, 0.2f}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* emitter, down */
     };
     for (int k = 0; k < 7; k++) memcpy(q[k].albedo, al, sizeof al);
+    tu_make_scene(s, q, emitter ? 7 : 6);
+    if (emitter) s->materials[6].emission[0] = 4.0f, s->materials[6].emission[1] = 2.0f, s->materials[6].emission[2] = 1.0f;
+}
+
+/* Several lights in a closed box (every ray hits): one domain each, the
+ * budget split by power (3:1 gives 192 + 64 slots), and the VPL fluxes
+ * (I pi / albedo) add up to the lights' powers: 4 pi I for the point
+ * light, I times the cone factor's integral (gi_ir.c's midpoint rule) for
+ * the spot. */
+static void test_two_lights_power(void **state)
+{
+    (void)state;
     pf_scene s;
     pf_error err;
-    tu_make_scene(&s, q, 7);
-    s.materials[6].emission[0] = 4.0f, s.materials[6].emission[1] = 2.0f, s.materials[6].emission[2] = 1.0f;
+    closed_box(&s, 0);
+    pf_light P = {.type = PF_LIGHT_POINT, .position = {-0.5f, 1, 0}, .color = {1, 1, 1}, .intensity = 3};
+    pf_light S = {.type = PF_LIGHT_SPOT, .position = {0.5f, 1.5f, 0}, .direction = {0, -1, 0}, .color = {1, 0.5f, 0.25f},
+                  .intensity = 1, .inner_cone = 0.3f, .outer_cone = 0.9f};
+    /* the spot's power per unit intensity, gi_ir.c's rule */
+    double co = cos(0.9), sum = 0.0;
+    for (int k = 0; k < 256; k++) sum += gi_light_spot_factor(&S, (float)(co + (1.0 - co) * (k + 0.5) / 256.0));
+    double spot_sr = 2.0 * PI * sum * (1.0 - co) / 256.0;
+    /* luminance powers 12 pi (point) : 4 pi (spot) */
+    S.intensity = (float)(4.0 * PI / spot_sr / (0.2126 + 0.7152 * 0.5 + 0.0722 * 0.25));
+    assert_int_equal(pf_scene_add_light(&s, &P, &err), PF_OK);
+    assert_int_equal(pf_scene_add_light(&s, &S, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    void *st;
+    assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
+    gi_area_lights area = {0};
+    gi_vpl_set v = {0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area};
+    run_frames(st, &in, &v, 0, 2);
+    double flux[3] = {0, 0, 0};
+    uint32_t n = 0, near_spot = 0;
+    for (uint32_t i = 0; i < v.count; i++) {
+        if (v.v[i].id == UINT32_MAX) continue;
+        n++;
+        flux[0] += v.v[i].intensity.x * PI / 0.5, flux[1] += v.v[i].intensity.y * PI / 0.5;
+        flux[2] += v.v[i].intensity.z * PI / 0.5;
+        /* the spot's VPLs are on the floor under it, inside its cone */
+        pf_vec3 d = pf_v3_sub(v.v[i].pos, S.position);
+        /* (on the cone's edge the cone factor, hence the intensity, is 0) */
+        int spot_coloured = v.v[i].intensity.x == 0.0f || v.v[i].intensity.z < 0.5f * v.v[i].intensity.x;
+        near_spot += spot_coloured && pf_v3_dot(pf_v3_normalize(d), S.direction) > cosf(0.9f) - 1e-3f;
+    }
+    double want[3] = {4 * PI * 3 + spot_sr * S.intensity, 4 * PI * 3 + spot_sr * S.intensity * 0.5,
+                      4 * PI * 3 + spot_sr * S.intensity * 0.25};
+    print_message("%u VPLs (%u of them the spot's), flux (%.5f, %.5f, %.5f), lights' power (%.5f, %.5f, %.5f)\n", n,
+                  near_spot, flux[0], flux[1], flux[2], want[0], want[1], want[2]);
+    assert_int_equal(n, 256);
+    assert_int_equal(near_spot, 64);
+    for (int c = 0; c < 3; c++) assert_true(fabs(flux[c] / want[c] - 1.0) < 1e-4);
+    gi_method_iir.destroy(st);
+    gi_vpl_set_free(&v);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* Area lights (the extension): a closed 2 x 2 x 2 box of albedo 0.5 with a
+ * small emissive quad under its ceiling facing down: every ray hits, so
+ * the VPLs' fluxes (I pi / albedo) add up to the emitter's power pi A Le
+ * exactly (one emitter of uniform radiance: Le / pdf_area is constant). */
+static void test_area_light_power(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_error err;
+    closed_box(&s, 1);
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
     pf_rt *rt;
     assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
@@ -742,6 +808,7 @@ int main(void)
         cmocka_unit_test(test_static_light_converges),
         cmocka_unit_test(test_deterministic_threads),
         cmocka_unit_test(test_converges_to_ir),
+        cmocka_unit_test(test_two_lights_power),
         cmocka_unit_test(test_area_light_power),
         cmocka_unit_test(test_bad_params),
         cmocka_unit_test(test_timing_sibenik),

@@ -563,6 +563,15 @@ static int gi__remove_local(gi_dt *dt, uint32_t v)
     dt->tri[nt].v[0] = P[0], dt->tri[nt].v[1] = P[1], dt->tri[nt].v[2] = P[2];
     dt->tri[nt].n[2] = own[0], dt->tri[nt].n[0] = own[1], dt->tri[nt].n[1] = own[2];
     made[nm++] = nt;
+    /* a hole filled with ghosts only (the disc around a hull vertex of
+     * degree 2, or a collinear remainder): leave that to the rebuild, which
+     * also recognises degenerate sets */
+    uint32_t solid_made = 0;
+    for (uint32_t k = 0; k < nm; k++) solid_made += !gi__is_ghost(&dt->tri[made[k]]);
+    if (!solid_made) {
+        for (uint32_t k = 0; k < nm; k++) gi__tri_release(dt, made[k]);
+        return 0;
+    }
     /* commit: back-links from every neighbour, then vertex map, centres */
     for (uint32_t k = 0; k < nm; k++) {
         uint32_t a = made[k];

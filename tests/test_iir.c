@@ -18,6 +18,8 @@
  * - IIR with many VPLs lights the Cornell box like IR (one bounce);
  * - two lights in a closed box: the budget split 3:1 by power and the VPL
  *   fluxes adding up to the lights' powers (gi_ir.c's units);
+ * - spot validity: VPLs outside a turned spot's cone are invalidated;
+ * - directional lights (the extension): the fluxes estimate E A of a floor;
  * - area lights (the extension): the VPL fluxes add up to the emitter's
  *   power in a closed box;
  * - local vertex deletion gives the same triangulation as a rebuild;
@@ -656,6 +658,89 @@ static void test_two_lights_power(void **state)
     pf_scene_free(&s);
 }
 
+/* Spot validity, condition 2 of Sec. 4.4: when the spot turns, VPLs that
+ * fall outside its outer cone are invalidated, and every VPL it keeps lies
+ * inside the new cone. */
+static void test_spot_cone_validity(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_error err;
+    closed_box(&s, 0);
+    pf_light S = {.type = PF_LIGHT_SPOT, .position = {0, 1.8f, 0}, .direction = {0, -1, 0}, .color = {1, 1, 1},
+                  .intensity = 1, .inner_cone = 0.3f, .outer_cone = 0.6f};
+    assert_int_equal(pf_scene_add_light(&s, &S, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    void *st;
+    assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
+    gi_area_lights area = {0};
+    gi_vpl_set a = {0}, b = {0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 128, 1, NULL, 0, 0, &area};
+    run_frames(st, &in, &a, 0, 2);
+    s.lights[0].direction = pf_v3_normalize(pf_v3(0.25f, -1, 0)); /* turn by 14 degrees */
+    run_frames(st, &in, &b, 2, 1);
+    uint32_t outside_before = 0, gone = 0, kept = 0;
+    float co = cosf(0.6f);
+    for (uint32_t i = 0; i < a.count; i++) {
+        if (a.v[i].id == UINT32_MAX) continue;
+        pf_vec3 w = pf_v3_normalize(pf_v3_sub(a.v[i].pos, S.position));
+        if (pf_v3_dot(w, s.lights[0].direction) >= co) continue;
+        outside_before++;
+        int alive = 0;
+        for (uint32_t j = 0; j < b.count; j++) alive |= b.v[j].id == a.v[i].id;
+        gone += !alive;
+    }
+    for (uint32_t j = 0; j < b.count; j++) {
+        if (b.v[j].id == UINT32_MAX) continue;
+        pf_vec3 w = pf_v3_normalize(pf_v3_sub(b.v[j].pos, S.position));
+        assert_true(pf_v3_dot(w, s.lights[0].direction) >= co - 1e-5f);
+        kept += !b.v[j].moved;
+    }
+    print_message("%u VPLs left the turned cone, %u of them invalidated; %u kept\n", outside_before, gone, kept);
+    assert_true(outside_before > 5);
+    assert_int_equal(gone, outside_before);
+    assert_true(kept > 64);
+    gi_method_iir.destroy(st);
+    gi_vpl_set_free(&a), gi_vpl_set_free(&b);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* Directional lights (the extension): a beam straight down onto a 10 x 10
+ * floor; the emission disc has the scene's bounding radius, so the VPLs'
+ * fluxes estimate E times the floor's area through their Voronoi areas. */
+static void test_directional_power(void **state)
+{
+    (void)state;
+    const tu_quad q = {{0, 0, 0}, {5, 0, 0}, {0, 0, -5}, {0.5f, 0.5f, 0.5f, 1}, PF_ALPHA_OPAQUE, 0.5f};
+    pf_scene s;
+    pf_error err;
+    tu_make_scene(&s, &q, 1);
+    pf_light D = {.type = PF_LIGHT_DIRECTIONAL, .direction = {0, -1, 0}, .color = {1, 1, 1}, .intensity = 2};
+    assert_int_equal(pf_scene_add_light(&s, &D, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    void *st;
+    assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
+    gi_area_lights area = {0};
+    gi_vpl_set v = {0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 1024, 1, NULL, 0, 0, &area};
+    run_frames(st, &in, &v, 0, 2);
+    double flux = 0.0;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < v.count; i++)
+        if (v.v[i].id != UINT32_MAX) flux += v.v[i].intensity.x * PI / 0.5, n++;
+    print_message("%u of 1024 samples hit the floor: flux %.4f, E A = %.4f\n", n, flux, 2.0 * 100.0);
+    assert_true(fabs(flux / 200.0 - 1.0) < 0.03);
+    gi_method_iir.destroy(st);
+    gi_vpl_set_free(&v);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
 /* Area lights (the extension): a closed 2 x 2 x 2 box of albedo 0.5 with a
  * small emissive quad under its ceiling facing down: every ray hits, so
  * the VPLs' fluxes (I pi / albedo) add up to the emitter's power pi A Le
@@ -809,6 +894,8 @@ int main(void)
         cmocka_unit_test(test_deterministic_threads),
         cmocka_unit_test(test_converges_to_ir),
         cmocka_unit_test(test_two_lights_power),
+        cmocka_unit_test(test_spot_cone_validity),
+        cmocka_unit_test(test_directional_power),
         cmocka_unit_test(test_area_light_power),
         cmocka_unit_test(test_bad_params),
         cmocka_unit_test(test_timing_sibenik),

@@ -798,6 +798,11 @@ static void test_bad_params(void **state)
         assert_int_not_equal(gi_method_iir.create(&st, &p, &err), PF_OK);
         print_message("%s: %s\n", bad[k], err.message);
     }
+    /* and through the command line: a clear message, exit status 2 */
+    tu_softgi_expect("render " CORNELL " --method iir --param recalcMin=9 --size 32x24 -q -o /tmp/test_iir_bad.png", 2,
+                     "recalcMin (9) must not exceed recalcMax (8)");
+    tu_softgi_expect("render " CORNELL " --method iir --param recalc=3 --size 32x24 -q -o /tmp/test_iir_bad.png", 2,
+                     "no such parameter");
 }
 
 /* VPL management time (steps 1-4, one core) with a light moving through

@@ -14,7 +14,8 @@
  * __int128 (|coordinate| <= 2^24 + 1, so differences < 2^26, products of
  * three differences < 2^78, sums well inside 2^127). The triangulation is
  * therefore unique up to exactly cocircular points, where the insertion
- * order (point index order) decides: a rebuild is deterministic.
+ * order (Morton order of the grid cells, then index) decides: a rebuild
+ * is deterministic.
  *
  * Disc: Bowyer-Watson with "ghost" triangles (a, b, INF) on the hull edges
  * (Shewchuk's convention: the ghost's circumcircle is the open half-plane
@@ -30,8 +31,9 @@
  *
  * Degenerate sets (disc: fewer than 3 non-collinear points; sphere: fewer
  * than 4 non-coplanar) have no triangulation: the functions then answer by
- * brute force over a fixed candidate set (disc: 8192 grid and boundary
- * points, sphere: 4096 Fibonacci points), which is approximate but only
+ * brute force over fixed probe points (largest empty circle: 8192 grid
+ * and boundary points on the disc, 4096 Fibonacci points on the sphere;
+ * areas: nearest-site counts over 32768 / 16384), which is approximate but only
  * happens for a handful of points (a light's first samples, or after a
  * light jump invalidates almost everything).
  *
@@ -96,7 +98,8 @@ pf_result gi_dt_rebuild(gi_dt *dt, pf_error *err);
  * was rejected (coincident, or inside the sphere's hull): then v is not
  * present. */
 int gi_dt_insert(gi_dt *dt, uint32_t v, const double p[3], pf_error *err);
-/* Removes vertex v (marks it absent and rebuilds). */
+/* Removes vertex v: locally (its star re-triangulated by Delaunay ear
+ * clipping), or by a rebuild for tiny or degenerate sets. */
 pf_result gi_dt_remove(gi_dt *dt, uint32_t v, pf_error *err);
 
 /* The largest empty circle's centre (disc: z = 0; sphere: unit vector) and

@@ -152,10 +152,11 @@ void gi_stage_vpl_update(gi_frame *f)
 
 int gi_vpl_method_gbuffer_free(const gi_vpl_method *m)
 {
-    /* Instant Radiosity starts its paths at the lights; the camera and the
-     * G-buffer play no part. (Kept here rather than as a field of
-     * gi_vpl_method so that the methods' files need no change.) */
-    return m == &gi_method_ir;
+    /* Instant Radiosity and Incremental Instant Radiosity start at the
+     * lights; the camera and the G-buffer play no part. (Kept here rather
+     * than as a field of gi_vpl_method so that the methods' files need no
+     * change.) */
+    return m == &gi_method_ir || m == &gi_method_iir;
 }
 
 /* The pipelined update: one job of one item. It touches only the method's

@@ -29,7 +29,8 @@ typedef struct gi_vpl {
     pf_vec3 pos, nrm;
     pf_vec3 intensity; /* Phi * albedo / pi, RGB (W/sr at normal exitance) */
     uint32_t id;       /* stable while the VPL lives */
-    uint32_t moved;    /* new, moved or re-weighted this frame */
+    uint32_t moved;    /* position or normal new/changed this frame: its paraboloid map must be
+                          re-rendered (a changed intensity alone needs no new map) */
 } gi_vpl;
 
 typedef struct gi_vpl_set {

@@ -241,7 +241,9 @@ int app_sequence(const pf_options *o)
                o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
         if (fr->indirect)
             printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s\n", fr->ind.opt.method->name,
-                   fr->ind.opt.vpls, fr->ind.n, fr->ind.m, fr->ind.para ? "paraboloid maps" : "Embree rays");
+                   fr->ind.opt.vpls, fr->ind.n, fr->ind.m, fr->ind.ism    ? "imperfect shadow maps"
+                   : fr->ind.para ? "paraboloid maps"
+                                  : "Embree rays");
         printf("load %.1f ms, build %.1f ms; writing %s/frame_NNNN.{pfm,png,view,depth.pfm}\n", t_load * 1e3,
                t_build * 1e3, dir);
     }

@@ -4,7 +4,9 @@
  *
  *   gi_stage_vpl_update        the VPL method's update (step 3)
  *   gi_stage_vpl_shadow_maps   paraboloid maps, re-rendered only for new or
- *                              moved VPLs (step 4, Laine 2007 Sec. 6)
+ *                              moved VPLs (step 4, Laine 2007 Sec. 6); or
+ *                              (--visibility ism) imperfect shadow maps of
+ *                              every VPL, rebuilt every frame (gi_ism.h)
  *   gi_stage_split             the G-buffer split into n x m interleaved
  *                              tiles: pixel (a, b) of tile (i, j) is pixel
  *                              (a n + i, b m + j) of the image (Sec. 5.1)
@@ -29,6 +31,7 @@
 #define GI_INDIRECT_H
 
 #include "gi_vpl.h"
+#include "gi_ism.h"
 #include "rs_paraboloid.h"
 
 typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE } gi_filter_kind;
@@ -46,7 +49,8 @@ typedef struct gi_indirect_options {
     gi_filter_kind filter;
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
     float beta;                  /* filter normal threshold (0: 0.8, Laine 2007) */
-    uint32_t para_res;           /* paraboloid map resolution (0: 128) */
+    uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
+    gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
 } gi_indirect_options;
 
 typedef struct gi_indirect {
@@ -58,7 +62,9 @@ typedef struct gi_indirect {
     float alpha;              /* filter threshold in scene units */
     /* paraboloid maps: one slot per VPL index */
     rs_para_context *para;
-    uint16_t *atlas;
+    gi_ism *ism;              /* --visibility ism (then para is NULL) */
+    float bias_scale;         /* map bias x this: 1 for exact maps, the ISM bias scale for ISMs */
+    uint16_t *atlas;          /* exact maps or ISMs, rs_paraboloid layout, R = opt.para_res */
     uint32_t atlas_slots;
     rs_para_frame *frames;
     float range;

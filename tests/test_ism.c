@@ -22,6 +22,7 @@
 
 #include <cmocka.h>
 #include <math.h>
+#include <unistd.h>
 
 #include "gi_frame.h"
 #include "gi_ism.h"
@@ -410,6 +411,17 @@ static void test_bad_options(void **state)
     tu_softgi_expect("render --visibility ism --ism-bias 0.5 -q", 2, "--ism-bias '0.5'");
     tu_softgi_expect("render --visibility ism --ism-bias nan -q", 2, "--ism-bias");
     tu_softgi_expect("render --ism-res 64 -q", 2, "need --visibility ism");
+    tu_softgi_expect("bench frame --visibility ism", 2, "--visibility");
+    /* and good values render */
+    char out[4096];
+    snprintf(out, sizeof out, "render --visibility ism --ism-res 32 --ism-points 20000 --ism-bias 2.5 --size 32x24 "
+                              "--indirect-only --vpls 16 -o /tmp/test_ism_%d.png",
+             (int)getpid());
+    tu_softgi_expect(out, 0, "visibility imperfect shadow maps");
+    snprintf(out, sizeof out, "/tmp/test_ism_%d.png", (int)getpid());
+    remove(out);
+    snprintf(out, sizeof out, "/tmp/test_ism_%d.pfm", (int)getpid());
+    remove(out);
     tu_softgi_expect("render --visibility raytrace --ism-bias 2 -q", 2, "need --visibility ism");
 }
 

@@ -290,6 +290,10 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
                       : o->indirect_only       ? "--indirect-only"
                       : o->no_interleave       ? "--no-interleave"
                       : o->visibility_raytrace ? "--visibility"
+                      : o->visibility_ism      ? "--visibility" /* ISM timing: tests/test_ism.c, SOFTGI_ISM_BENCH=1 */
+                      : o->ism_res             ? "--ism-res"
+                      : o->ism_points          ? "--ism-points"
+                      : o->ism_bias != 0.0f    ? "--ism-bias"
                       : o->method              ? "--method"
                       : o->bounces             ? "--bounces"
                       : o->clamp_set           ? "--clamp"

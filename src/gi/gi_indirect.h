@@ -17,7 +17,8 @@
  *   gi_stage_accumulate        each tile pixel's irradiance from its tile's
  *                              VPLs: E = T * sum I G_b V, with G_b =
  *                              min(cos cos / r^2, b) and V from the VPL's
- *                              paraboloid map (or an Embree ray); T = n m
+ *                              paraboloid map (or its ISM, with the ISM
+ *                              bias, or an Embree ray); T = n m
  *                              makes the n x m average the full sum
  *   gi_stage_combine           back to image layout (Sec. 5.1)
  *   gi_stage_filter            Laine's geometry-aware n x m box filter

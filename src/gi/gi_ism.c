@@ -6,8 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Triangles per splat job item: enough work per item to hide the claim. */
-#define GI__ISM_TRI_CHUNK 256u
+/* Expected points per splat job item: items are runs of consecutive
+ * triangles, and a triangle with more points is split into runs of its
+ * points, so a scene of few large triangles spreads over the workers too. */
+#define GI__ISM_ITEM_POINTS 4096.0f
 /* Maps per clear / pull-push job item. */
 #define GI__ISM_MAP_GRAIN 4u
 
@@ -15,11 +17,18 @@ typedef struct gi__ism_tri {
     float v0[3], e1[3], e2[3];
 } gi__ism_tri;
 
+/* A splat job item: triangles t0..t1-1, their points k0..min(k1, n)-1. */
+typedef struct gi__ism_item {
+    uint32_t t0, t1, k0, k1;
+} gi__ism_item;
+
 struct gi_ism {
     gi_ism_options opt;
     uint32_t tri_count;
     gi__ism_tri *tris;
     float *density;     /* expected points per frame of each triangle: P A_i / A */
+    gi__ism_item *items;
+    uint32_t item_count;
     uint16_t *template_map; /* R x R: EMPTY inside the disc, OUTSIDE out of it */
     uint32_t inside_texels;
     int *row_lo, *row_hi; /* per map row: the inside texels' columns (lo > hi: none) */
@@ -38,6 +47,46 @@ struct gi_ism {
 /* ------------------------------------------------------------------ create */
 
 static int gi__is_pow2(uint32_t x) { return x && !(x & (x - 1)); }
+
+/* The splat job items (see GI__ISM_ITEM_POINTS): two passes, count then
+ * fill. */
+static pf_result gi__ism_make_items(gi_ism *m)
+{
+    for (int pass = 0; pass < 2; pass++) {
+        uint32_t n = 0, start = 0;
+        float acc = 0.0f;
+#define GI__ISM_ITEM(a, b, c, d)                                                                                       \
+    do {                                                                                                               \
+        if (pass) m->items[n] = (gi__ism_item){(a), (b), (c), (d)};                                                    \
+        n++;                                                                                                           \
+    } while (0)
+        for (uint32_t t = 0; t < m->tri_count; t++) {
+            float d = m->density[t];
+            if (d > GI__ISM_ITEM_POINTS) { /* close the run, then split this triangle */
+                if (t > start) GI__ISM_ITEM(start, t, 0, UINT32_MAX);
+                uint32_t pieces = (uint32_t)ceilf(d / GI__ISM_ITEM_POINTS);
+                for (uint32_t q = 0; q < pieces; q++)
+                    GI__ISM_ITEM(t, t + 1, q * (uint32_t)GI__ISM_ITEM_POINTS,
+                                 q + 1 == pieces ? UINT32_MAX : (q + 1) * (uint32_t)GI__ISM_ITEM_POINTS);
+                start = t + 1, acc = 0.0f;
+                continue;
+            }
+            acc += d;
+            if (acc >= GI__ISM_ITEM_POINTS) {
+                GI__ISM_ITEM(start, t + 1, 0, UINT32_MAX);
+                start = t + 1, acc = 0.0f;
+            }
+        }
+        if (m->tri_count > start) GI__ISM_ITEM(start, m->tri_count, 0, UINT32_MAX);
+#undef GI__ISM_ITEM
+        if (!pass) {
+            m->items = malloc(sizeof(gi__ism_item) * (n ? n : 1));
+            if (!m->items) return PF_ERR_OUT_OF_MEMORY;
+        }
+        m->item_count = n;
+    }
+    return PF_OK;
+}
 
 pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_options *opt_in, uint32_t threads,
                         pf_error *err)
@@ -104,6 +153,10 @@ pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_option
     m->area = total;
     for (uint32_t t = 0; t < scene->tri_count; t++)
         m->density[t] = (float)((double)o.points * (double)m->density[t] / total);
+    if (gi__ism_make_items(m) != PF_OK) {
+        gi_ism_destroy(m);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs");
+    }
     for (uint32_t j = 0; j < R; j++) {
         m->row_lo[j] = (int)R, m->row_hi[j] = -1;
         for (uint32_t i = 0; i < R; i++) {
@@ -124,6 +177,7 @@ void gi_ism_destroy(gi_ism *m)
     if (m->scratch)
         for (uint32_t w = 0; w < m->workers; w++) free(m->scratch[w]);
     free(m->scratch);
+    free(m->items);
     free(m->tris), free(m->density), free(m->template_map), free(m->row_lo), free(m->row_hi);
     free(m);
 }
@@ -187,10 +241,9 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
     const size_t map = (size_t)R * R;
     const float scale = m->scale;
     const float phi = 0.6180339887f; /* golden-ratio lattice for u2 */
-    uint32_t t0 = item * GI__ISM_TRI_CHUNK, t1 = t0 + GI__ISM_TRI_CHUNK;
-    if (t1 > m->tri_count) t1 = m->tri_count;
+    const gi__ism_item *it = &m->items[item];
     uint64_t generated = 0, splatted = 0;
-    for (uint32_t t = t0; t < t1; t++) {
+    for (uint32_t t = it->t0; t < it->t1; t++) {
         /* tessellation control shader: this triangle's point count,
          * floor(P A_i / A) plus one with probability of the fraction */
         uint64_t seed = gi__mix64(((uint64_t)m->frame << 32 | t) ^ 0x5851f42d4c957f2dull);
@@ -201,7 +254,8 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
         const gi__ism_tri *T = &m->tris[t];
         float shift = gi__unit24(gi__mix64(seed + 1));
         float inv_n = 1.0f / (float)n;
-        for (uint32_t k = 0; k < n; k++) {
+        uint32_t k0 = it->k0 < n ? it->k0 : n, k1 = it->k1 < n ? it->k1 : n;
+        for (uint32_t k = k0; k < k1; k++) {
             /* tessellation evaluation shader: a stratified position and the
              * point's seed */
             uint64_t h = gi__mix64(seed + ((uint64_t)k + 2) * 0x9e3779b97f4a7c15ull);
@@ -255,7 +309,7 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
             }
             splatted++;
         }
-        generated += n;
+        generated += k1 - k0;
     }
     __atomic_fetch_add(&m->generated, generated, __ATOMIC_RELAXED);
     __atomic_fetch_add(&m->splatted, splatted, __ATOMIC_RELAXED);
@@ -273,7 +327,7 @@ void gi_ism_stage_splat(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, const rs_para
     m->point_radius = (float)sqrt(m->area * (double)count / ((double)m->opt.points * 3.14159265358979));
     m->generated = m->splatted = 0;
     if (count == 0) return;
-    gi__ism_for(jobs, gi__ism_splat_chunk, m, (m->tri_count + GI__ISM_TRI_CHUNK - 1) / GI__ISM_TRI_CHUNK, 1);
+    gi__ism_for(jobs, gi__ism_splat_chunk, m, m->item_count, 1);
     if (stats) stats->points += m->generated, stats->splatted += m->splatted;
 }
 

@@ -63,10 +63,12 @@
  *   occlusion test replacing samples 10% behind the coarser level spread
  *   the nearest depth over whole maps: agreement 0.45).
  *
- * Determinism: every splat is an atomic min on the 16-bit code of one texel,
- * which is order-free, so the maps do not depend on which thread splats which
- * triangle; pull-push runs one map per job item. Same bytes for any thread
- * count (tested).
+ * Parallelism and determinism: the splat's job items are runs of
+ * consecutive triangles of about 4096 expected points (a larger triangle is
+ * split into runs of its points); every splat is an atomic min on the 16-bit
+ * code of a texel, which is order-free, so the maps do not depend on which
+ * thread splats which point; clear and pull-push run one map per job item.
+ * Same bytes for any thread count (tested).
  *
  * Memory: everything at create (triangles, per-triangle point densities,
  * per-worker pull-push pyramids); gi_ism_render allocates nothing. */

@@ -240,7 +240,6 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
     const uint32_t R = m->opt.resolution, N = m->count;
     const size_t map = (size_t)R * R;
     const float scale = m->scale;
-    const float phi = 0.6180339887f; /* golden-ratio lattice for u2 */
     const gi__ism_item *it = &m->items[item];
     uint64_t generated = 0, splatted = 0;
     for (uint32_t t = it->t0; t < it->t1; t++) {
@@ -252,7 +251,7 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
         uint32_t n = (uint32_t)whole + (gi__unit24(seed) < dens - whole ? 1u : 0u);
         if (n == 0) continue;
         const gi__ism_tri *T = &m->tris[t];
-        float shift = gi__unit24(gi__mix64(seed + 1));
+        uint32_t shift = (uint32_t)(gi__mix64(seed + 1) >> 32);
         float inv_n = 1.0f / (float)n;
         uint32_t k0 = it->k0 < n ? it->k0 : n, k1 = it->k1 < n ? it->k1 : n;
         for (uint32_t k = k0; k < k1; k++) {
@@ -260,8 +259,8 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
              * point's seed */
             uint64_t h = gi__mix64(seed + ((uint64_t)k + 2) * 0x9e3779b97f4a7c15ull);
             float u1 = ((float)k + gi__unit24(h)) * inv_n;
-            float u2 = (float)k * phi + shift;
-            u2 -= floorf(u2);
+            /* frac(k phi + shift) in 32-bit fixed point: exact for any k */
+            float u2 = (float)(((uint32_t)k * 2654435769u + shift) >> 8) * 0x1p-24f;
             float s = sqrtf(u1), a = s * (1.0f - u2), b = s * u2;
             pf_vec3 q = pf_v3(T->v0[0] + (a * T->e1[0] + b * T->e2[0]), T->v0[1] + (a * T->e1[1] + b * T->e2[1]),
                               T->v0[2] + (a * T->e1[2] + b * T->e2[2]));
@@ -276,8 +275,8 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
             /* the splat: the texel the point falls in, plus (geometry
              * shader: "calculate the size of the splat") every inside texel
              * whose centre is within the splat's radius, the point's disc
-             * of area A count / P (its VPL's share of
-             * the points) seen from the VPL: angle r / dist, in texels
+             * of area A count / P (its VPL's share of the points) seen
+             * from the VPL: angle r / dist, in texels
              * r / dist (1 + u^2 + v^2) R / 4 (dtheta = 2 drho / (1 + rho^2),
              * R / 2 texels per unit of u), capped */
             uint16_t *mp = m->atlas + vi * map;
@@ -299,12 +298,12 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
                     float cy = (float)j + 0.5f - y, h2 = rt * rt - cy * cy;
                     if (!(h2 >= 0.0f)) continue;
                     float hw = sqrtf(h2);
-                    int a = (int)ceilf(x - hw - 0.5f), b = (int)floorf(x + hw - 0.5f);
-                    if (a < i0) a = i0;
-                    if (b > i1) b = i1;
-                    if (a < m->row_lo[j]) a = m->row_lo[j];
-                    if (b > m->row_hi[j]) b = m->row_hi[j];
-                    for (int i = a; i <= b; i++) gi__atomic_min_u16(mp + (size_t)j * R + (size_t)i, code);
+                    int ia = (int)ceilf(x - hw - 0.5f), ib = (int)floorf(x + hw - 0.5f);
+                    if (ia < i0) ia = i0;
+                    if (ib > i1) ib = i1;
+                    if (ia < m->row_lo[j]) ia = m->row_lo[j];
+                    if (ib > m->row_hi[j]) ib = m->row_hi[j];
+                    for (int i = ia; i <= ib; i++) gi__atomic_min_u16(mp + (size_t)j * R + (size_t)i, code);
                 }
             }
             splatted++;

@@ -102,7 +102,7 @@
  * receiver's own surface sits up to a few texel footprints nearer than it.
  * 2 was chosen by measurement (indirect-only image against Embree
  * visibility, 256 IR VPLs): Sibenik RMSE 0.00449 / 0.00356 / 0.00340 /
- * 0.00452 and Cornell box 0.0638 / 0.0473 / 0.0443 / 0.0475 for scales
+ * 0.00452 and Cornell box 0.0635 / 0.0472 / 0.0443 / 0.0475 for scales
  * 1 / 1.5 / 2 / 3 (README notes); below 2 surfaces shadow themselves, above
  * it light leaks under contacts. */
 #define GI_ISM_DEFAULT_BIAS 2.0f

@@ -14,7 +14,10 @@
  * - bad option values are errors (API and CLI).
  * SOFTGI_ISM_BENCH=1 adds the timing of README "ISM": the ISMs of 256 VPLs
  * against the exact 128x128 paraboloid maps of the same VPLs, 1 and 2
- * threads, on Sibenik (median of 5, ISM and exact maps alternated). */
+ * threads, on Sibenik (median of 5, ISM and exact maps alternated).
+ * SOFTGI_ISM_BIAS, SOFTGI_ISM_POINTS, SOFTGI_ISM_RES and SOFTGI_PARA_RES
+ * override the agreement tests' settings (how the defaults were chosen; the
+ * bounds hold for the defaults only). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

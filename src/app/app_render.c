@@ -89,7 +89,10 @@ int app_render(const pf_options *o)
             if (frame.indirect)
                 printf("indirect: %s, %u VPLs (%u maps rendered), %ux%u tiles, clamp b = %g, visibility %s\n",
                        frame.ind.opt.method->name, frame.ind.vpls.count, frame.ind.maps_rendered, frame.ind.n,
-                       frame.ind.m, (double)frame.ind.b, frame.ind.para ? "paraboloid maps" : "Embree rays");
+                       frame.ind.m, (double)frame.ind.b,
+                       frame.ind.ism    ? "imperfect shadow maps"
+                       : frame.ind.para ? "paraboloid maps"
+                                        : "Embree rays");
             pf_stage_print(&t, stdout);
             printf("wrote %s and %s\n", png, pfm);
         }

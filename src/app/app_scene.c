@@ -79,6 +79,11 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     io->visibility_ism = o->visibility_ism;
     if (o->visibility_ism && o->visibility_raytrace)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
+    if (!o->visibility_ism && (o->ism_res || o->ism_points || o->ism_bias != 0.0f))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res, --ism-points and --ism-bias need --visibility ism");
+    io->ism.resolution = o->ism_res;
+    io->ism.points = o->ism_points;
+    io->ism.bias_scale = o->ism_bias;
     for (uint32_t i = 0; i < o->param_count; i++) {
         pf_result r = gi_params_add(&io->params, o->params[i], err);
         if (r != PF_OK) return r;

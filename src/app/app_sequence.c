@@ -273,7 +273,7 @@ int app_sequence(const pf_options *o)
         if (fr->indirect)
             printf("indirect: %s, budget %u VPLs, %ux%u tiles, visibility %s, pipeline %s\n",
                    fr->ind.opt.method->name, fr->ind.opt.vpls, fr->ind.n, fr->ind.m,
-                   fr->ind.para ? "paraboloid maps" : "Embree rays",
+                   fr->ind.ism ? "imperfect shadow maps" : fr->ind.para ? "paraboloid maps" : "Embree rays",
                    fr->ind.opt.pipeline ? "on (frames >= 1 shade with the previous frame's VPLs)" : "off");
         printf("load %.1f ms, build %.1f ms; writing %s/frame_NNNN.{pfm,png,view,depth.pfm}\n", t_load * 1e3,
                t_build * 1e3, dir);

@@ -37,10 +37,12 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if (o.clamp < 0.0f) o.clamp = GI__DEFAULT_CLAMP;
     if (!(o.alpha_rel > 0.0f)) o.alpha_rel = 0.02f;
     if (!(o.beta > 0.0f)) o.beta = 0.8f;
+    if (o.visibility_ism && o.visibility_raytrace)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
+    if (o.visibility_ism) o.para_res = o.ism.resolution ? o.ism.resolution : GI_ISM_DEFAULT_RES;
     if (!o.para_res) o.para_res = RS_PARA_DEFAULT_RES;
     ind->opt = o;
-    if (o.visibility_ism) /* ISM: see gi_ism.c (issue 6) */
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility ism: not implemented yet");
+    ind->bias_scale = 1.0f;
     const pf_scene *s = f->scene;
     float diag = pf_v3_length(pf_v3_sub(s->bounds_max, s->bounds_min));
     ind->b = o.clamp > 0.0f ? o.clamp / (diag * diag) : INFINITY;
@@ -75,11 +77,17 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
                             o.vpls, (double)rs_para_atlas_bytes(o.para_res, o.vpls) / (1u << 30), o.para_res,
                             o.para_res, (double)GI__MAX_MAP_BYTES / (1u << 30));
     if (ok && !o.visibility_raytrace) {
-        rs_para_options po;
-        memset(&po, 0, sizeof po);
-        po.resolution = o.para_res;
-        r = rs_para_context_create(&ind->para, s, &po, err);
-        if (r != PF_OK) return r;
+        if (o.visibility_ism) {
+            r = gi_ism_create(&ind->ism, s, &o.ism, f->jobs ? pf_jobs_thread_count(f->jobs) : 1, err);
+            if (r != PF_OK) return r;
+            ind->bias_scale = gi_ism_bias_scale(ind->ism);
+        } else {
+            rs_para_options po;
+            memset(&po, 0, sizeof po);
+            po.resolution = o.para_res;
+            r = rs_para_context_create(&ind->para, s, &po, err);
+            if (r != PF_OK) return r;
+        }
         /* +64 bytes: the SIMD accumulation gathers 4 bytes at a 2-byte texel */
         ind->atlas = malloc(rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
         ind->frames = calloc(o.vpls, sizeof(rs_para_frame));
@@ -109,6 +117,7 @@ void gi_indirect_free(gi_indirect *ind)
     gi_vpl_set_free(&ind->vpls);
     gi_vpl_set_free(&ind->vpls_next);
     rs_para_context_destroy(ind->para);
+    gi_ism_destroy(ind->ism);
     free(ind->atlas);
     free(ind->frames), free(ind->map_pos), free(ind->map_nrm);
     free(ind->sort_keys), free(ind->tile_of), free(ind->cursor);
@@ -220,6 +229,17 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     ind->maps_rendered = 0;
+    if (ind->ism) {
+        /* Imperfect shadow maps: every VPL's map is rebuilt every frame, moved
+         * or not, since the points are regenerated and reassigned to VPLs at
+         * random each frame (Ritschel 2008; Barak 2013 Sec. 5.2) */
+        uint32_t N = ind->vpls.count;
+        for (uint32_t i = 0; i < N; i++) ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+        gi_ism_render(ind->ism, ind->atlas, f->jobs, ind->frames, N, ind->range, ind->frame, NULL);
+        ind->maps_rendered = N;
+        ind->atlas_slots = N;
+        return;
+    }
     /* pipelined frame 1 shades with frame 0's set again: its maps are there */
     if (!ind->para || ind->maps_current) return;
     ind->maps_current = 1;
@@ -344,6 +364,7 @@ __attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indire
     const __m256 k4 = _mm256_set1_ps(4.0f / (float)R), tanmax = _mm256_set1_ps(RS_PARA_TAN_MAX);
     const __m256 step = _mm256_set1_ps(ind->range / RS_PARA_CODES);
     const __m256 qbias = _mm256_set1_ps(2.0f * ind->range / RS_PARA_CODES);
+    const __m256 bscale = _mm256_set1_ps(ind->bias_scale); /* 1 (exact maps: x 1 is exact) or the ISM scale */
     const __m256 h = _mm256_set1_ps(0.5f * (float)R), rmax = _mm256_set1_ps((float)R - 1.0f);
     const __m256 shrink = _mm256_set1_ps(1.0f - 1.5f / (float)R);
     const __m256i iR = _mm256_set1_epi32((int)R), iR2 = _mm256_set1_epi32((int)(R * R));
@@ -423,7 +444,8 @@ __attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indire
         __m256i code = _mm256_and_si256(_mm256_i32gather_epi32((const int *)mp, idx, 2), _mm256_set1_epi32(0xffff));
         __m256i empty = _mm256_cmpgt_epi32(code, _mm256_set1_epi32((int)RS_PARA_MAX_CODE));
         __m256 decoded = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(code), one), step);
-        __m256 limit = _mm256_add_ps(decoded, _mm256_add_ps(_mm256_mul_ps(wt, _mm256_add_ps(one, tan_t)), qbias));
+        __m256 limit = _mm256_add_ps(
+            decoded, _mm256_mul_ps(bscale, _mm256_add_ps(_mm256_mul_ps(wt, _mm256_add_ps(one, tan_t)), qbias)));
         __m256 vis = _mm256_or_ps(_mm256_castsi256_ps(empty), _mm256_cmp_ps(dist, limit, _CMP_LE_OQ));
         vis = _mm256_and_ps(_mm256_and_ps(vis, front), ok);
         sx = _mm256_add_ps(sx, _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.x), G)));
@@ -453,7 +475,7 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     const size_t map = (size_t)R * R;
     uint32_t a = 0;
 #ifdef GI_HAVE_X86
-    if (ind->para && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
+    if (ind->atlas && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
         for (; a + 8 <= ind->tile_w[t]; a += 8) {
             uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
             float e8[24];
@@ -485,7 +507,10 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             pf_vec3 c = gi__vpl_irradiance(v, pos, nrm, ind->b, &w, &r);
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
-            if (ind->para) {
+            if (ind->ism) {
+                visible = gi_ism_visible_at(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
+                                            pf_v3_dot(nrm, w), ind->bias_scale);
+            } else if (ind->para) {
                 visible = rs_para_visible_at(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
                                              pf_v3_dot(nrm, w));
             } else {

@@ -9,7 +9,9 @@
  *                              one-frame delay in VPL positions and
  *                              intensities; see "Pipelining" below)
  *   gi_stage_vpl_shadow_maps   paraboloid maps, re-rendered only for new or
- *                              moved VPLs (step 4, Laine 2007 Sec. 6)
+ *                              moved VPLs (step 4, Laine 2007 Sec. 6); or
+ *                              (--visibility ism) imperfect shadow maps of
+ *                              every VPL, rebuilt every frame (gi_ism.h)
  *   gi_stage_split             the G-buffer split into n x m interleaved
  *                              tiles: pixel (a, b) of tile (i, j) is pixel
  *                              (a n + i, b m + j) of the image (Sec. 5.1)
@@ -20,7 +22,8 @@
  *   gi_stage_accumulate        each tile pixel's irradiance from its tile's
  *                              VPLs: E = T * sum I G_b V, with G_b =
  *                              min(cos cos / r^2, b) and V from the VPL's
- *                              paraboloid map (or an Embree ray); T = n m
+ *                              paraboloid map (or its ISM, with the ISM
+ *                              bias, or an Embree ray); T = n m
  *                              makes the n x m average the full sum
  *   gi_stage_combine           back to image layout (Sec. 5.1)
  *   gi_stage_filter            Laine's geometry-aware n x m box filter
@@ -56,6 +59,7 @@
 #define GI_INDIRECT_H
 
 #include "gi_vpl.h"
+#include "gi_ism.h"
 #include "rs_paraboloid.h"
 
 typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE } gi_filter_kind;
@@ -73,7 +77,8 @@ typedef struct gi_indirect_options {
     gi_filter_kind filter;
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
     float beta;                  /* filter normal threshold (0: 0.8, Laine 2007) */
-    uint32_t para_res;           /* paraboloid map resolution (0: 128) */
+    uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
+    gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
     int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
 } gi_indirect_options;
 
@@ -95,7 +100,9 @@ typedef struct gi_indirect {
     float alpha;              /* filter threshold in scene units */
     /* paraboloid maps: one slot per VPL index */
     rs_para_context *para;
-    uint16_t *atlas;
+    gi_ism *ism;              /* --visibility ism (then para is NULL) */
+    float bias_scale;         /* map bias x this: 1 for exact maps, the ISM bias scale for ISMs */
+    uint16_t *atlas;          /* exact maps or ISMs, rs_paraboloid layout, R = opt.para_res */
     uint32_t atlas_slots;
     rs_para_frame *frames;
     float range;

@@ -41,6 +41,9 @@ void pf_cli_usage(FILE *out)
           "  --clamp C               bounded geometry term b = C / diagonal^2 (default 400, 0 = off)\n"
           "  --filter box|bilateral|none  indirect-light filter (default box, Laine 2007 Fig. 5)\n"
           "  --visibility paraboloid|ism|raytrace  VPL visibility (default exact paraboloid maps)\n"
+          "  --ism-res N             --visibility ism: texels per ISM side, a power of two 8..512 (default 64)\n"
+          "  --ism-points N          --visibility ism: points splatted per frame (default 1000000)\n"
+          "  --ism-bias S            --visibility ism: bias, x the exact maps' bias, 1..64 (default 3)\n"
           "  --param KEY=VALUE       a parameter of the VPL method (repeatable; see README)\n"
           "  --dump-stages DIR       write every stage's buffer as an image\n"
           "  --pipeline on|off       overlap the next frame's VPL update with this frame\n"
@@ -209,7 +212,8 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                                  "--exposure", "--frames", "--scenes", "--shadow-size",
                                                  "--vpls",     "--tiles",  "--clamp",  "--method",
                                                  "--bounces",  "--filter", "--visibility", "--dump-stages",
-                                                 "--spp",      "--param",  "--screenshot", "--pipeline"};
+                                                 "--spp",      "--param",  "--screenshot", "--pipeline",
+                                                 "--ism-res",  "--ism-points", "--ism-bias"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -239,6 +243,15 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
             else if (!strchr(val, '=') || val[0] == '=')
                 r = pf_error_set(err, PF_ERR_ARGUMENT, "--param '%s': expected KEY=VALUE", val);
             else o->params[o->param_count++] = val;
+        }
+        else if (!strcmp(a, "--ism-res")) {
+            r = pf__uint(a, val, 8, 512, &o->ism_res, err);
+            if (r == PF_OK && (o->ism_res & (o->ism_res - 1)))
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res '%s': expected a power of two in 8..512", val);
+        } else if (!strcmp(a, "--ism-points")) r = pf__uint(a, val, 1000, 100000000, &o->ism_points, err);
+        else if (!strcmp(a, "--ism-bias")) {
+            if (!pf__float(val, strlen(val), &o->ism_bias) || !(o->ism_bias >= 1.0f && o->ism_bias <= 64.0f))
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-bias '%s': expected a number in 1..64", val);
         }
         else if (!strcmp(a, "--dump-stages")) o->dump_dir = val;
         else if (!strcmp(a, "--screenshot")) o->screenshot_path = val;

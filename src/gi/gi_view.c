@@ -424,9 +424,16 @@ static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint
     gi__overhead o;
     o.f = f;
     o.rgb = rgb;
-    o.cx = 0.5f * (sc->bounds_min.x + sc->bounds_max.x);
-    o.cz = 0.5f * (sc->bounds_min.z + sc->bounds_max.z);
-    float sx = 0.92f * (float)W / fmaxf(ext.x, 1e-6f), sz = 0.92f * (float)H / fmaxf(ext.z, 1e-6f);
+    /* the region shown: the scene's bounds, the camera and the lights */
+    float x0 = sc->bounds_min.x, x1 = sc->bounds_max.x, z0 = sc->bounds_min.z, z1 = sc->bounds_max.z;
+    for (uint32_t l = 0; l <= sc->light_count; l++) {
+        pf_vec3 p = l < sc->light_count ? sc->lights[l].position : f->camera.eye;
+        if (l < sc->light_count && sc->lights[l].type == PF_LIGHT_DIRECTIONAL) continue;
+        x0 = fminf(x0, p.x), x1 = fmaxf(x1, p.x), z0 = fminf(z0, p.z), z1 = fmaxf(z1, p.z);
+    }
+    o.cx = 0.5f * (x0 + x1);
+    o.cz = 0.5f * (z0 + z1);
+    float sx = 0.92f * (float)W / fmaxf(x1 - x0, 1e-6f), sz = 0.92f * (float)H / fmaxf(z1 - z0, 1e-6f);
     o.scale = fminf(sx, sz);
     float diag = pf_v3_length(ext);
     o.y0 = fminf(sc->bounds_max.y + 1e-3f * diag, fmaxf(sc->bounds_min.y, f->camera.eye.y));

@@ -60,6 +60,7 @@ typedef struct view_app {
     gi_indirect_options want; /* what the keys asked for */
     int indirect_dirty;
     uint32_t method_count, method_cursor;
+    uint32_t vis_cursor; /* 0 paraboloid, 1 ism, 2 raytrace */
     const gi_vpl_method *methods[VIEW_MAX_METHODS];
     float exposure;
     /* fly camera and light */
@@ -142,6 +143,7 @@ static pf_result view_setup(view_app *a, pf_error *err)
         if ((r = gi_frame_enable_indirect(&a->frame, &a->io, o->indirect_only, err)) != PF_OK) return r;
         a->io = a->frame.ind.opt; /* with the defaults filled in */
         a->want = a->io;
+        a->vis_cursor = a->io.visibility_ism ? 1 : a->io.visibility_raytrace ? 2 : 0;
     }
     view_list_methods(a);
     a->exposure = o->exposure;
@@ -235,11 +237,13 @@ static void view_cycle_filter(view_app *a)
     a->indirect_dirty = 1;
 }
 
+/* paraboloid -> ism -> raytrace: the cursor moves on even when a choice
+ * fails (ism while it is not implemented), so every press tries the next. */
 static void view_cycle_visibility(view_app *a)
 {
-    if (!a->want.visibility_raytrace && !a->want.visibility_ism) a->want.visibility_ism = 1;
-    else if (a->want.visibility_ism) a->want.visibility_ism = 0, a->want.visibility_raytrace = 1;
-    else a->want.visibility_raytrace = 0;
+    a->vis_cursor = (a->vis_cursor + 1) % 3;
+    a->want.visibility_ism = a->vis_cursor == 1;
+    a->want.visibility_raytrace = a->vis_cursor == 2;
     a->indirect_dirty = 1;
 }
 
@@ -534,9 +538,12 @@ static void view_draw_caption(view_app *a)
 
 static void view_draw_help(view_app *a)
 {
-    int n = (int)(sizeof view_help / sizeof view_help[0]);
-    int w = 56 * GI_FONT_CELL_W, h = (n + 2) * (GI_FONT_CELL_H + 1);
+    int n = (int)(sizeof view_help / sizeof view_help[0]), chars = 0;
+    for (int i = 0; i < n; i++) chars = (int)strlen(view_help[i]) > chars ? (int)strlen(view_help[i]) : chars;
+    int w = chars * GI_FONT_CELL_W, h = (n + 2) * (GI_FONT_CELL_H + 1);
     int x = ((int)a->width - w) / 2, y = ((int)a->height - h) / 2;
+    if (x < 4) x = 4; /* small windows: keep the start of each line */
+    if (y < 4) y = 4;
     gi_view_shade_rect(a->display, a->width, a->height, x - 4, y - 4, w + 8, h + 8);
     view_text(a, x, y, "softgi view: keys", 255, 220, 120);
     for (int i = 0; i < n; i++) view_text(a, x, y + (i + 2) * (GI_FONT_CELL_H + 1), view_help[i], 255, 255, 255);

@@ -82,6 +82,67 @@ static void test_screenshot_equals_render(void **state)
                                  "--camera 0,1,3.5:0,1,0:50");
 }
 
+/* Keys replayed through SOFTGI_VIEW_KEYS: a method that is not implemented
+ * yet and ism visibility are refused with their message (the previous
+ * setting stays), the next O reaches raytrace, ] I F C set 512 VPLs, 8x8
+ * tiles, the bilateral filter and clamp 1600; P pauses and nine N step to
+ * the overhead VPL view (the paraboloid-map view is skipped: raytrace has no
+ * maps). The screenshot is then that stage, byte for byte the view render's
+ * --dump-stages writes with those settings given on the command line. */
+static void test_keys_settings_and_stepper(void **state)
+{
+    (void)state;
+    if (!have_xvfb()) {
+        print_message("SKIP: xvfb-run is absent: cannot start the viewer\n");
+        return;
+    }
+    /* which method the first M tries: the registry's second entry */
+    char names[256];
+    snprintf(names, sizeof names, "%s", gi_vpl_method_names());
+    const char *second = strtok(names, ", ");
+    second = second ? strtok(NULL, ", ") : NULL;
+    assert_non_null(second);
+    const gi_vpl_method *m = gi_vpl_method_find(second);
+    assert_non_null(m);
+    void *st = NULL;
+    pf_error err;
+    int m_fails = m->create(&st, NULL, &err) != PF_OK;
+    if (!m_fails) m->destroy(st);
+    char args[2048], out[16384], shot[512], dir[512], want[1024];
+    snprintf(shot, sizeof shot, "%s/keys-view.png", g_tmp);
+    snprintf(dir, sizeof dir, "%s/keys-dump", g_tmp);
+    /* M then shift+M: back on ir whether or not the second method works */
+    snprintf(args, sizeof args, "%s --frames 24 --screenshot %s", SIZE, shot);
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd,
+             "SOFTGI_VIEW_KEYS='M shift+M O O ] I F C P N N N N N N N N N' xvfb-run -a -s '-screen 0 1280x1024x24' "
+             "%s view %s",
+             SOFTGI_BINARY, args);
+    int status = tu_run(cmd, out, sizeof out);
+    if (status != 0) fail_msg("%s: exit %d:\n%s", cmd, status, out);
+    if (m_fails) {
+        snprintf(want, sizeof want, "%s: %s", second, err.message);
+        if (!strstr(out, want)) fail_msg("the viewer did not report '%s':\n%s", want, out);
+    }
+    /* while ism is a placeholder, the viewer must say so and keep paraboloid maps */
+    char ism[16384];
+    snprintf(args, sizeof args, "render --size 16x16 --visibility ism -q -o %s/ism.png", g_tmp);
+    int ism_fails = tu_softgi_run(args, ism, sizeof ism) != 0 && strstr(ism, "not implemented yet");
+    if (ism_fails && !strstr(out, "--visibility ism: not implemented yet (kept the previous settings)"))
+        fail_msg("the viewer did not report the ism failure:\n%s", out);
+    snprintf(args, sizeof args,
+             "render %s --visibility raytrace --vpls 512 --tiles 8x8 --filter bilateral --clamp 1600 -q "
+             "--dump-stages %s -o %s/keys.png",
+             SIZE, dir, g_tmp);
+    tu_softgi_expect(args, 0, NULL);
+    snprintf(want, sizeof want, "%s/%02d-%s.png", dir, GI_VIEW_VPL_OVERHEAD, gi_view_name(GI_VIEW_VPL_OVERHEAD));
+    if (!same_file(shot, want)) fail_msg("the stepper's overhead view %s differs from %s", shot, want);
+    /* a bad key name is a usage error */
+    snprintf(cmd, sizeof cmd, "SOFTGI_VIEW_KEYS='M nosuchkey' %s view %s --frames 1", SOFTGI_BINARY, SIZE);
+    status = tu_run(cmd, out, sizeof out);
+    if (status != 2 || !strstr(out, "unknown key 'nosuchkey'")) fail_msg("%s: exit %d:\n%s", cmd, status, out);
+}
+
 /* The expected dump: the views available for the given settings. */
 static void check_dump(const char *dir, int indirect, int para_maps)
 {
@@ -203,6 +264,7 @@ int main(void)
         cmocka_unit_test(test_screenshot_equals_render),
         cmocka_unit_test(test_dump_every_method),
         cmocka_unit_test(test_viewer_dump_equals_render_dump),
+        cmocka_unit_test(test_keys_settings_and_stepper),
         cmocka_unit_test(test_no_display),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -21,11 +21,13 @@
  * yet", too many VPLs for the maps) leaves the previous one in place and
  * shows the error in the HUD.
  *
- * Headless: `--frames N` renders N frames and exits 0; with `--screenshot
+ * Headless: `--frames N` shows N frames and exits 0; with `--screenshot
  * FILE` the window's framebuffer (the displayed view without the HUD: the
  * final image unless the stepper shows a stage) is read back after frame N
  * and written as a PNG, byte-identical to `softgi render`'s PNG of the same
- * camera and options (tests/test_viewer.c). */
+ * camera and options (tests/test_viewer.c). The environment variable
+ * SOFTGI_VIEW_KEYS replays key presses, one per frame shown, so the tests
+ * drive the settings and the stepper without a keyboard. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -72,7 +74,11 @@ typedef struct view_app {
     int show_help, show_hud;
     /* what happened */
     int frame_needed, image_dirty;
-    uint32_t frames_done;
+    uint32_t frames_done;  /* frames rendered */
+    uint32_t frames_shown; /* loop iterations (a paused viewer shows frames without rendering) */
+    /* SOFTGI_VIEW_KEYS: key presses replayed one per shown frame */
+    uint32_t script_count, script_next;
+    int script_key[256], script_mods[256];
     double frame_ms, total_ms;
     uint32_t vpls_moved;
     char message[1024];
@@ -92,6 +98,43 @@ __attribute__((format(printf, 2, 3))) static void view_message(view_app *a, cons
     va_end(ap);
     a->message_until = pf_time_now() + 6.0;
     if (!a->opt->quiet) fprintf(stderr, "softgi view: %s\n", a->message);
+}
+
+/* ------------------------------------------------------------ scripted keys */
+
+/* SOFTGI_VIEW_KEYS="M O O ] P N N": key presses replayed one per shown
+ * frame before the window's own events, so tests (and demos) can drive the
+ * viewer headless. Names: a letter or digit, [ ] - =, SPACE TAB ESC F1 LEFT
+ * RIGHT UP DOWN, each optionally prefixed with "shift+". */
+static pf_result view_parse_script(view_app *a, const char *text, pf_error *err)
+{
+    static const struct {
+        const char *name;
+        int key;
+    } named[] = {{"SPACE", PF_KEY_SPACE}, {"TAB", PF_KEY_TAB},   {"ESC", PF_KEY_ESCAPE}, {"F1", PF_KEY_F1},
+                 {"LEFT", PF_KEY_LEFT},   {"RIGHT", PF_KEY_RIGHT}, {"UP", PF_KEY_UP},   {"DOWN", PF_KEY_DOWN},
+                 {"[", PF_KEY_LEFT_BRACKET}, {"]", PF_KEY_RIGHT_BRACKET}, {"-", PF_KEY_MINUS}, {"=", PF_KEY_EQUAL}};
+    char buf[2048];
+    snprintf(buf, sizeof buf, "%s", text);
+    for (char *tok = strtok(buf, " ,"); tok; tok = strtok(NULL, " ,")) {
+        if (a->script_count >= sizeof a->script_key / sizeof a->script_key[0])
+            return pf_error_set(err, PF_ERR_ARGUMENT, "SOFTGI_VIEW_KEYS: at most 256 keys");
+        int mods = 0, key = -1;
+        if (!strncmp(tok, "shift+", 6)) mods = PF_MOD_SHIFT, tok += 6;
+        if (strlen(tok) == 1 && ((tok[0] >= 'A' && tok[0] <= 'Z') || (tok[0] >= '0' && tok[0] <= '9'))) key = tok[0];
+        if (strlen(tok) == 1 && tok[0] >= 'a' && tok[0] <= 'z') key = tok[0] - 'a' + 'A';
+        for (size_t k = 0; key < 0 && k < sizeof named / sizeof named[0]; k++)
+            if (!strcmp(tok, named[k].name)) key = named[k].key;
+        if (key < 0)
+            return pf_error_set(err, PF_ERR_ARGUMENT,
+                                "SOFTGI_VIEW_KEYS: unknown key '%s' (a letter or digit, [ ] - =, SPACE TAB ESC F1 LEFT "
+                                "RIGHT UP DOWN, optionally shift+)",
+                                tok);
+        a->script_key[a->script_count] = key;
+        a->script_mods[a->script_count] = mods;
+        a->script_count++;
+    }
+    return PF_OK;
 }
 
 /* ------------------------------------------------------------ setup */
@@ -127,6 +170,8 @@ static pf_result view_setup(view_app *a, pf_error *err)
     pf_isa isa;
     pf_result r = pf_isa_resolve(o->isa, &isa, err);
     if (r != PF_OK) return r;
+    const char *script = getenv("SOFTGI_VIEW_KEYS");
+    if (script && (r = view_parse_script(a, script, err)) != PF_OK) return r;
     if ((r = app_scene_load(o, &a->scene, &a->camera, a->stem, sizeof a->stem, err)) != PF_OK) return r;
     a->camera_start = a->camera;
     if ((r = pf_rt_create(&a->rt, &a->scene, isa, threads, err)) != PF_OK) return r;
@@ -395,9 +440,13 @@ static void view_handle_motion(view_app *a, const pf_input *in, double dt)
 static int view_handle_input(view_app *a, double dt)
 {
     pf_input in;
-    int idle = a->paused && !a->frame_needed && !a->image_dirty;
+    int idle = a->paused && !a->frame_needed && !a->image_dirty && a->script_next >= a->script_count;
     pf_window_poll(a->win, &in, idle ? 0.05 : 0.0);
     if (in.close) return 1;
+    if (a->script_next < a->script_count) {
+        uint32_t k = a->script_next++;
+        if (view_handle_key(a, a->script_key[k], a->script_mods[k])) return 1;
+    }
     for (uint32_t i = 0; i < in.key_count; i++)
         if (view_handle_key(a, in.key[i], in.mods[i])) return 1;
     view_handle_motion(a, &in, dt);
@@ -585,8 +634,8 @@ static int view_finish(view_app *a)
     }
     if (r != PF_OK) return app_fail(&err);
     if (!o->quiet) {
-        printf("softgi view: %s, %ux%u, %u frames, mean frame %.2f ms\n", a->stem, a->width, a->height, a->frames_done,
-               a->frames_done ? a->total_ms / a->frames_done : 0.0);
+        printf("softgi view: %s, %ux%u, %u frames, %u rendered, mean frame %.2f ms\n", a->stem, a->width, a->height,
+               a->frames_shown, a->frames_done, a->frames_done ? a->total_ms / a->frames_done : 0.0);
         if (o->screenshot_path) printf("wrote %s (the window without the HUD)\n", o->screenshot_path);
     }
     return 0;
@@ -613,7 +662,8 @@ int app_view(const pf_options *opts)
         free(a);
         return app_fail(&err);
     }
-    /* --frames N: N frames then exit (with --screenshot: 1 when not given) */
+    /* --frames N: N frames shown, then exit (with --screenshot: 1 when not
+     * given); unpaused, every frame shown is a frame rendered */
     uint32_t max_frames = opts->frames ? opts->frames : opts->screenshot_path ? 1 : 0;
     int status = 0;
     double last = pf_time_now();
@@ -623,7 +673,8 @@ int app_view(const pf_options *opts)
         if (view_handle_input(a, dt)) break;
         if (!a->paused || a->frame_needed) view_render_frame(a);
         if (a->image_dirty) view_draw_image(a);
-        if (max_frames && a->frames_done >= max_frames) {
+        a->frames_shown++;
+        if (max_frames && a->frames_shown >= max_frames) {
             status = view_finish(a);
             break;
         }

@@ -80,6 +80,7 @@ typedef struct view_app {
     uint32_t script_count, script_next;
     int script_key[256], script_mods[256];
     double frame_ms, total_ms;
+    double loop_start;     /* when the first frame began (for the whole-loop rate) */
     uint32_t vpls_moved;
     char message[1024];
     double message_until;
@@ -634,8 +635,11 @@ static int view_finish(view_app *a)
     }
     if (r != PF_OK) return app_fail(&err);
     if (!o->quiet) {
-        printf("softgi view: %s, %ux%u, %u frames, %u rendered, mean frame %.2f ms\n", a->stem, a->width, a->height,
-               a->frames_shown, a->frames_done, a->frames_done ? a->total_ms / a->frames_done : 0.0);
+        printf("softgi view: %s, %ux%u, %u frames, %u rendered, mean frame %.2f ms, mean loop %.2f ms (frame + HUD + "
+               "window)\n",
+               a->stem, a->width, a->height, a->frames_shown, a->frames_done,
+               a->frames_done ? a->total_ms / a->frames_done : 0.0,
+               a->frames_shown ? (pf_time_now() - a->loop_start) * 1e3 / a->frames_shown : 0.0);
         if (o->screenshot_path) printf("wrote %s (the window without the HUD)\n", o->screenshot_path);
     }
     return 0;
@@ -667,6 +671,7 @@ int app_view(const pf_options *opts)
     uint32_t max_frames = opts->frames ? opts->frames : opts->screenshot_path ? 1 : 0;
     int status = 0;
     double last = pf_time_now();
+    a->loop_start = last;
     for (;;) {
         double now = pf_time_now(), dt = now - last;
         last = now;

@@ -298,11 +298,28 @@ static void gi__view_gbuffer(const gi_frame *f, gi_view_id id, uint8_t *rgb)
     }
 }
 
-/* Radiance or irradiance through the PNG writer's display transform. */
-static void gi__view_radiance(const float *src, size_t n, float exposure, uint8_t *rgb)
+/* Radiance or irradiance through the PNG writer's display transform, one
+ * job item per row (the transform is per value: any thread count gives the
+ * same bytes). */
+typedef struct gi__display_ctx {
+    const float *src;
+    uint8_t *rgb;
+    size_t row; /* values per row */
+    float scale;
+} gi__display_ctx;
+
+static void gi__display_row(void *p, uint32_t y, uint32_t worker)
 {
-    float scale = exp2f(exposure);
-    for (size_t i = 0; i < 3 * n; i++) rgb[i] = pf_imageio_display(src[i], scale);
+    (void)worker;
+    const gi__display_ctx *c = p;
+    size_t o = (size_t)y * c->row;
+    for (size_t i = o; i < o + c->row; i++) c->rgb[i] = pf_imageio_display(c->src[i], c->scale);
+}
+
+static void gi__view_radiance(const gi_frame *f, const float *src, float exposure, uint8_t *rgb)
+{
+    gi__display_ctx c = {src, rgb, (size_t)f->width * 3, exp2f(exposure)};
+    pf_jobs_parallel_for(f->jobs, gi__display_row, &c, f->height, 8);
 }
 
 /* Light 0's shadow map: one face fitted in the image, or a cube's six faces
@@ -350,7 +367,7 @@ static int gi__project(const gi_frame *f, const rs_mat4 *vp, pf_vec3 p, int *px,
 static void gi__view_vpls(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb)
 {
     uint32_t W = f->width, H = f->height;
-    gi__view_radiance(f->final, (size_t)W * H, s->exposure, rgb);
+    gi__view_radiance(f, f->final, s->exposure, rgb);
     for (size_t i = 0; i < (size_t)W * H * 3; i++) rgb[i] = (uint8_t)(rgb[i] / 2); /* dim the image under the dots */
     rs_mat4 vp = rs_mat4_camera(&f->camera, W, H);
     const gi_vpl_set *set = &f->ind.vpls;
@@ -547,7 +564,6 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
     memset(&s, 0, sizeof s);
     if (s_in) s = *s_in;
     uint32_t W = f->width, H = f->height;
-    size_t n = (size_t)W * H;
     if (!gi_view_available(f, id)) {
         gi__unavailable(rgb, W, H,
                         id == GI_VIEW_SHADOW_MAP ? "no shadow map (ray-traced frame, no lights or --indirect-only)"
@@ -563,15 +579,15 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
     case GI_VIEW_ALBEDO:
     case GI_VIEW_PRIM: gi__view_gbuffer(f, id, rgb); break;
     case GI_VIEW_SHADOW_MAP: gi__view_shadow_map(f, rgb); break;
-    case GI_VIEW_DIRECT: gi__view_radiance(f->direct, n, s.exposure, rgb); break;
+    case GI_VIEW_DIRECT: gi__view_radiance(f, f->direct, s.exposure, rgb); break;
     case GI_VIEW_VPLS: gi__view_vpls(f, &s, rgb); break;
     case GI_VIEW_VPL_OVERHEAD: gi__view_overhead(f, &s, rgb); break;
     case GI_VIEW_VPL_MAP: gi__view_vpl_map(f, &s, rgb); break;
     case GI_VIEW_SPLIT: gi__view_mosaic(f, 1, s.exposure, rgb); break;
     case GI_VIEW_ACCUMULATED: gi__view_mosaic(f, 0, s.exposure, rgb); break;
-    case GI_VIEW_COMBINED: gi__view_radiance(f->ind.combined, n, s.exposure, rgb); break;
-    case GI_VIEW_FILTERED: gi__view_radiance(f->ind.filtered, n, s.exposure, rgb); break;
-    default: gi__view_radiance(f->final, n, s.exposure, rgb); break;
+    case GI_VIEW_COMBINED: gi__view_radiance(f, f->ind.combined, s.exposure, rgb); break;
+    case GI_VIEW_FILTERED: gi__view_radiance(f, f->ind.filtered, s.exposure, rgb); break;
+    default: gi__view_radiance(f, f->final, s.exposure, rgb); break;
     }
     return 1;
 }

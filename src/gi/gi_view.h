@@ -72,8 +72,8 @@ pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_setting
  * the same encoder and settings as pf_imageio_write_png. */
 pf_result gi_view_write_png(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h, pf_error *err);
 
-/* Built-in 5x7 bitmap font (ASCII 32..126, lower case drawn as upper case),
- * each glyph cell 6 x 9 pixels times `scale`. Draws `text` with its top-left
+/* Built-in 5x7 bitmap font (ASCII 32..126; lower case with one descender
+ * row), each glyph cell 6 x 9 pixels times `scale`. Draws `text` with its top-left
  * corner at (x, y), clipped to the image; returns the width drawn. */
 #define GI_FONT_CELL_W 6
 #define GI_FONT_CELL_H 9

@@ -22,8 +22,8 @@ static const char *const gi__view_names[GI_VIEW_COUNT] = {
 static const char *gi__caption_shadow_map =
     "Shadow map of light 0, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF (Laine 2007 Sec. 6)";
 static const char *gi__caption_overhead =
-    "VPLs from above (cut at eye height), coloured by intensity, lights yellow, camera frustum green (Hedman 2017 "
-    "Fig. 3)";
+    "VPLs from above (cut at eye height), coloured by intensity; lights yellow, camera and frustum green (Hedman "
+    "2017 Fig. 3)";
 static const char *gi__caption_vpl_map =
     "Paraboloid shadow map of the chosen VPL (white box), near = bright (Laine 2007 Sec. 4.6; Brabec 2002)";
 
@@ -424,7 +424,19 @@ typedef struct gi__overhead {
     const gi_frame *f;
     uint8_t *rgb;
     float cx, cz, scale, y0;
+    int frustum;                  /* 1: tint the camera's horizontal frustum */
+    float ex, ez, lx, lz, rx, rz; /* eye and the left / right edge directions, x-z plane */
 } gi__overhead;
+
+static float gi__cross2(float ax, float az, float bx, float bz) { return ax * bz - az * bx; }
+
+/* 1 if the x-z point (x, z) lies in the wedge between the frustum's edges. */
+static int gi__in_frustum(const gi__overhead *o, float x, float z)
+{
+    float dx = x - o->ex, dz = z - o->ez, s = gi__cross2(o->lx, o->lz, o->rx, o->rz);
+    return s * gi__cross2(o->lx, o->lz, dx, dz) >= 0.0f && s * gi__cross2(dx, dz, o->rx, o->rz) >= 0.0f &&
+           o->lx * dx + o->lz * dz + o->rx * dx + o->rz * dz > 0.0f;
+}
 
 static void gi__overhead_row(void *ctx, uint32_t y, uint32_t worker)
 {
@@ -456,6 +468,11 @@ static void gi__overhead_row(void *ctx, uint32_t y, uint32_t worker)
             float shade = 0.25f + 0.75f * fabsf(sf.ng.y); /* floors bright, walls seen edge-on dark */
             for (int c = 0; c < 3; c++) p[c] = gi__unit(pf_linear_to_srgb(sf.albedo[c] * shade) * 0.8f);
         }
+        for (uint32_t k = 0; k < n && o->frustum; k++) /* the frustum as a green region (Hedman 2017 Fig. 3) */
+            if (gi__in_frustum(o, rays[k].org.x, rays[k].org.z)) {
+                uint8_t *p = o->rgb + 3 * ((size_t)y * W + x0 + k);
+                p[0] = (uint8_t)(p[0] * 3 / 4), p[1] = (uint8_t)(p[1] * 3 / 4 + 50), p[2] = (uint8_t)(p[2] * 3 / 4);
+            }
     }
 }
 
@@ -487,6 +504,11 @@ static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint
     o.scale = fminf(sx, sz);
     float diag = pf_v3_length(ext);
     o.y0 = fminf(sc->bounds_max.y + 1e-3f * diag, fmaxf(sc->bounds_min.y, f->camera.eye.y));
+    pf_vec3 dl = pf_camera_ray_dir(&f->camera, W, H, 0.0f, 0.5f * (float)H);
+    pf_vec3 dr = pf_camera_ray_dir(&f->camera, W, H, (float)W, 0.5f * (float)H);
+    o.ex = f->camera.eye.x, o.ez = f->camera.eye.z, o.lx = dl.x, o.lz = dl.z, o.rx = dr.x, o.rz = dr.z;
+    /* a camera looking (almost) straight down or up has no horizontal wedge */
+    o.frustum = fabsf(gi__cross2(o.lx, o.lz, o.rx, o.rz)) > 1e-6f;
     pf_jobs_parallel_for(f->jobs, gi__overhead_row, &o, H, 4);
     /* camera: eye and the frustum's left/right edges through the image centre row */
     int ex, ey, ax, ay;

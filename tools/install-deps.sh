@@ -5,6 +5,9 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config
       libembree-dev      # Embree 3: every sampling-side ray
       libglfw3-dev       # GLFW 3: the viewer window
+      libgl-dev          # OpenGL 1.x headers/library for the viewer's textured quad
+      libgl1-mesa-dri    # Mesa's software OpenGL (llvmpipe): the viewer needs no GPU
+      xvfb xauth         # xvfb-run: the viewer's headless test (tests/test_viewer.c)
       libtinygltf-dev    # tinygltf: glTF 2.0 scenes
       libstb-dev         # stb_image_write: PNG output
       libmeshoptimizer-dev   # meshoptimizer: simplified shadow geometry

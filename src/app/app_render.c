@@ -10,6 +10,7 @@
 
 #include "app.h"
 #include "gi_frame.h"
+#include "gi_view.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_jobs.h"
@@ -77,7 +78,10 @@ int app_render(const pf_options *o)
     char png[4096], pfm[4096], def[4096];
     snprintf(def, sizeof def, "out/%s.png", stem);
     r = app_write_image(o, def, frame.final, width, height, png, pfm, &err);
-    if (r == PF_OK && o->dump_dir) r = gi_frame_dump_stages(&frame, o->dump_dir, &err);
+    if (r == PF_OK && o->dump_dir) {
+        gi_view_settings vs = {o->exposure, 0}; /* the views `softgi view` shows at this exposure */
+        r = gi_view_dump(&frame, o->dump_dir, &vs, &err);
+    }
     pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     int status = 0;
     if (r != PF_OK) status = app_fail(&err);

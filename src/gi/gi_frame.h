@@ -116,9 +116,9 @@ void gi_stage_shadow_maps(gi_frame *f);
 void gi_stage_direct_shadowmap(gi_frame *f);
 void gi_stage_compose(gi_frame *f);
 
-/* Writes every stage's buffer of the last frame as `DIR/NN-name.png` (data
- * buffers mapped to [0,1], radiance/irradiance tone mapped like the final
- * image) plus `DIR/captions.txt` with one caption line per image. */
+/* Writes every stage of the last frame as `DIR/NN-name.png` plus
+ * `DIR/captions.txt` with one caption line per image: gi_view_dump (gi_view.h)
+ * at exposure 0. */
 pf_result gi_frame_dump_stages(const gi_frame *f, const char *dir, pf_error *err);
 
 /* The whole ray-traced frame: G-buffer, direct light, compose (timed). */

@@ -10,6 +10,8 @@ void pf_cli_usage(FILE *out)
 {
     fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
           "       softgi reference [SCENE.gltf|SCENE.glb] [options]   (path-traced reference)\n"
+          "       softgi view [SCENE.gltf|SCENE.glb] [options]        (interactive viewer and stage stepper;\n"
+          "                                                           keys: H in the window)\n"
           "       softgi sequence SEQUENCE.json [options]             (render a camera/light sequence)\n"
           "       softgi bench frame [--threads N] [--frames N] [--scenes DIR] [--vpls N] [--tiles NxM]\n"
           "       softgi compare ...                                  (softgi compare --help)\n"
@@ -54,6 +56,8 @@ void pf_cli_usage(FILE *out)
           "  --hash                  print a 64-bit hash of the linear output\n"
           "  -q, --quiet             no timing table\n"
           "  --frames N              bench: repetitions per measurement (default 15)\n"
+          "                          view: render N frames, then exit (after --screenshot)\n"
+          "  --screenshot FILE.png   view: save the window (without the HUD) after --frames N (default 1)\n"
           "  --scenes DIR            bench: folder with sibenik/ and conference/ (default ../shared/scenes)\n"
           "  --moving-light          bench frame: the light moves on a small circle every frame\n"
           "  -h, --help, --version\n",

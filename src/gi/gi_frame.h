@@ -67,11 +67,12 @@ const char *gi_buffer_caption(gi_buffer_id id);
 
 /* Area lights (gi_area.h) in the direct light of a frame.
  *
- * Ray-traced frame: per pixel, S = strata^2 emitter samples, stratified
- * (the (u1, u2) point on the chosen triangle from a jittered strata x strata
- * grid, the triangle-choosing u0 from S strata in a per-pixel shuffled
- * order), deterministic: every random number is a hash of (pixel, sample,
- * dimension). E = 1/S sum Le cos cos' / (r^2 pdf) V (gi_area_sample_irradiance).
+ * Ray-traced frame: per pixel, S = strata^2 emitter samples, stratified:
+ * sample k's triangle-choosing u0 is jittered in stratum k of S, its point
+ * (u1, u2) on the triangle is Halton point k (bases 2, 3) under a per-pixel
+ * rotation (Cranley-Patterson), so the consecutive k a triangle gets are
+ * themselves well spread over it. Deterministic: every random number is a
+ * hash of (pixel, sample, dimension). E = 1/S sum Le cos cos' / (r^2 pdf) V (gi_area_sample_irradiance).
  *
  * Rasterized frame: K fixed points on the emitters, chosen once (u0 =
  * (k + 1/2) / K through the power CDF, (u1, u2) = Halton(k + 1) in bases 2

@@ -64,17 +64,8 @@ void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__
 static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm, pf_vec3 ng)
 {
     uint32_t sd = f->area_strata, S = sd * sd;
-    /* the u0 strata in a per-pixel shuffled order (Fisher-Yates), so the
-     * triangle choice is not tied to the (u1, u2) grid cell */
-    uint32_t perm[GI_AREA_MAX_STRATA * GI_AREA_MAX_STRATA];
-    for (uint32_t k = 0; k < S; k++) perm[k] = k;
-    for (uint32_t k = S; k > 1; k--) {
-        uint32_t j = (uint32_t)(gi_reference_random(pixel, k, GI__AREA_STREAM, 3) * (float)k);
-        if (j >= k) j = k - 1;
-        uint32_t t = perm[k - 1];
-        perm[k - 1] = perm[j];
-        perm[j] = t;
-    }
+    /* per-pixel rotation of the (u1, u2) points (Cranley-Patterson) */
+    float r1 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 1), r2 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 2);
     pf_vec3 sum = pf_v3(0, 0, 0);
     for (uint32_t k0 = 0; k0 < S; k0 += PF_RT_WIDTH) {
         uint32_t n = S - k0 < PF_RT_WIDTH ? S - k0 : PF_RT_WIDTH, m = 0;
@@ -82,9 +73,10 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
         pf_vec3 irr[PF_RT_WIDTH];
         for (uint32_t i = 0; i < n; i++) {
             uint32_t k = k0 + i;
-            double u0 = ((double)perm[k] + gi_reference_random(pixel, k, GI__AREA_STREAM, 0)) / S;
-            float u1 = ((float)(k / sd) + gi_reference_random(pixel, k, GI__AREA_STREAM, 1)) / (float)sd;
-            float u2 = ((float)(k % sd) + gi_reference_random(pixel, k, GI__AREA_STREAM, 2)) / (float)sd;
+            double u0 = ((double)k + gi_reference_random(pixel, k, GI__AREA_STREAM, 0)) / S;
+            float u1 = (float)gi_halton(k, 2) + r1, u2 = (float)gi_halton(k, 3) + r2;
+            u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
+            u2 -= u2 >= 1.0f ? 1.0f : 0.0f;
             gi_area_sample as;
             gi_area_sample_point(&f->area, u0, fminf(u1, 0x1.fffffep-1f), fminf(u2, 0x1.fffffep-1f), &as);
             gi_light_sample ls;

@@ -373,6 +373,33 @@ static void test_mcguire_residual(void **state)
     fx_end(&x);
 }
 
+/* --area-strata / --area-points: bad values are clear errors; good ones
+ * change the image (the McGuire box is lit by its emitter only). */
+static void test_cli_options(void **state)
+{
+    (void)state;
+    tu_softgi_expect("render --area-points 0 -q", 2, "--area-points '0': expected an integer in 1..1024");
+    tu_softgi_expect("render --area-strata 17 -q", 2, "--area-strata '17': expected an integer in 1..16");
+    if (!tu_file_exists(MCGUIRE)) return;
+    char out[3][16384];
+    const char *args[3] = {"", "--area-points 8", "--raytrace --area-strata 2"};
+    for (int k = 0; k < 3; k++) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd,
+                 "render %s --camera 0,1,3.4:0,1,0:40 --size 32x24 --direct-only -q --hash -o /tmp/softgi-test-area-%d.png "
+                 "%s",
+                 MCGUIRE, k, args[k]);
+        assert_int_equal(tu_softgi_run(cmd, out[k], sizeof out[k]), 0);
+        assert_non_null(strstr(out[k], "hash"));
+        snprintf(cmd, sizeof cmd, "/tmp/softgi-test-area-%d.png", k);
+        remove(cmd);
+        snprintf(cmd, sizeof cmd, "/tmp/softgi-test-area-%d.pfm", k);
+        remove(cmd);
+    }
+    assert_true(strcmp(out[0], out[1]) != 0);
+    assert_true(strcmp(out[0], out[2]) != 0);
+}
+
 static uint64_t hash_floats(const float *v, size_t n)
 {
     uint64_t h = 1469598103934665603ull;
@@ -409,7 +436,7 @@ int main(void)
         cmocka_unit_test(test_direct_raytrace_analytic), cmocka_unit_test(test_direct_raster_analytic),
         cmocka_unit_test(test_reference_analytic),       cmocka_unit_test(test_box_normals_inward),
         cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_threads_identical),
-        cmocka_unit_test(test_mcguire_residual),
+        cmocka_unit_test(test_mcguire_residual),         cmocka_unit_test(test_cli_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,6 +22,8 @@
  *   the standard error itself must be < 1%); its
  *   indirect-only image is exactly 0 (the only bounce lands on the black
  *   emitter).
+ * - Furnace with NEE (closed sphere): the mean over independent pixels
+ *   within 5 standard errors of sum_{k=0..B+1} rho^k, B = 0, 1, 2.
  * - Convergence: Instant Radiosity with the area light as its only light
  *   (8192 VPLs, Embree visibility, no clamp, no filter) against the
  *   reference (4096 spp), indirect only, 3 bounces, in a closed box lit by
@@ -43,6 +45,7 @@
 
 #include "gi_frame.h"
 #include "gi_reference.h"
+#include "pf_gltf.h"
 #include "test_util.h"
 
 static const float k_rho = 0.6f, k_le = 2.0f, k_h = 1.0f;
@@ -215,6 +218,50 @@ static void test_reference_analytic(void **state)
         o.bounces = 1;
         assert_int_equal(gi_reference_render(img, &s, rt, jobs, &cam, N, N, &o, &err), PF_OK);
         for (int c = 0; c < 3 * N * N; c++) assert_true(img[c] == 0.0f);
+    }
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* The furnace with NEE: inside scenes/closed-sphere (its point light
+ * removed; ~1280 inward emitting triangles, Le = 1, rho = 0.5) the expected
+ * radiance with B bounces is sum_{k=0..B+1} rho^k (the emitters are lights:
+ * B = 0 holds their direct light). NEE on flat facets is not zero-variance
+ * (test_reference checks the BSDF-only estimator exactly), so: the mean over
+ * 24 x 24 independent pixels within 5 standard errors, and the standard
+ * error < 0.1%. */
+#define SPHERE SOFTGI_SOURCE_DIR "/scenes/closed-sphere/closed-sphere.gltf"
+
+static void test_furnace_nee(void **state)
+{
+    (void)state;
+    enum { N = 24 };
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, SPHERE, NULL, &err), PF_OK);
+    s.light_count = 0;
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(2);
+    static float img[3 * N * N];
+    double want = 1.0, term = 1.0;
+    for (uint32_t b = 0; b <= 2; b++) {
+        gi_reference_options o = {0};
+        o.spp = 16;
+        o.bounces = b;
+        o.direct_only = b == 0;
+        assert_int_equal(gi_reference_render(img, &s, rt, jobs, &s.cameras[0], N, N, &o, &err), PF_OK);
+        term *= 0.5;
+        want += term;
+        double m = 0.0, v = 0.0;
+        for (int i = 0; i < N * N; i++) m += img[3 * i] / (N * N);
+        for (int i = 0; i < N * N; i++) v += (img[3 * i] - m) * (img[3 * i] - m) / (N * N - 1);
+        double se = sqrt(v / (N * N));
+        print_message("furnace with NEE, B=%u: mean %.6f, expected %.6f (%.2f standard errors of %.4f%%)\n", b, m, want,
+                      fabs(m - want) / se, 100.0 * se / want);
+        assert_true(fabs(m - want) < 5.0 * se);
+        assert_true(se < 0.001 * want);
     }
     pf_jobs_destroy(jobs);
     pf_rt_destroy(rt);
@@ -436,7 +483,7 @@ int main(void)
         cmocka_unit_test(test_direct_raytrace_analytic), cmocka_unit_test(test_direct_raster_analytic),
         cmocka_unit_test(test_reference_analytic),       cmocka_unit_test(test_box_normals_inward),
         cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_threads_identical),
-        cmocka_unit_test(test_mcguire_residual),         cmocka_unit_test(test_cli_options),
+        cmocka_unit_test(test_mcguire_residual),         cmocka_unit_test(test_furnace_nee),         cmocka_unit_test(test_cli_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

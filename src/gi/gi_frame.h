@@ -82,9 +82,11 @@ const char *gi_buffer_caption(gi_buffer_id id);
  * with V from a 128 x 128 paraboloid map at the point (rs_paraboloid.h,
  * exact per texel). Emitters do not move, so the maps are rendered at the
  * first frame and kept. This is a fixed K-point quadrature of the emitter
- * integral: smooth where every point is far (error O(1/K^p) for smooth
- * integrands), banded penumbrae (K hard shadows) and hot spots on surfaces
- * closer to an emitter than its point spacing (1/r^2 of a single point). */
+ * integral (deterministic, no noise): accurate where the emitter is small
+ * seen from the receiver (tests/test_area.c: 1.6% mean error of the peak
+ * under a 1 x 1 emitter at 1 m with K = 32, 0.3% with K = 256), penumbrae
+ * made of K hard shadows, and a receiver much closer to an emitter than the
+ * points' spacing sees individual points (1/r^2 of each; not clamped). */
 #define GI_AREA_DEFAULT_STRATA 4u  /* 16 samples per pixel */
 #define GI_AREA_MAX_STRATA 16u
 #define GI_AREA_DEFAULT_POINTS 32u /* K */

@@ -59,9 +59,10 @@
  * and the systematic resampling are this implementation's choices: the paper
  * does not say how the contribution was estimated.
  *
- * Determinism: steps 1, 2 and 4 run in a fixed order on the calling thread;
- * step 3 is a parallel loop whose items write disjoint weights, reduced in
- * index order afterwards. Random numbers hash stable ids only. */
+ * Determinism: steps 1 and 4 run in a fixed order on the calling thread;
+ * steps 2 (light paths, in rounds appended in path order) and 3 are
+ * parallel loops whose items write disjoint slots, reduced in index order
+ * afterwards. Random numbers hash stable ids only. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,6 +85,10 @@ typedef struct gi__mir_state {
     uint32_t cap, count;
     gi_vpl *cand;
     float *g;   /* image contribution estimate per candidate */
+    /* light-path scratch of one round: GI__MIR_ROUND paths x B VPLs */
+    gi_vpl *scratch;
+    uint8_t *path_n;
+    uint32_t scratch_b;
     /* camera points */
     uint32_t pcap, pcount;
     pf_vec3 *xp, *xn, *xg; /* position, shading normal, geometric normal (turned to the camera) */
@@ -119,6 +124,8 @@ static void gi__mir_destroy(void *state)
     if (!s) return;
     free(s->cand);
     free(s->g);
+    free(s->scratch);
+    free(s->path_n);
     free(s->xp);
     free(s->xn);
     free(s->xg);
@@ -206,86 +213,144 @@ static float gi__u(const gi_vpl_inputs *in, uint32_t path, uint32_t vertex, uint
     return gi_reference_random(path, in->frame, vertex, dim);
 }
 
+/* What every light path of a frame shares: the light CDF (entry np is the
+ * area lights) and the scene's bounding disc for directional lights. */
+typedef struct gi__mir_lights {
+    const gi_vpl_inputs *in;
+    double total, cdf[65];
+    uint32_t np, nl, B;
+    pf_vec3 centre;
+    float radius;
+} gi__mir_lights;
+
+/* Traces light path `path` (its numbers depend on (path, frame) only) and
+ * writes its VPLs, at most B, to out; returns how many. Intensities are not
+ * yet divided by the number of paths. */
+static uint32_t gi__mir_trace_path(const gi__mir_lights *c, uint32_t path, gi_vpl *out)
+{
+    const gi_vpl_inputs *in = c->in;
+    const pf_scene *sc = in->scene;
+    double ul = (double)gi__u(in, path, 0, 0) * c->total;
+    uint32_t l = 0;
+    while (l + 1 < c->nl && c->cdf[l] <= ul) l++;
+    const pf_light *L = l < c->np ? &sc->lights[l] : NULL;
+    double lo = l ? c->cdf[l - 1] : 0.0, pl = (c->cdf[l] - lo) / c->total;
+    float u1 = gi__u(in, path, 0, 1), u2 = gi__u(in, path, 0, 2);
+    float radius = c->radius;
+    pf_ray ray;
+    pf_vec3 phi;
+    ray.tnear = 0.0f;
+    ray.tfar = INFINITY;
+    if (!L) {
+        gi_area_sample as;
+        gi_area_sample_point(in->area, gi__u(in, path, 0, 3), u1, u2, &as);
+        float a1 = gi__u(in, path, 0, 4), a2 = gi__u(in, path, 0, 5);
+        ray.org = pf_rt_offset_origin(as.p, as.n, as.n);
+        ray.dir = gi__around(as.n, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
+        phi = pf_v3_scale(as.radiance, (float)(PF_PI / ((double)as.pdf_area * pl)));
+    } else if (L->type == PF_LIGHT_POINT) {
+        ray.org = L->position;
+        ray.dir = gi__around(pf_v3(0, 0, 1), 1.0f - 2.0f * u1, 2.0f * PF_PI * u2);
+        phi = pf_v3_scale(L->color, (float)(L->intensity * 4.0 * PF_PI / pl));
+    } else if (L->type == PF_LIGHT_SPOT) {
+        float co = cosf(L->outer_cone), ct = 1.0f - u1 * (1.0f - co);
+        ray.org = L->position;
+        ray.dir = gi__around(L->direction, ct, 2.0f * PF_PI * u2);
+        float w = gi_light_spot_factor(L, ct) * 2.0f * PF_PI * (1.0f - co);
+        phi = pf_v3_scale(L->color, (float)(L->intensity * w / pl));
+    } else {
+        pf_vec3 t, b;
+        pf_v3_basis(L->direction, &t, &b);
+        float rr = radius * sqrtf(u1), a = 2.0f * PF_PI * u2;
+        ray.org = pf_v3_add(pf_v3_sub(c->centre, pf_v3_scale(L->direction, 2.0f * radius)),
+                            pf_v3_add(pf_v3_scale(t, rr * cosf(a)), pf_v3_scale(b, rr * sinf(a))));
+        ray.dir = L->direction;
+        phi = pf_v3_scale(L->color, (float)(L->intensity * PF_PI * radius * radius / pl));
+    }
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < c->B; k++) {
+        pf_hit h = pf_rt_intersect1(in->rt, ray);
+        if (h.prim == PF_RT_MISS) break;
+        pf_surface sf;
+        pf_rt_surface(in->rt, &h, 0.0f, &sf);
+        pf_vec3 nrm = sf.ns, ng = sf.ng;
+        if (pf_v3_dot(ng, ray.dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
+        if (pf_v3_dot(nrm, ng) < 0.0f) nrm = pf_v3_scale(nrm, -1.0f);
+        pf_vec3 albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
+        gi_vpl *v = &out[n++];
+        v->pos = pf_rt_offset_origin(sf.p, ng, ng);
+        v->nrm = nrm;
+        v->intensity = pf_v3_scale(pf_v3_mul(phi, albedo), PF_INV_PI);
+        v->id = path;
+        v->moved = 1;
+        float q = fminf(1.0f, pf_v3_max_comp(albedo));
+        if (!(gi__u(in, path, k + 1, 2) < q)) break;
+        phi = pf_v3_scale(pf_v3_mul(phi, albedo), 1.0f / q);
+        float a1 = gi__u(in, path, k + 1, 0), a2 = gi__u(in, path, k + 1, 1);
+        ray.org = v->pos;
+        ray.dir = gi__around(nrm, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+    }
+    return n;
+}
+
+/* Light paths are traced in rounds of GI__MIR_ROUND paths, GI__MIR_PATHS
+ * per job item, each into its own slots of the state's scratch (B VPLs per
+ * path); the rounds are then appended in path order until M candidates. The
+ * result is exactly the serial loop's (a path's VPLs depend on its index
+ * only; the last path may be cut short), for any thread count. */
+#define GI__MIR_PATHS 64u
+#define GI__MIR_ROUND (GI__MIR_PATHS * 32u)
+
+typedef struct gi__mir_round_ctx {
+    const gi__mir_lights *lights;
+    gi__mir_state *s;
+    uint32_t first, count; /* paths of this round */
+} gi__mir_round_ctx;
+
+static void gi__mir_trace_item(void *ctx, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    gi__mir_round_ctx *c = ctx;
+    uint32_t B = c->lights->B;
+    for (uint32_t j = item * GI__MIR_PATHS; j < (item + 1) * GI__MIR_PATHS && j < c->count; j++)
+        c->s->path_n[j] = (uint8_t)gi__mir_trace_path(c->lights, c->first + j, c->s->scratch + (size_t)j * B);
+}
+
 static void gi__mir_trace_candidates(gi__mir_state *s, const gi_vpl_inputs *in, uint32_t M)
 {
     const pf_scene *sc = in->scene;
-    uint32_t B = in->bounces ? in->bounces : 3;
+    gi__mir_lights c;
+    memset(&c, 0, sizeof c);
+    c.in = in;
+    c.B = in->bounces ? in->bounces : 3;
     s->count = 0;
-    pf_vec3 centre = pf_v3_scale(pf_v3_add(sc->bounds_min, sc->bounds_max), 0.5f);
-    float radius = 0.5f * pf_v3_length(pf_v3_sub(sc->bounds_max, sc->bounds_min)) * 1.001f;
-    double total = 0.0, cdf[65];
-    uint32_t np = sc->light_count < 64 ? sc->light_count : 64, nl = np;
-    for (uint32_t l = 0; l < np; l++) {
-        total += gi__light_power(&sc->lights[l], radius);
-        cdf[l] = total;
+    c.centre = pf_v3_scale(pf_v3_add(sc->bounds_min, sc->bounds_max), 0.5f);
+    c.radius = 0.5f * pf_v3_length(pf_v3_sub(sc->bounds_max, sc->bounds_min)) * 1.001f;
+    c.np = sc->light_count < 64 ? sc->light_count : 64;
+    c.nl = c.np;
+    for (uint32_t l = 0; l < c.np; l++) {
+        c.total += gi__light_power(&sc->lights[l], c.radius);
+        c.cdf[l] = c.total;
     }
     if (in->area->count > 0 && in->area->total_power > 0.0) {
-        total += in->area->total_power;
-        cdf[nl++] = total;
+        c.total += in->area->total_power;
+        c.cdf[c.nl++] = c.total;
     }
-    if (nl == 0 || !(total > 0.0)) return;
-    uint32_t paths = 0;
-    for (uint32_t path = 0; s->count < M && path < M * 64u; path++) {
-        paths++;
-        double ul = (double)gi__u(in, path, 0, 0) * total;
-        uint32_t l = 0;
-        while (l + 1 < nl && cdf[l] <= ul) l++;
-        const pf_light *L = l < np ? &sc->lights[l] : NULL;
-        double lo = l ? cdf[l - 1] : 0.0, pl = (cdf[l] - lo) / total;
-        float u1 = gi__u(in, path, 0, 1), u2 = gi__u(in, path, 0, 2);
-        pf_ray ray;
-        pf_vec3 phi;
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        if (!L) {
-            gi_area_sample as;
-            gi_area_sample_point(in->area, gi__u(in, path, 0, 3), u1, u2, &as);
-            float a1 = gi__u(in, path, 0, 4), a2 = gi__u(in, path, 0, 5);
-            ray.org = pf_rt_offset_origin(as.p, as.n, as.n);
-            ray.dir = gi__around(as.n, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
-            phi = pf_v3_scale(as.radiance, (float)(PF_PI / ((double)as.pdf_area * pl)));
-        } else if (L->type == PF_LIGHT_POINT) {
-            ray.org = L->position;
-            ray.dir = gi__around(pf_v3(0, 0, 1), 1.0f - 2.0f * u1, 2.0f * PF_PI * u2);
-            phi = pf_v3_scale(L->color, (float)(L->intensity * 4.0 * PF_PI / pl));
-        } else if (L->type == PF_LIGHT_SPOT) {
-            float co = cosf(L->outer_cone), ct = 1.0f - u1 * (1.0f - co);
-            ray.org = L->position;
-            ray.dir = gi__around(L->direction, ct, 2.0f * PF_PI * u2);
-            float w = gi_light_spot_factor(L, ct) * 2.0f * PF_PI * (1.0f - co);
-            phi = pf_v3_scale(L->color, (float)(L->intensity * w / pl));
-        } else {
-            pf_vec3 t, b;
-            pf_v3_basis(L->direction, &t, &b);
-            float rr = radius * sqrtf(u1), a = 2.0f * PF_PI * u2;
-            ray.org = pf_v3_add(pf_v3_sub(centre, pf_v3_scale(L->direction, 2.0f * radius)),
-                                pf_v3_add(pf_v3_scale(t, rr * cosf(a)), pf_v3_scale(b, rr * sinf(a))));
-            ray.dir = L->direction;
-            phi = pf_v3_scale(L->color, (float)(L->intensity * PF_PI * radius * radius / pl));
-        }
-        for (uint32_t k = 0; k < B && s->count < M; k++) {
-            pf_hit h = pf_rt_intersect1(in->rt, ray);
-            if (h.prim == PF_RT_MISS) break;
-            pf_surface sf;
-            pf_rt_surface(in->rt, &h, 0.0f, &sf);
-            pf_vec3 n = sf.ns, ng = sf.ng;
-            if (pf_v3_dot(ng, ray.dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
-            if (pf_v3_dot(n, ng) < 0.0f) n = pf_v3_scale(n, -1.0f);
-            pf_vec3 albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
-            gi_vpl *v = &s->cand[s->count++];
-            v->pos = pf_rt_offset_origin(sf.p, ng, ng);
-            v->nrm = n;
-            v->intensity = pf_v3_scale(pf_v3_mul(phi, albedo), PF_INV_PI);
-            v->id = path;
-            v->moved = 1;
-            float q = fminf(1.0f, pf_v3_max_comp(albedo));
-            if (!(gi__u(in, path, k + 1, 2) < q)) break;
-            phi = pf_v3_scale(pf_v3_mul(phi, albedo), 1.0f / q);
-            float a1 = gi__u(in, path, k + 1, 0), a2 = gi__u(in, path, k + 1, 1);
-            ray.org = v->pos;
-            ray.dir = gi__around(n, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
-            ray.tnear = 0.0f;
-            ray.tfar = INFINITY;
+    if (c.nl == 0 || !(c.total > 0.0)) return;
+    uint64_t limit = (uint64_t)M * 64u, paths = 0;
+    while (s->count < M && paths < limit) {
+        gi__mir_round_ctx rc = {&c, s, (uint32_t)paths, 0};
+        rc.count = limit - paths < GI__MIR_ROUND ? (uint32_t)(limit - paths) : GI__MIR_ROUND;
+        uint32_t items = (rc.count + GI__MIR_PATHS - 1) / GI__MIR_PATHS;
+        if (in->jobs) pf_jobs_parallel_for(in->jobs, gi__mir_trace_item, &rc, items, 1);
+        else
+            for (uint32_t i = 0; i < items; i++) gi__mir_trace_item(&rc, i, 0);
+        for (uint32_t j = 0; j < rc.count && s->count < M; j++) {
+            paths++;
+            for (uint32_t k = 0; k < s->path_n[j] && s->count < M; k++)
+                s->cand[s->count++] = s->scratch[(size_t)j * c.B + k];
         }
     }
     float inv = 1.0f / (float)paths;
@@ -426,6 +491,18 @@ static pf_result gi__mir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
         if (!s->xp || !s->xn || !s->xg || !s->xa)
             return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "--method mir: out of memory for camera points");
         s->pcap = P;
+    }
+    uint32_t B = in->bounces ? in->bounces : 3;
+    if (B > 255) return pf_error_set(err, PF_ERR_ARGUMENT, "--method mir: at most 255 bounces");
+    if (B > s->scratch_b) {
+        free(s->scratch);
+        free(s->path_n);
+        s->scratch = malloc(sizeof(gi_vpl) * GI__MIR_ROUND * B);
+        s->path_n = malloc(GI__MIR_ROUND);
+        s->scratch_b = 0;
+        if (!s->scratch || !s->path_n)
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "--method mir: out of memory for light paths");
+        s->scratch_b = B;
     }
     if (N == 0) return PF_OK;
     gi__mir_camera_points(s, in);

@@ -3,11 +3,13 @@
  *
  * - Furnace (scenes/closed-sphere, its point light removed): inside a closed
  *   sphere of uniform emission Le = 1 and albedo rho = 0.5, the radiance is
- *   Le sum_{k=0..B} rho^k with B bounces (1, 1.5, 1.75, 1.875 for B = 0..3)
- *   and Le / (1 - rho) = 2 in the limit; B = 30 leaves a truncation error of
- *   rho^31 / (1 - rho) = 2^-30. Tolerance: with cosine-weighted sampling the
+ *   Le sum_{k=0..B+1} rho^k with B bounces (1.5, 1.75, 1.875 for B = 0..2:
+ *   the emitters are lights, so B = 0 holds their direct light) and
+ *   Le / (1 - rho) = 2 in the limit; B = 30 leaves a truncation error of
+ *   rho^32 / (1 - rho) = 2^-31. Tolerance, with no_area_nee (emitters found
+ *   by BSDF sampling only): with cosine-weighted sampling the
  *   per-bounce weight is exactly rho, and every path stays inside the closed
- *   sphere and meets emission Le at each of its B + 1 vertices, so *every
+ *   sphere and meets emission Le at each of its B + 2 vertices, so *every
  *   path* returns the expected value: the estimator has zero variance and
  *   the sample count does not enter the tolerance. What is left is float
  *   rounding of a sum of 31 terms (a few ulps, < 1e-6 relative); we allow
@@ -98,6 +100,7 @@ static void check_furnace(const pf_scene *s, uint32_t bounces, int direct_only, 
 {
     enum { W = 24, H = 24 };
     gi_reference_options o = {0};
+    o.no_area_nee = 1; /* the zero-variance estimator (the NEE one: test_area) */
     o.spp = spp;
     o.bounces = bounces;
     o.direct_only = direct_only;
@@ -119,7 +122,7 @@ static void test_furnace_converged(void **state)
     (void)state;
     pf_scene s;
     load_sphere(&s);
-    /* Le / (1 - rho) = 2; B = 30 truncates the series 2^-30 short of it. */
+    /* Le / (1 - rho) = 2; B = 30 truncates the series 2^-31 short of it. */
     check_furnace(&s, 30, 0, 8, 2.0);
     pf_scene_free(&s);
 }
@@ -129,8 +132,8 @@ static void test_furnace_truncated(void **state)
     (void)state;
     pf_scene s;
     load_sphere(&s);
-    check_furnace(&s, 0, 1, 4, 1.0); /* B = 0: emission seen directly */
-    double sum = 1.0, term = 1.0;
+    check_furnace(&s, 0, 1, 4, 1.5); /* B = 0: emission seen directly + its direct light */
+    double sum = 1.5, term = 0.5;
     for (uint32_t b = 1; b <= 5; b++) {
         term *= 0.5;
         sum += term;
@@ -233,7 +236,8 @@ static void test_quad_indirect_only_zero(void **state)
  * there) receives E = pi Le F with the point-to-rectangle form factor, for
  * each of the four a x a quarters (corner above the point, X = Y = a/h):
  *   F_q = 1/(2 pi) [X/sqrt(1+X^2) atan(Y/sqrt(1+X^2)) + Y/sqrt(1+Y^2) atan(X/sqrt(1+Y^2))]
- * so with B = 1, indirect only, L = rho Le F. A 1x1 image through a 0.01
+ * so with B = 0 (direct only; the square is a light) and no_area_nee (the
+ * emitter found by the cosine-sampled bounce), L = rho Le F. A 1x1 image through a 0.01
  * degree field of view sees (0, 0, 0) only. Each sample is rho Le (the bounce
  * hit the square) or 0, so the standard error is rho Le sqrt(F (1-F) / N);
  * the test allows 5 of them (N = 2^16: 0.5%). Uniform hemisphere sampling
@@ -256,8 +260,8 @@ static void test_form_factor(void **state)
     const uint32_t n = 1u << 16;
     gi_reference_options o = {0};
     o.spp = n;
-    o.bounces = 1;
-    o.indirect_only = 1;
+    o.direct_only = 1;
+    o.no_area_nee = 1;
     float *img = render(&s, best_isa(), 2, &cam, 1, 1, &o);
     double X = a / h, Y = a / h;
     double fq = (X / sqrt(1 + X * X) * atan(Y / sqrt(1 + X * X)) + Y / sqrt(1 + Y * Y) * atan(X / sqrt(1 + Y * Y))) /

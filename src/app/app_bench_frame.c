@@ -369,6 +369,8 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
                       : o->clamp_set           ? "--clamp"
                       : o->filter              ? "--filter"
                       : o->shadow_size         ? "--shadow-size"
+                      : o->area_strata         ? "--area-strata"
+                      : o->area_points         ? "--area-points"
                       : o->has_camera          ? "--camera"
                       : o->light_count         ? "--light"
                       : o->dump_dir            ? "--dump-stages"

@@ -59,8 +59,16 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
         pf_scene_free(scene);
         return r;
     }
-    if (scene->light_count == 0 && !o->quiet)
-        fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    if (scene->light_count == 0 && !o->quiet) {
+        /* emissive triangles are lights too (gi_area.h) */
+        uint32_t emitters = 0;
+        for (uint32_t t = 0; t < scene->tri_count && !emitters; t++) {
+            const float *e = scene->materials[scene->tri_material[t]].emission;
+            emitters = e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
+        }
+        if (!emitters)
+            fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
+    }
     return PF_OK;
 }
 

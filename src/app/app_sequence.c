@@ -256,6 +256,9 @@ int app_sequence(const pf_options *o)
     if (r == PF_OK) {
         r = gi_frame_init(&s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, o->shadow_size, &err);
         s.frame_ready = r == PF_OK;
+        if (r == PF_OK && (o->area_strata || o->area_points))
+            r = gi_frame_set_area_sampling(&s.frame, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
+                                           o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS, &err);
     }
     if (r == PF_OK && !o->direct_only && !o->reference) {
         gi_indirect_options io;

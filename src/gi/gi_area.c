@@ -102,3 +102,22 @@ uint32_t gi_area_find(const gi_area_lights *a, uint32_t prim)
     }
     return lo < a->count && a->tri[lo].prim == prim ? lo : UINT32_MAX;
 }
+
+int gi_area_sample_irradiance(const gi_area_sample *s, pf_vec3 p, pf_vec3 n, pf_vec3 *irradiance, pf_vec3 *wi,
+                              float *distance)
+{
+    pf_vec3 d = pf_v3_sub(s->p, p);
+    float r2 = pf_v3_dot(d, d);
+    *irradiance = pf_v3(0.0f, 0.0f, 0.0f);
+    *wi = pf_v3(0.0f, 0.0f, 1.0f);
+    *distance = 0.0f;
+    if (!(r2 > 0.0f) || !(s->pdf_area > 0.0f)) return 0;
+    float r = sqrtf(r2);
+    pf_vec3 w = pf_v3_scale(d, 1.0f / r);
+    float cr = pf_v3_dot(n, w), ce = -pf_v3_dot(s->n, w);
+    if (!(cr > 0.0f) || !(ce > 0.0f)) return 0;
+    *irradiance = pf_v3_scale(s->radiance, cr * ce / (r2 * s->pdf_area));
+    *wi = w;
+    *distance = r;
+    return 1;
+}

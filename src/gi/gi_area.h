@@ -61,6 +61,18 @@ void gi_area_sample_point(const gi_area_lights *a, double u0, float u1, float u2
  * (per unit area, one face), for multiple importance sampling. */
 float gi_area_pdf(const gi_area_lights *a, uint32_t index);
 
+/* Unshadowed irradiance estimate at receiver point p (unit normal n) from
+ * one emitter sample: the area-measure estimator of E = integral Le cos_r
+ * cos_e / r^2 dA,
+ *   E ~ Le max(0, n.w) max(0, -n_e.w) / (r^2 pdf_area),   w = (sample - p) / r
+ * (an emitter point is a cosine emitter: it lights p like a VPL of intensity
+ * Le dA). Returns 0 and zero irradiance when a cosine is <= 0 or r = 0;
+ * otherwise 1 with the direction to the sample and its distance, so
+ * gi_light_shadow_ray gives the shadow ray (it stops just short of the
+ * emitter, which therefore does not shadow itself). */
+int gi_area_sample_irradiance(const gi_area_sample *s, pf_vec3 p, pf_vec3 n, pf_vec3 *irradiance, pf_vec3 *wi,
+                              float *distance);
+
 /* Index of the emitter for scene triangle `prim`, or UINT32_MAX. O(log n). */
 uint32_t gi_area_find(const gi_area_lights *a, uint32_t prim);
 

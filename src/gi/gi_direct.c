@@ -3,7 +3,13 @@
  * unshadowed irradiance (gi_light) times its shadow map's 16-tap PCF
  * visibility (rs_shadow_visibility), albedo / pi. The ray-traced
  * counterpart is gi_stage_direct_raytrace (--raytrace), the reference these
- * maps are tested against. One job item per row; each writes its own row. */
+ * maps are tested against. One job item per row; each writes its own row.
+ *
+ * Area lights (emissive triangles, gi_area.h): K fixed points on the
+ * emitters, each a cosine emitter of intensity Le A_k with its own
+ * paraboloid shadow map (rs_paraboloid.h), rendered once and reused (see
+ * gi_frame.h "Area lights" for the quadrature and its error). */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -54,6 +60,44 @@ void gi_stage_shadow_maps(gi_frame *f)
     f->shadows_rendered = 1;
 }
 
+void gi_stage_area_shadow_maps(gi_frame *f)
+{
+    gi_area_maps *m = &f->area_maps;
+    if (m->count == 0 || m->rendered) return; /* emitters do not move: drawn once */
+    pf_vec3 pos[64], nrm[64];
+    size_t map = (size_t)RS_PARA_DEFAULT_RES * RS_PARA_DEFAULT_RES;
+    for (uint32_t k0 = 0; k0 < m->count; k0 += 64) {
+        uint32_t n = m->count - k0 < 64 ? m->count - k0 : 64;
+        for (uint32_t k = 0; k < n; k++) {
+            pos[k] = m->frames[k0 + k].o;
+            nrm[k] = m->frames[k0 + k].n;
+        }
+        rs_para_render(m->atlas + k0 * map, m->para, f->jobs, pos, nrm, n, m->range, NULL);
+    }
+    m->rendered = 1;
+}
+
+/* Irradiance at (pos, nrm) from the K emitter points, each visible per its
+ * paraboloid map: sum_k Le A_k cos_r cos_e / r^2 V_k. */
+static pf_vec3 gi__area_irradiance_maps(const gi_area_maps *m, pf_vec3 pos, pf_vec3 nrm)
+{
+    size_t map = (size_t)RS_PARA_DEFAULT_RES * RS_PARA_DEFAULT_RES;
+    pf_vec3 e = pf_v3(0, 0, 0);
+    for (uint32_t k = 0; k < m->count; k++) {
+        const rs_para_frame *fr = &m->frames[k];
+        pf_vec3 d = pf_v3_sub(fr->o, pos);
+        float r2 = pf_v3_dot(d, d);
+        if (!(r2 > 0.0f)) continue;
+        float r = sqrtf(r2);
+        pf_vec3 w = pf_v3_scale(d, 1.0f / r);
+        float cr = pf_v3_dot(nrm, w), ce = -pf_v3_dot(fr->n, w);
+        if (!(cr > 0.0f) || !(ce > 0.0f)) continue;
+        if (!rs_para_visible_at(m->atlas + k * map, RS_PARA_DEFAULT_RES, m->range, fr, pos, cr)) continue;
+        e = pf_v3_add(e, pf_v3_scale(m->weight[k], cr * ce / r2));
+    }
+    return e;
+}
+
 static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -77,6 +121,12 @@ static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
             e[0] += ls.irradiance.x * vis;
             e[1] += ls.irradiance.y * vis;
             e[2] += ls.irradiance.z * vis;
+        }
+        if (f->area_maps.rendered) {
+            pf_vec3 ea = gi__area_irradiance_maps(&f->area_maps, pos, nrm);
+            e[0] += ea.x;
+            e[1] += ea.y;
+            e[2] += ea.z;
         }
         out[3 * x + 0] = e[0] * g->alb_r[p] * PF_INV_PI;
         out[3 * x + 1] = e[1] * g->alb_g[p] * PF_INV_PI;

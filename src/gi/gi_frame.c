@@ -30,6 +30,55 @@ const char *gi_buffer_caption(gi_buffer_id id)
     return (unsigned)id < GI_BUF_COUNT ? gi__buffer_captions[id] : "?";
 }
 
+static void gi__area_maps_free(gi_area_maps *m)
+{
+    rs_para_context_destroy(m->para);
+    free(m->atlas);
+    free(m->frames);
+    free(m->weight);
+    memset(m, 0, sizeof *m);
+}
+
+/* The K fixed emitter points of the rasterized direct light (see
+ * gi_frame.h): positions, frames and weights now, maps at the first frame. */
+static pf_result gi__area_maps_init(gi_frame *f, uint32_t K, pf_error *err)
+{
+    gi_area_maps *m = &f->area_maps;
+    gi__area_maps_free(m);
+    if (!f->raster || f->area.count == 0) return PF_OK;
+    pf_result r = rs_para_context_create(&m->para, f->scene, NULL, err);
+    if (r != PF_OK) return r;
+    m->atlas = malloc(rs_para_atlas_bytes(RS_PARA_DEFAULT_RES, K));
+    m->frames = calloc(K, sizeof *m->frames);
+    m->weight = calloc(K, sizeof *m->weight);
+    if (!m->atlas || !m->frames || !m->weight) {
+        gi__area_maps_free(m);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u area-light maps", K);
+    }
+    for (uint32_t k = 0; k < K; k++) {
+        gi_area_sample as;
+        gi_area_sample_point(&f->area, ((double)k + 0.5) / K, (float)gi_halton(k + 1, 2), (float)gi_halton(k + 1, 3),
+                             &as);
+        /* the map's centre just off the emitter, on its emitting side */
+        pf_vec3 o = pf_rt_offset_origin(as.p, as.n, as.n);
+        m->frames[k] = rs_para_frame_make(o, as.n);
+        m->weight[k] = pf_v3_scale(as.radiance, 1.0f / ((float)K * as.pdf_area));
+    }
+    m->count = K;
+    m->range = rs_para_default_range(f->scene);
+    return PF_OK;
+}
+
+pf_result gi_frame_set_area_sampling(gi_frame *f, uint32_t strata, uint32_t points, pf_error *err)
+{
+    if (strata < 1 || strata > GI_AREA_MAX_STRATA)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "area-light strata %u: expected 1..%u", strata, GI_AREA_MAX_STRATA);
+    if (points < 1 || points > GI_AREA_MAX_POINTS)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "area-light points %u: expected 1..%u", points, GI_AREA_MAX_POINTS);
+    f->area_strata = strata;
+    return gi__area_maps_init(f, points, err);
+}
+
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
                         const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err)
 {
@@ -56,6 +105,12 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
         gi_frame_free(f);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width, height);
     }
+    f->area_strata = GI_AREA_DEFAULT_STRATA;
+    r = gi_frame_set_area_sampling(f, GI_AREA_DEFAULT_STRATA, GI_AREA_DEFAULT_POINTS, err);
+    if (r != PF_OK) {
+        gi_frame_free(f);
+        return r;
+    }
     if (raster) {
         rs_shadow_desc desc;
         memset(&desc, 0, sizeof desc);
@@ -76,6 +131,7 @@ void gi_frame_free(gi_frame *f)
     rs_shadow_set_free(&f->shadows);
     free(f->shadow_lights);
     gi_indirect_free(&f->ind);
+    gi__area_maps_free(&f->area_maps);
     gi_area_lights_free(&f->area);
     free(f->direct);
     free(f->final);
@@ -186,6 +242,7 @@ void gi_frame_render_raster(gi_frame *f)
     gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
     if (f->show_direct) {
         gi__timed(f, "shadow maps", gi_stage_shadow_maps);
+        gi__timed(f, "area-light maps", gi_stage_area_shadow_maps);
         gi__timed(f, "direct light (shadow maps)", gi_stage_direct_shadowmap);
     }
     gi__indirect_stages(f);

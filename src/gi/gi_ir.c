@@ -6,7 +6,7 @@
  * path, so a static scene keeps a static VPL set; when anything changes (a
  * light moves), the whole set is regenerated from the same indices, which is
  * the flickering baseline the later methods beat. Dimensions of path i:
- * 2 light choice, 3/5 emission, then per bounce k (0-based) a pair of
+ * 2 light choice, 3/5 emission (area lights: also 7/11), then per bounce k (0-based) a pair of
  * primes for the cosine-weighted direction and one for Russian roulette.
  *
  * Path construction (per path, light l chosen with probability p_l
@@ -16,6 +16,15 @@
  *                Phi = I * cone(w) * 2 pi (1 - cos outer) / p_l
  *   directional: origin uniform on a disc of the scene's bounding radius R
  *                across the beam, Phi = E pi R^2 / p_l
+ *   area lights: the scene's emissive triangles (gi_area.h) are one more
+ *                entry of the light CDF, with their total power
+ *                sum pi A lum(Le); a path that picks them reuses the light
+ *                choice's number, rescaled to [0, 1) inside the entry, to pick
+ *                an emitter by power (gi_area_sample_point), a point uniform on
+ *                it (dims 3/5), a cosine-weighted direction around its
+ *                emitting normal (dims 7/11; the bounce dimensions below then
+ *                shift by 2), Phi = pi Le / (pdf_area p_l) (cosine emission:
+ *                Le cos / (pdf_area (cos / pi)) per unit p_l)
  * At each surface hit x_j: a VPL with intensity Phi * albedo / pi; survive
  * with q = min(1, max albedo), then Phi *= albedo / q and continue with a
  * cosine-weighted direction (pdf cos / pi cancels the BRDF's cos / pi), up
@@ -25,6 +34,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_area.h"
 #include "gi_light.h"
 #include "gi_vpl.h"
 
@@ -95,12 +105,17 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     if (r != PF_OK) return r;
     pf_vec3 centre = pf_v3_scale(pf_v3_add(s->bounds_min, s->bounds_max), 0.5f);
     float radius = 0.5f * pf_v3_length(pf_v3_sub(s->bounds_max, s->bounds_min)) * 1.001f;
-    /* light selection CDF by power */
-    double total = 0.0, cdf[64];
-    uint32_t nl = s->light_count < 64 ? s->light_count : 64;
-    for (uint32_t l = 0; l < nl; l++) {
+    /* light selection CDF by power; entry np (after the punctual lights) is
+     * the set of area lights, when the scene has emitters */
+    double total = 0.0, cdf[65];
+    uint32_t np = s->light_count < 64 ? s->light_count : 64, nl = np;
+    for (uint32_t l = 0; l < np; l++) {
         total += gi__light_power(&s->lights[l], radius);
         cdf[l] = total;
+    }
+    if (in->area->count > 0 && in->area->total_power > 0.0) {
+        total += in->area->total_power;
+        cdf[nl++] = total;
     }
     if (nl == 0 || !(total > 0.0)) return PF_OK; /* nothing emits: no VPLs */
     uint32_t paths = 0;
@@ -110,14 +125,26 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
         double ul = gi_halton(hi, 2) * total;
         uint32_t l = 0;
         while (l + 1 < nl && cdf[l] <= ul) l++;
-        const pf_light *L = &s->lights[l];
-        double pl = ((l ? cdf[l] - cdf[l - 1] : cdf[0])) / total;
+        const pf_light *L = l < np ? &s->lights[l] : NULL;
+        double lo = l ? cdf[l - 1] : 0.0, pl = (cdf[l] - lo) / total;
         float u1 = (float)gi_halton(hi, 3), u2 = (float)gi_halton(hi, 5);
         pf_ray ray;
         pf_vec3 phi;
         ray.tnear = 0.0f;
         ray.tfar = INFINITY;
-        if (L->type == PF_LIGHT_POINT) {
+        uint32_t dim0 = 3; /* first bounce dimension */
+        if (!L) {
+            double ua = (ul - lo) / (cdf[l] - lo);
+            if (!(ua < 1.0)) ua = 0x1.fffffffffffffp-1;
+            if (!(ua >= 0.0)) ua = 0.0;
+            gi_area_sample as;
+            gi_area_sample_point(in->area, ua, u1, u2, &as);
+            float a1 = (float)gi_halton(hi, gi__primes[3]), a2 = (float)gi_halton(hi, gi__primes[4]);
+            ray.org = pf_rt_offset_origin(as.p, as.n, as.n);
+            ray.dir = gi__around(as.n, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
+            phi = pf_v3_scale(as.radiance, (float)(PF_PI / ((double)as.pdf_area * pl)));
+            dim0 = 5;
+        } else if (L->type == PF_LIGHT_POINT) {
             ray.org = L->position;
             ray.dir = gi__around(pf_v3(0, 0, 1), 1.0f - 2.0f * u1, 2.0f * PF_PI * u2);
             phi = pf_v3_scale(L->color, (float)(L->intensity * 4.0 * PF_PI / pl));
@@ -152,7 +179,7 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
             v->id = path * B + k;
             v->moved = 1;
             /* Russian roulette by albedo, then a cosine-weighted bounce */
-            uint32_t d = 3 + 3 * k;
+            uint32_t d = dim0 + 3 * k;
             float q = fminf(1.0f, pf_v3_max_comp(albedo));
             if (d + 2 >= GI__DIMS || !((float)gi_halton(hi, gi__primes[d + 2]) < q)) break;
             phi = pf_v3_scale(pf_v3_mul(phi, albedo), 1.0f / q);

@@ -1,7 +1,8 @@
 /* gi_raytrace: the ray-traced reference stages of a frame: the G-buffer from
  * Embree primary rays and direct light with Embree shadow rays. This is the
  * `--raytrace` path: the reference the rasterized G-buffer and the shadow
- * maps are tested against.
+ * maps are tested against. Area lights (emissive triangles) add stratified
+ * emitter samples per pixel with shadow rays (gi_frame.h "Area lights").
  *
  * Parallel structure: one job item per image row; every item writes only its
  * row of every buffer, and rays go to Embree in 8-pixel packets (the fixed
@@ -10,6 +11,7 @@
 
 #include "gi_frame.h"
 #include "gi_light.h"
+#include "gi_reference.h"
 
 static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
 {
@@ -54,6 +56,43 @@ static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
 
 void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__gbuffer_row, f, f->height, 1); }
 
+/* Irradiance at a visible point from the area lights: S = strata^2
+ * stratified emitter samples (see gi_frame.h), shadow rays in packets of 8,
+ * summed in sample order. Random numbers: gi_reference_random(pixel, sample,
+ * GI__AREA_STREAM, dim), a hash of stable ids only. */
+#define GI__AREA_STREAM 0x41524541u /* "AREA": a vertex index no path reaches */
+static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm, pf_vec3 ng)
+{
+    uint32_t sd = f->area_strata, S = sd * sd;
+    /* per-pixel rotation of the (u1, u2) points (Cranley-Patterson) */
+    float r1 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 1), r2 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 2);
+    pf_vec3 sum = pf_v3(0, 0, 0);
+    for (uint32_t k0 = 0; k0 < S; k0 += PF_RT_WIDTH) {
+        uint32_t n = S - k0 < PF_RT_WIDTH ? S - k0 : PF_RT_WIDTH, m = 0;
+        pf_ray rays[PF_RT_WIDTH];
+        pf_vec3 irr[PF_RT_WIDTH];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t k = k0 + i;
+            double u0 = ((double)k + gi_reference_random(pixel, k, GI__AREA_STREAM, 0)) / S;
+            float u1 = (float)gi_halton(k, 2) + r1, u2 = (float)gi_halton(k, 3) + r2;
+            u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
+            u2 -= u2 >= 1.0f ? 1.0f : 0.0f;
+            gi_area_sample as;
+            gi_area_sample_point(&f->area, u0, fminf(u1, 0x1.fffffep-1f), fminf(u2, 0x1.fffffep-1f), &as);
+            gi_light_sample ls;
+            if (!gi_area_sample_irradiance(&as, pos, nrm, &ls.irradiance, &ls.wi, &ls.distance)) continue;
+            irr[m] = ls.irradiance;
+            rays[m++] = gi_light_shadow_ray(&ls, pos, ng);
+        }
+        if (m == 0) continue;
+        uint8_t occ[PF_RT_WIDTH];
+        pf_rt_occluded(f->rt, rays, occ, m);
+        for (uint32_t j = 0; j < m; j++)
+            if (!occ[j]) sum = pf_v3_add(sum, irr[j]);
+    }
+    return pf_v3_scale(sum, 1.0f / (float)S);
+}
+
 /* Direct light of one row: for each light, an 8-wide packet of shadow rays
  * from the visible points towards the light; radiance = albedo/pi * sum E. */
 static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
@@ -92,6 +131,18 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
                 o[2] += ls[k].irradiance.z;
             }
         }
+        if (f->area.count > 0)
+            for (uint32_t i = 0; i < n; i++) {
+                size_t p = (size_t)y * f->width + x0 + i;
+                if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
+                pf_vec3 e = gi__area_irradiance_rays(f, (uint32_t)p, pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]),
+                                                     pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]),
+                                                     pf_scene_face_normal(s, g->prim[p]));
+                float *o = out + 3 * (x0 + i);
+                o[0] += e.x;
+                o[1] += e.y;
+                o[2] += e.z;
+            }
         for (uint32_t i = 0; i < n; i++) {
             size_t p = (size_t)y * f->width + x0 + i;
             float *o = out + 3 * (x0 + i);

@@ -3,16 +3,18 @@
  *
  * Per job item (one image row), per group of 8 pixels, per sample index:
  *   1. camera rays       gi__camera_ray jittered within the pixel
- *   2. for vertex k = 1 .. B+1:
+ *   2. for vertex k = 1 .. B+1 (B+2 with no_area_nee):
  *      a. intersect      the live paths, compacted into one packet
- *      b. emission       L += T Le(x_k)
- *      c. next event     per light: irradiance, shadow packet, L += T albedo/pi E
+ *      b. emission       L += T Le(x_k) (k = 1 only, unless no_area_nee)
+ *      c. next event     per punctual light and one area-light sample:
+ *                        irradiance, shadow packet, L += T albedo/pi E
  *      d. continue       cosine-weighted bounce, T *= albedo
  *   3. accumulate        L of every path into its pixel's sum, in sample order */
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
 
+#include "gi_area.h"
 #include "gi_light.h"
 #include "gi_reference.h"
 
@@ -78,6 +80,8 @@ typedef struct gi__ref_ctx {
     const pf_camera *camera;
     uint32_t width, height, spp, bounces;
     int indirect_only;
+    int no_area_nee;            /* emitters only through BSDF-sampled hits */
+    const gi_area_lights *area; /* the scene's emissive triangles */
     gi_reference_progress_fn progress;
     void *progress_user;
     uint32_t caller_worker; /* the job system's id of the thread that waits */
@@ -96,10 +100,41 @@ typedef struct gi__path {
     pf_vec3 nee_w;     /* T * albedo / pi: the weight of an irradiance at this vertex */
 } gi__path;
 
-/* 2b + 2c for the paths of a packet that hit a surface at vertex k. */
-static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t *lanes, uint32_t m)
+/* 2c for the paths of a packet that hit a surface at vertex k: every
+ * punctual light, then (unless no_area_nee) one point on the emitters. */
+static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t *lanes, uint32_t m, uint32_t pixel0,
+                           uint32_t sample, uint32_t k)
 {
     const pf_scene *s = c->scene;
+    if (!c->no_area_nee && c->area->count > 0) {
+        /* Area lights: one emitter point per path vertex, chosen by power
+         * (gi_area_sample_point, numbers of dimensions 2-4 of vertex k, so the
+         * bounce's dimensions 0-1 are untouched), and the area-measure
+         * estimator Le cos cos / (r^2 pdf) (gi_area_sample_irradiance). */
+        pf_ray rays[PF_RT_WIDTH];
+        pf_vec3 irr[PF_RT_WIDTH];
+        uint32_t who[PF_RT_WIDTH], q = 0;
+        for (uint32_t j = 0; j < m; j++) {
+            gi__path *P = &paths[lanes[j]];
+            uint32_t pixel = pixel0 + lanes[j];
+            gi_area_sample as;
+            gi_area_sample_point(c->area, gi_reference_random(pixel, sample, k, 2),
+                                 gi_reference_random(pixel, sample, k, 3), gi_reference_random(pixel, sample, k, 4),
+                                 &as);
+            gi_light_sample ls;
+            if (!gi_area_sample_irradiance(&as, P->p, P->ns, &ls.irradiance, &ls.wi, &ls.distance)) continue;
+            irr[q] = ls.irradiance;
+            rays[q] = gi_light_shadow_ray(&ls, P->p, P->ng);
+            who[q] = lanes[j];
+            q++;
+        }
+        if (q > 0) {
+            uint8_t occ[PF_RT_WIDTH];
+            pf_rt_occluded(c->rt, rays, occ, q);
+            for (uint32_t j = 0; j < q; j++)
+                if (!occ[j]) paths[who[j]].L = pf_v3_add(paths[who[j]].L, pf_v3_mul(paths[who[j]].nee_w, irr[j]));
+        }
+    }
     for (uint32_t l = 0; l < s->light_count; l++) {
         pf_ray rays[PF_RT_WIDTH];
         gi_light_sample ls[PF_RT_WIDTH];
@@ -141,8 +176,11 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
         P->alive = 1;
     }
     /* Vertex k is the k-th surface the path meets: x1 seen from the camera,
-     * x2 .. x_{B+1} after 1 .. B bounces. */
-    for (uint32_t k = 1; k <= c->bounces + 1; k++) {
+     * x2 .. x_{B+1} after 1 .. B bounces (and x_{B+2}, for its emission
+     * only, with no_area_nee: there the emitter seen from x_{B+1} is what NEE
+     * at x_{B+1} would have counted). */
+    uint32_t last = c->bounces + 1 + (c->no_area_nee ? 1u : 0u);
+    for (uint32_t k = 1; k <= last; k++) {
         /* 2a. intersect the live paths as one compacted packet */
         pf_ray rays[PF_RT_WIDTH];
         pf_hit hits[PF_RT_WIDTH];
@@ -157,7 +195,10 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
 
         /* 2b. emission of the surfaces hit, and the surface frames */
         uint32_t hit_lanes[PF_RT_WIDTH], h = 0;
-        int counts = !(c->indirect_only && k == 1); /* indirect_only: nothing from x1 itself */
+        /* indirect_only: nothing from x1 itself, neither its emission nor its
+         * direct light (NEE at x1, or with no_area_nee the emission of x2). */
+        int counts = !(c->indirect_only && k == 1);
+        int emits = c->no_area_nee ? !(c->indirect_only && k <= 2) : (k == 1 && !c->indirect_only);
         for (uint32_t j = 0; j < m; j++) {
             gi__path *P = &paths[lanes[j]];
             if (hits[j].prim == PF_RT_MISS) { /* left the scene: no environment light */
@@ -175,7 +216,7 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
             P->ns = back ? pf_v3_scale(sf.ns, -1.0f) : sf.ns;
             pf_vec3 albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
             P->nee_w = pf_v3_mul(P->T, pf_v3_scale(albedo, PF_INV_PI));
-            if (counts) {
+            if (emits) {
                 const float *e = s->materials[sf.material].emission;
                 P->L = pf_v3_add(P->L, pf_v3_mul(P->T, pf_v3(e[0], e[1], e[2])));
             }
@@ -184,14 +225,14 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
             hit_lanes[h++] = lanes[j];
         }
 
-        /* 2c. next-event estimation to every punctual light */
-        if (counts && h > 0) gi__next_event(c, paths, hit_lanes, h);
+        /* 2c. next-event estimation to every light (none at x_{B+2}) */
+        if (counts && h > 0 && k <= c->bounces + 1) gi__next_event(c, paths, hit_lanes, h, y * c->width + x0, sample, k);
 
         /* 2d. continue: a cosine-weighted bounce, throughput *= albedo
          * (f_r cos / pdf = (albedo/pi) cos / (cos/pi)); none after x_{B+1} */
         for (uint32_t j = 0; j < h; j++) {
             gi__path *P = &paths[hit_lanes[j]];
-            if (k == c->bounces + 1 || pf_v3_max_comp(P->T) <= 0.0f) {
+            if (k == last || pf_v3_max_comp(P->T) <= 0.0f) {
                 P->alive = 0;
                 continue;
             }
@@ -264,6 +305,11 @@ pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt
     c.spp = o.spp ? o.spp : GI_REFERENCE_DEFAULT_SPP;
     c.bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
     c.indirect_only = o.indirect_only;
+    c.no_area_nee = o.no_area_nee;
+    gi_area_lights area;
+    pf_result r = gi_area_lights_build(&area, scene, err);
+    if (r != PF_OK) return r;
+    c.area = &area;
     c.progress = o.progress;
     c.progress_user = o.progress_user;
     c.caller_worker = pf_jobs_thread_count(jobs) - 1u;
@@ -271,5 +317,6 @@ pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt
     /* grain 1: rows cost very different amounts (sky vs. deep corners) */
     pf_jobs_parallel_for(jobs, gi__reference_row, &c, height, 1);
     if (c.progress) c.progress(c.progress_user, height, height);
+    gi_area_lights_free(&area);
     return PF_OK;
 }

@@ -8,7 +8,8 @@
  * estimated by drawing one path per sample (Eq. 4). Per vertex x:
  *
  *   Lo(x) = Le(x) + albedo/pi * sum_lights E_l(x) V_l(x)        punctual lights: NEE
- *                 + albedo/pi * integral Lo(y(x, wi)) cos dwi   surfaces: BSDF sampling
+ *                 + albedo/pi * integral_emitters Le cos cos' / r^2 V dA   area lights: NEE
+ *                 + albedo/pi * integral Lr(y(x, wi)) cos dwi   reflected light: BSDF sampling
  *
  * The same sum over path lengths the VPL methods split at x2 (the survey's
  * Eq. 5), so the reference and a VPL image estimate the same quantity.
@@ -20,25 +21,37 @@
  *
  * Bounces (what --bounces B means; default 3). A path starts at the camera,
  * meets its first surface at x1 and is continued by B diffuse bounces to
- * x2 .. x_{B+1}: at most B+1 segments from the camera. At every vertex
- * x1 .. x_{B+1} the estimator adds
- *   - the emission Le(xk) of the surface the path hit (two-sided, as the
- *     renderer's compose), weighted by the throughput so far, and
- *   - next-event estimation: for every punctual light, albedo/pi * E with
- *     E = gi_light_irradiance (the renderer's units exactly) times a shadow
- *     ray (pf_rt_occluded).
- * So B = 0 is "emission seen directly + direct light" (what `softgi render`
- * computes), B = 1 adds one-bounce indirect light, and inside a closed
- * sphere of uniform emission Le and albedo rho the expected value is exactly
- * Le * sum_{k=0..B} rho^k (-> Le / (1 - rho) as B grows; the furnace test).
- * Emissive surfaces are reached only by BSDF sampling (there is no light
- * sampling for them) and punctual lights only by NEE (a path can never hit
- * them), so each light path is counted by exactly one strategy and no
- * multiple importance sampling is needed.
+ * x2 .. x_{B+1}. Emissive triangles are area lights (gi_area.h) exactly as
+ * punctual lights are lights: light that leaves a light and is reflected at
+ * most B + 1 times (x1 included) counts. The estimator adds
+ *   - the emission Le(x1) of the surface the camera sees (two-sided, as the
+ *     renderer's compose), and
+ *   - at every vertex x1 .. x_{B+1}, next-event estimation: for every
+ *     punctual light albedo/pi * E with E = gi_light_irradiance (the
+ *     renderer's units exactly) times a shadow ray (pf_rt_occluded), and for
+ *     the area lights one emitter point chosen by power, uniform on its
+ *     triangle (gi_area_sample_point), albedo/pi * Le cos cos' / (r^2
+ *     pdf_area) times a shadow ray (gi_area_sample_irradiance).
+ * Emission met by a bounce (x2 ..) is not added: that light path is the one
+ * NEE at the previous vertex counts (NEE-only, no MIS: each light path is
+ * counted by exactly one strategy, so the estimate is unbiased; punctual
+ * lights could never be hit anyway). So B = 0 is "emission seen directly +
+ * direct light of all lights" (what `softgi render` computes), B = 1 adds
+ * one-bounce indirect light, and inside a closed sphere of uniform emission
+ * Le and albedo rho the expected value is exactly Le * sum_{k=0..B+1} rho^k
+ * (-> Le / (1 - rho) as B grows; the furnace test).
  *
- * indirect_only drops the two first-hit terms (Le(x1) and the NEE at x1): what
- * is left is the light that reached x1 after at least one bounce, the part
- * the VPL methods approximate. direct_only sets B = 0.
+ * no_area_nee (tests only) replaces the area-light NEE by BSDF sampling:
+ * the emission Le(xk) of every surface a path hits is added, for x1 .. and
+ * x_{B+2} (one segment further, so the same light paths count and the
+ * expectation is the same). In the furnace every path of that estimator
+ * returns exactly the expected value (zero variance), which NEE on a
+ * tessellated sphere does not.
+ *
+ * indirect_only drops the first-hit terms (Le(x1) and the direct light at
+ * x1: NEE at x1, or with no_area_nee the emission of x2): what is left is
+ * the light that reached x1 after at least one bounce, the part the VPL
+ * methods approximate. direct_only sets B = 0.
  *
  * No Russian roulette: paths stop after B bounces, when they leave the scene
  * or when the throughput is zero (a black surface). The estimate of the
@@ -92,7 +105,8 @@ typedef struct gi_reference_options {
     uint32_t spp;      /* samples per pixel; 0: GI_REFERENCE_DEFAULT_SPP */
     uint32_t bounces;  /* B as defined above; 0: GI_REFERENCE_DEFAULT_BOUNCES (use direct_only for B = 0) */
     int direct_only;   /* B = 0: emission seen directly + direct light */
-    int indirect_only; /* drop Le(x1) and the NEE at x1 */
+    int indirect_only; /* drop Le(x1) and the direct light at x1 */
+    int no_area_nee;   /* emitters only by BSDF sampling (same expectation; for tests) */
     gi_reference_progress_fn progress; /* may be NULL */
     void *progress_user;
 } gi_reference_options;
@@ -108,7 +122,7 @@ pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt
 /* The random number in [0, 1) of (pixel = y * width + x, sample, path vertex,
  * dimension). Vertex 0 is the camera (dimensions 0, 1: the jitter within the
  * pixel); vertex k >= 1 is the bounce leaving x_k (dimensions 0, 1: the
- * hemisphere sample). */
+ * hemisphere sample; 2, 3, 4: the area-light sample of the NEE at x_k). */
 float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim);
 
 /* The camera ray of pixel (x, y), sample `sample`: through the pixel at the

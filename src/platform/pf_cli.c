@@ -34,6 +34,10 @@ void pf_cli_usage(FILE *out)
           "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
           "                          lights given replace the scene's lights\n"
           "  --shadow-size N         direct-light shadow map resolution (default 1024)\n"
+          "  --area-strata N         area lights, ray-traced direct light: N x N stratified\n"
+          "                          samples per pixel (1..16, default 4)\n"
+          "  --area-points K         area lights, rasterized direct light: K emitter points,\n"
+          "                          each with a paraboloid shadow map (1..1024, default 32)\n"
           "  --indirect-only, --direct-only\n"
           "  --vpls N                VPL budget (default 256)\n"
           "  --method NAME           VPL method (default ir: Instant Radiosity)\n"
@@ -213,7 +217,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         const char *val = NULL;
         static const char *const with_value[] = {"-o",       "--output", "--hdr",      "--size",
                                                  "--threads", "--isa",   "--camera",   "--light",
-                                                 "--exposure", "--frames", "--scenes", "--shadow-size",
+                                                 "--exposure", "--frames", "--scenes", "--shadow-size", "--area-strata", "--area-points",
                                                  "--vpls",     "--tiles",  "--clamp",  "--method",
                                                  "--bounces",  "--filter", "--visibility", "--dump-stages",
                                                  "--spp",      "--param",  "--screenshot", "--pipeline",
@@ -235,6 +239,8 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
         else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
         else if (!strcmp(a, "--shadow-size")) r = pf__uint(a, val, 16, 8192, &o->shadow_size, err);
+        else if (!strcmp(a, "--area-strata")) r = pf__uint(a, val, 1, 16, &o->area_strata, err);
+        else if (!strcmp(a, "--area-points")) r = pf__uint(a, val, 1, 1024, &o->area_points, err);
         else if (!strcmp(a, "--indirect-only")) o->indirect_only = 1;
         else if (!strcmp(a, "--direct-only")) o->direct_only = 1;
         else if (!strcmp(a, "--no-interleave")) o->no_interleave = 1;

@@ -28,6 +28,8 @@ typedef struct pf_options {
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
     uint32_t frames;        /* bench: repetitions per measurement (0: default 15) */
     uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */
+    uint32_t area_strata;   /* ray-traced area-light samples: N x N per pixel (0: default 4) */
+    uint32_t area_points;   /* rasterized area light: K emitter points with paraboloid maps (0: default 32) */
     /* many-light frame (issue 4) and the reference path tracer */
     int indirect_only, direct_only;
     int no_interleave;       /* every pixel sees every VPL */

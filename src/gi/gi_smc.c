@@ -83,10 +83,12 @@ typedef struct gi__smc_vpl {
     pf_vec3 pos;        /* on the surface, pushed off along ng */
     pf_vec3 ng, ns;     /* turned to the side it was found from */
     pf_vec3 albedo;
-    pf_vec3 E;          /* irradiance estimate (gi_radiosity) */
+    pf_vec3 E;          /* irradiance estimate for rendering (gi_radiosity) */
+    pf_vec3 E_rank;     /* the estimate lines 9-12 rank by (see "independent") */
     pf_vec3 mail_p, mail_n; /* the visible point that validated it (Sec. 3.2.2) */
     uint64_t seed;      /* radiosity seed, fixed for its life */
     uint32_t light_epoch; /* lights E was estimated with */
+    uint32_t rank_epoch;  /* lights E_rank was estimated with */
     float density;      /* p(y), Eq. 7 */
     float intensity;    /* lum(L) / p, Eq. 6 */
     uint32_t id, alive, valid, born;
@@ -127,7 +129,7 @@ static int gi__smc_cmp_sortkey(const void *a, const void *b)
 }
 
 typedef struct gi__smc_params {
-    uint32_t m_max, v, vis_iters, points, ratio, spp, bounces, warmup, k;
+    uint32_t m_max, v, vis_iters, points, ratio, spp, bounces, warmup, k, independent;
 } gi__smc_params;
 
 typedef struct gi__smc_state {
@@ -163,9 +165,9 @@ static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return
 
 static pf_result gi__smc_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"Mmax", "V", "vis_iters", "points", "ratio", "spp", "bounces", "warmup", "k", NULL};
+    static const char *const known[] = {"Mmax", "V", "vis_iters", "points", "ratio", "spp", "bounces", "warmup", "k", "independent", NULL};
     *state = NULL;
-    gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0};
+    gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0, 1};
     pf_result r = gi_params_check(params, "smc", known, err);
     if (r == PF_OK) r = gi_param_u32(params, "Mmax", 1, 1u << 20, &p.m_max, err);
     if (r == PF_OK) r = gi_param_u32(params, "V", 0, 1024, &p.v, err);
@@ -176,6 +178,7 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
     if (r == PF_OK) r = gi_param_u32(params, "bounces", 0, GI_RADIOSITY_MAX_BOUNCES, &p.bounces, err);
     if (r == PF_OK) r = gi_param_u32(params, "warmup", 1, 100000, &p.warmup, err);
     if (r == PF_OK) r = gi_param_u32(params, "k", 0, GI_KNN_MAX_K, &p.k, err);
+    if (r == PF_OK) r = gi_param_u32(params, "independent", 0, 1, &p.independent, err);
     if (r != PF_OK) return r;
     gi__smc_state *s = calloc(1, sizeof *s);
     if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
@@ -530,8 +533,15 @@ static void gi__smc_rad_vpl_job(void *ctx, uint32_t i, uint32_t worker)
     gi__smc_vpl *v = &s->y[s->list[i]];
     /* v->pos is the pushed-off point; the estimator pushes again by the
      * same rule, a few ulps further: immaterial */
-    v->E = gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed);
-    v->light_epoch = s->light_epoch;
+    if (v->light_epoch != s->light_epoch) {
+        v->E = gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed);
+        v->light_epoch = s->light_epoch;
+    }
+    if (v->rank_epoch != s->light_epoch) {
+        v->E_rank = s->prm.independent ? gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed ^ 0x52414e4bull)
+                                       : v->E;
+        v->rank_epoch = s->light_epoch;
+    }
 }
 
 /* ESTIMATERADIOSITIES for the candidates (line 7): every candidate. */
@@ -547,7 +557,8 @@ static void gi__smc_estimate_radiosities_vpls(gi__smc_state *s, const gi_vpl_inp
 {
     uint32_t n = 0;
     for (uint32_t i = 0; i < s->I; i++)
-        if (s->y[i].alive && s->y[i].light_epoch != s->light_epoch) s->list[n++] = i;
+        if (s->y[i].alive && (s->y[i].light_epoch != s->light_epoch || s->y[i].rank_epoch != s->light_epoch))
+            s->list[n++] = i;
     pf_jobs_parallel_for(in->jobs, gi__smc_rad_vpl_job, s, n, 4);
 }
 
@@ -593,7 +604,7 @@ static void gi__smc_density_vpl_job(void *ctx, uint32_t t, uint32_t worker)
     gi__smc_dens_ctx *c = ctx;
     gi__smc_state *s = c->s;
     gi__smc_vpl *v = &s->y[s->knn_slot[t]];
-    float L = gi__lum(pf_v3_scale(pf_v3_mul(v->albedo, v->E), PF_INV_PI));
+    float L = gi__lum(pf_v3_scale(pf_v3_mul(v->albedo, v->E_rank), PF_INV_PI));
     v->density = gi_knn_density(c->k, s->I, gi_knn_kth_dist2(&s->tree, v->pos, c->k, t));
     v->intensity = v->density > 0.0f ? L / v->density : 0.0f;
 }
@@ -683,13 +694,16 @@ static void gi__smc_take_strongest(gi__smc_state *s)
         const gi__smc_cand *C = &s->raw[s->cand[o[next++].i]];
         gi__smc_vpl *v = &s->y[slot];
         memset(v, 0, sizeof *v);
-        v->pos = C->pos, v->ng = C->ng, v->ns = C->ns, v->albedo = C->albedo, v->E = C->E;
+        v->pos = C->pos, v->ng = C->ng, v->ns = C->ns, v->albedo = C->albedo;
         v->id = s->next_id++;
         /* its own radiosity seed, independent of the candidate's: the
          * candidate won on its noisy estimate, so reusing that estimate
          * would keep the winners' upward noise (line 18 re-estimates) */
         v->seed = gi_radiosity_hash(0x7b1, v->id);
         v->light_epoch = s->light_epoch - 1u; /* stale: line 18 estimates it */
+        /* ranking: the candidate's own estimate (independent mode) costs nothing */
+        v->E_rank = C->E;
+        v->rank_epoch = s->prm.independent ? s->light_epoch : s->light_epoch - 1u;
         v->mail_p = s->x[C->x].p;
         v->mail_n = s->x[C->x].ng;
         v->alive = 1;
@@ -712,6 +726,7 @@ static pf_result gi__smc_initialize_vpls(gi__smc_state *s, const gi_vpl_inputs *
     if (r != PF_OK) return r;
     for (uint32_t i = 0; i < s->cand_count; i++) s->raw[s->cand[i]].intensity = (float)(s->cand_count - i);
     gi__smc_take_strongest(s); /* all of them, in resampling order */
+    for (uint32_t i = 0; i < s->I; i++) s->y[i].rank_epoch = s->light_epoch - 1u; /* no candidate estimates here */
     gi__smc_estimate_radiosities_vpls(s, in);
     return gi__smc_estimate_densities_vpls(s, in, err);
 }

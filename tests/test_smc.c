@@ -32,6 +32,7 @@
 #include "gi_knn.h"
 #include "gi_radiosity.h"
 #include "pf_gltf.h"
+#include "pf_timer.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -444,6 +445,83 @@ static void test_units_furnace(void **state)
     assert_true(e1 / want > e8 / want);
 }
 
+/* ---------------------------------------------------------------- timing */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : (x > y);
+}
+
+/* Opt-in timing (SOFTGI_SMC_BENCH=1 ./build/tests/test_smc): the SMC update
+ * on Sibenik (../shared/scenes) with one point light at (0, 0, 0), 50 W/sr,
+ * and the camera of `softgi bench frame` at 1024x768, for I = 256 and 2048
+ * on 1 and 2 threads: the first update (line 1 + 100 warm-up iterations)
+ * and the median and minimum of 10 later updates (one iteration each; the
+ * G-buffer stages are not timed). It also checks each later frame returns
+ * I VPLs of which at most M_max are new. */
+static void test_bench_sibenik(void **state)
+{
+    (void)state;
+    if (!getenv("SOFTGI_SMC_BENCH")) {
+        print_message("SKIP: timing only with SOFTGI_SMC_BENCH=1\n");
+        return;
+    }
+    const uint32_t budgets[2] = {256, 2048}, threads[2] = {1, 2};
+    for (int bi = 0; bi < 2; bi++)
+        for (int ti = 0; ti < 2; ti++) {
+            fx x;
+            memset(&x, 0, sizeof x);
+            if (!tu_load_or_skip(&x.scene, SOFTGI_SOURCE_DIR "/../shared/scenes/sibenik/sibenik.gltf")) return;
+            pf_error err;
+            pf_light L;
+            memset(&L, 0, sizeof L);
+            L.type = PF_LIGHT_POINT;
+            L.position = pf_v3(0, 0, 0);
+            L.color = pf_v3(1, 1, 1);
+            L.intensity = 50.0f;
+            x.scene.light_count = 0;
+            assert_int_equal(pf_scene_add_light(&x.scene, &L, &err), PF_OK);
+            pf_camera cam;
+            assert_int_equal(pf_camera_look_at(&cam, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err), PF_OK);
+            pf_isa isa;
+            assert_int_equal(pf_isa_resolve(PF_ISA_AUTO, &isa, &err), PF_OK);
+            assert_int_equal(pf_scene_validate(&x.scene, &err), PF_OK);
+            assert_int_equal(pf_rt_create(&x.rt, &x.scene, isa, 1, &err), PF_OK);
+            x.jobs = pf_jobs_create(threads[ti]);
+            assert_int_equal(rs_context_create(&x.rs, &x.scene, x.jobs, rs_simd_for_isa(isa), &err), PF_OK);
+            assert_int_equal(gi_frame_init(&x.f, &x.scene, x.rt, x.rs, x.jobs, &cam, 1024, 768, 0, &err), PF_OK);
+            x.has_frame = 1;
+            gi_indirect_options io;
+            memset(&io, 0, sizeof io);
+            io.method = gi_vpl_method_find("smc");
+            io.vpls = budgets[bi];
+            io.visibility_raytrace = 1;
+            assert_int_equal(gi_frame_enable_indirect(&x.f, &io, 0, &err), PF_OK);
+            gi_stage_gbuffer_raster(&x.f);
+            gi_stage_gbuffer_resolve(&x.f);
+            double t0 = pf_time_now();
+            gi_stage_vpl_update(&x.f);
+            double first = (pf_time_now() - t0) * 1e3, ms[10];
+            for (int fr = 0; fr < 10; fr++) {
+                gi_stage_gbuffer_raster(&x.f);
+                gi_stage_gbuffer_resolve(&x.f);
+                t0 = pf_time_now();
+                gi_stage_vpl_update(&x.f);
+                ms[fr] = (pf_time_now() - t0) * 1e3;
+                uint32_t moved = 0;
+                for (uint32_t i = 0; i < x.f.ind.vpls.count; i++) moved += x.f.ind.vpls.v[i].moved;
+                assert_int_equal(x.f.ind.vpls.count, budgets[bi]);
+                assert_true(moved <= 16);
+            }
+            qsort(ms, 10, sizeof ms[0], cmp_double);
+            print_message("smc update, sibenik 1024x768, I = %4u, %u thread%s: first (warm-up) %8.1f ms, then median "
+                          "%7.1f ms, min %7.1f ms per frame\n",
+                          budgets[bi], threads[ti], threads[ti] > 1 ? "s" : " ", first, 0.5 * (ms[4] + ms[5]), ms[0]);
+            fx_end(&x);
+        }
+}
+
 /* ---------------------------------------------------------------- errors */
 
 static void test_bad_input(void **state)
@@ -493,7 +571,7 @@ int main(void)
         cmocka_unit_test(test_radiosity_point_light), cmocka_unit_test(test_radiosity_furnace),
         cmocka_unit_test(test_static_converges),      cmocka_unit_test(test_corridor_hidden_room),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_units_furnace),
-        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_bad_input),             cmocka_unit_test(test_bench_sibenik),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -61,6 +61,29 @@ typedef struct gi__rpath {
     int alive;
 } gi__rpath;
 
+/* Punctual lights at the current vertex of every live path: E += T E_l,
+ * one batch of shadow rays per light. */
+static void gi__punctual_batch(const gi_radiosity_ctx *c, gi__rpath *P, uint32_t n)
+{
+    for (uint32_t l = 0; l < c->scene->light_count; l++) {
+        pf_ray rays[GI_RADIOSITY_MAX_SPP];
+        pf_vec3 w[GI_RADIOSITY_MAX_SPP];
+        uint32_t who[GI_RADIOSITY_MAX_SPP], q = 0;
+        uint8_t occ[GI_RADIOSITY_MAX_SPP];
+        for (uint32_t s = 0; s < n; s++) {
+            gi_light_sample ls;
+            if (!P[s].alive || !gi_light_irradiance(&c->scene->lights[l], P[s].p, P[s].ns, &ls)) continue;
+            rays[q] = gi_light_shadow_ray(&ls, P[s].p, P[s].ng);
+            w[q] = pf_v3_mul(P[s].T, ls.irradiance);
+            who[q++] = s;
+        }
+        if (!q) continue;
+        pf_rt_occluded(c->rt, rays, occ, q);
+        for (uint32_t k = 0; k < q; k++)
+            if (!occ[k]) P[who[k]].E = pf_v3_add(P[who[k]].E, w[k]);
+    }
+}
+
 /* One area-light sample per live path at its current vertex: E += T Le
  * cos_y cos_l / (r^2 pdf), if unshadowed. */
 static void gi__area_nee(const gi_radiosity_ctx *c, gi__rpath *P, uint32_t n, uint64_t seed, uint32_t vertex)
@@ -110,9 +133,7 @@ pf_vec3 gi_radiosity_irradiance(const gi_radiosity_ctx *c, pf_vec3 p, pf_vec3 ng
     /* vertex 0: punctual lights are exact, the same for every sample */
     pf_vec3 e0 = gi__punctual(c, p, ng, ns);
     for (uint32_t j = 0; j < B; j++) {
-        if (j > 0) /* punctual lights at the bounce vertices */
-            for (uint32_t s = 0; s < n; s++)
-                if (P[s].alive) P[s].E = pf_v3_add(P[s].E, pf_v3_mul(P[s].T, gi__punctual(c, P[s].p, P[s].ng, P[s].ns)));
+        if (j > 0) gi__punctual_batch(c, P, n); /* punctual lights at the bounce vertices */
         if (area) gi__area_nee(c, P, n, seed, j);
         if (j + 1 == B) break;
         /* continue: a cosine-weighted bounce (f_r cos / pdf = albedo of the next vertex) */

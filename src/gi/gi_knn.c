@@ -6,12 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-static float gi__coord(pf_vec3 p, uint32_t a) { return a == 0 ? p.x : (a == 1 ? p.y : p.z); }
+static inline float gi__coord(const pf_vec3 *p, uint32_t a) { return a == 0 ? p->x : (a == 1 ? p->y : p->z); }
 
 /* The total order the split uses: coordinate on axis a, then index. */
-static int gi__less(const gi_knn *t, uint32_t a, uint32_t i, uint32_t j)
+static inline int gi__less(const gi_knn *t, uint32_t a, uint32_t i, uint32_t j)
 {
-    float ci = gi__coord(t->pts[i], a), cj = gi__coord(t->pts[j], a);
+    float ci = gi__coord(&t->pts[i], a), cj = gi__coord(&t->pts[j], a);
     return ci < cj || (ci == cj && i < j);
 }
 
@@ -68,13 +68,16 @@ pf_result gi_knn_build(gi_knn *t, const pf_vec3 *pts, uint32_t count, pf_error *
         if (ix) t->idx = ix;
         uint8_t *ax = realloc(t->axis, cap);
         if (ax) t->axis = ax;
-        if (!p || !ix || !ax) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
+        pf_vec3 *tp = realloc(t->tpts, sizeof(pf_vec3) * cap);
+        if (tp) t->tpts = tp;
+        if (!p || !ix || !ax || !tp) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
         t->cap = cap;
     }
     t->count = count;
     if (count) memcpy(t->pts, pts, sizeof(pf_vec3) * count);
     for (uint32_t i = 0; i < count; i++) t->idx[i] = i;
     gi__build(t, 0, count);
+    for (uint32_t i = 0; i < count; i++) t->tpts[i] = t->pts[t->idx[i]];
     return PF_OK;
 }
 
@@ -83,6 +86,7 @@ void gi_knn_free(gi_knn *t)
     free(t->pts);
     free(t->idx);
     free(t->axis);
+    free(t->tpts);
     memset(t, 0, sizeof *t);
 }
 
@@ -110,19 +114,18 @@ static void gi__query(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, uint
     while (hi > lo) {
         if (hi - lo <= 8) { /* small node: scan */
             for (uint32_t i = lo; i < hi; i++) {
-                uint32_t j = t->idx[i];
-                if (j == exclude) continue;
-                pf_vec3 d = pf_v3_sub(t->pts[j], q);
+                if (t->idx[i] == exclude) continue;
+                pf_vec3 d = pf_v3_sub(t->tpts[i], q);
                 gi__push(h, pf_v3_dot(d, d));
             }
             return;
         }
-        uint32_t mid = lo + (hi - lo) / 2, j = t->idx[mid];
-        if (j != exclude) {
-            pf_vec3 d = pf_v3_sub(t->pts[j], q);
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (t->idx[mid] != exclude) {
+            pf_vec3 d = pf_v3_sub(t->tpts[mid], q);
             gi__push(h, pf_v3_dot(d, d));
         }
-        float delta = gi__coord(q, t->axis[mid]) - gi__coord(t->pts[j], t->axis[mid]);
+        float delta = gi__coord(&q, t->axis[mid]) - gi__coord(&t->tpts[mid], t->axis[mid]);
         /* near side first, the far side only if the splitting plane is
          * closer than the current k-th distance */
         uint32_t nlo = delta < 0.0f ? lo : mid + 1, nhi = delta < 0.0f ? mid : hi;

@@ -35,6 +35,7 @@ typedef struct gi_knn {
     uint32_t count, cap;
     pf_vec3 *pts;   /* copies of the points, by original index */
     uint32_t *idx;  /* the implicit tree: a permutation of 0..count-1 */
+    pf_vec3 *tpts;  /* pts[idx[i]]: the points in tree order, so queries read memory in order */
     uint8_t *axis;  /* split axis of the node whose point is idx[i] */
 } gi_knn;
 

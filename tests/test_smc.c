@@ -136,7 +136,8 @@ static void test_knn_brute_force(void **state)
                 }
         for (int j = 0; j < 5; j++) {
             float got = gi_knn_kth_dist2(&t, c, ks[j], ex);
-            if (got != d[ks[j] - 1]) fail_msg("query %d k %u: tree %.9g, brute force %.9g", q, ks[j], got, d[ks[j] - 1]);
+            if (got != d[ks[j] - 1])
+                fail_msg("query %d k %u: tree %.9g, brute force %.9g", q, ks[j], got, d[ks[j] - 1]);
         }
     }
     /* fewer points than k: infinity; an empty tree too */
@@ -493,7 +494,8 @@ static void test_bench_sibenik(void **state)
             x.scene.light_count = 0;
             assert_int_equal(pf_scene_add_light(&x.scene, &L, &err), PF_OK);
             pf_camera cam;
-            assert_int_equal(pf_camera_look_at(&cam, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err), PF_OK);
+            pf_vec3 eye = pf_v3(-18, -11, 0), target = pf_v3(10, -8, 0);
+            assert_int_equal(pf_camera_look_at(&cam, eye, target, pf_radians(70), &err), PF_OK);
             pf_isa isa;
             assert_int_equal(pf_isa_resolve(PF_ISA_AUTO, &isa, &err), PF_OK);
             assert_int_equal(pf_scene_validate(&x.scene, &err), PF_OK);

@@ -70,7 +70,8 @@ pf_result gi_knn_build(gi_knn *t, const pf_vec3 *pts, uint32_t count, pf_error *
         if (ax) t->axis = ax;
         pf_vec3 *tp = realloc(t->tpts, sizeof(pf_vec3) * cap);
         if (tp) t->tpts = tp;
-        if (!p || !ix || !ax || !tp) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
+        if (!p || !ix || !ax || !tp)
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
         t->cap = cap;
     }
     t->count = count;

@@ -142,7 +142,8 @@ pf_vec3 gi_radiosity_irradiance(const gi_radiosity_ctx *c, pf_vec3 p, pf_vec3 ng
         uint32_t who[GI_RADIOSITY_MAX_SPP], q = 0;
         for (uint32_t s = 0; s < n; s++) {
             if (!P[s].alive) continue;
-            pf_vec3 wi = gi__cosine_dir(P[s].ns, gi_radiosity_random(seed, s, j, 3), gi_radiosity_random(seed, s, j, 4));
+            float u0 = gi_radiosity_random(seed, s, j, 3), u1 = gi_radiosity_random(seed, s, j, 4);
+            pf_vec3 wi = gi__cosine_dir(P[s].ns, u0, u1);
             /* below the geometric surface (interpolated normals): mirror, as gi_reference.c */
             float d = pf_v3_dot(wi, P[s].ng);
             if (d < 0.0f) wi = pf_v3_sub(wi, pf_v3_scale(P[s].ng, 2.0f * d));

@@ -16,15 +16,19 @@
  *   line 6     gi__smc_resample_candidates       ratio:1 weighted resampling
  *                                                without replacement towards a
  *                                                uniform area density (3.2.1)
- *   line 7,18  gi__smc_estimate_radiosities      path tracer, gi_radiosity.h
+ *   line 7     gi__smc_estimate_radiosities_candidates
+ *   line 18    gi__smc_estimate_radiosities_vpls path tracer, gi_radiosity.h
  *                                                (3.2.3)
- *   line 8,19  gi__smc_estimate_densities        kNN, Eq. 7 (k = 1 for
- *                                                candidates, Eq. 8 for Y)
+ *   line 8     gi__smc_estimate_densities_candidates  kNN, Eq. 7, k = 1
+ *   line 19    gi__smc_estimate_densities_vpls   kNN, Eq. 7, k of Eq. 8
  *   line 9     gi__smc_count_undersampled        M_min, Eq. 9 (the 95% rule)
- *   line 10-12 gi__smc_invalidate_weakest        FINDSMALLESTINTENSITY, repeated
- *   line 13    gi__smc_clamp_size                remove at most M_max VPLs
+ *   line 10-13 gi__smc_invalidate_and_clamp      FINDSMALLESTINTENSITY until
+ *                                                |INVALID| >= M_min, then
+ *                                                CLAMPSIZE: remove <= M_max
  *   line 14-17 gi__smc_take_strongest            FINDLARGESTINTENSITY, repeated
  *   line 20    gi__smc_output                    the frame's VPL set
+ *   line 1     gi__smc_initialize_vpls, then gi__smc_iterate (lines 3-19)
+ *              `warmup` times, on the first update
  *
  * Units (what the frame receives). The paper's estimator (Eq. 5, 6) sums
  * over the I VPLs  (1/I) W G L(y_i) / p(y_i): a VPL y with reflected
@@ -178,7 +182,7 @@ typedef struct gi__smc_state {
     gi__smc_sortkey *sortkeys; /* scratch (max(raw, I)) */
     gi_knn tree;
     pf_light *lights;         /* the lights E was estimated with */
-    uint32_t light_count;
+    uint32_t light_count, light_cap, lights_tracked;
     const gi_vpl_inputs *in;  /* this update's inputs (for the jobs) */
     gi_radiosity_ctx rad;
 } gi__smc_state;
@@ -191,7 +195,8 @@ static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return
 
 static pf_result gi__smc_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"Mmax", "V", "vis_iters", "points", "ratio", "spp", "bounces", "warmup", "k", "independent", NULL};
+    static const char *const known[] = {"Mmax",    "V",      "vis_iters", "points", "ratio", "spp",
+                                        "bounces", "warmup", "k",         "independent", NULL};
     *state = NULL;
     gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0, 1};
     pf_result r = gi_params_check(params, "smc", known, err);
@@ -219,6 +224,7 @@ static void gi__smc_free_buffers(gi__smc_state *s)
     free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->lights);
     free(s->sortkeys);
     s->sortkeys = NULL;
+    s->light_count = s->light_cap = s->lights_tracked = 0;
     gi_knn_free(&s->tree);
     s->y = NULL, s->prev_id = NULL, s->x = NULL, s->raw = NULL, s->cand = NULL, s->vis_hit = NULL;
     s->list = s->list2 = NULL, s->knn_pts = NULL, s->knn_slot = NULL, s->lights = NULL;
@@ -237,7 +243,8 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
 {
     gi__smc_free_buffers(s);
     uint64_t raw = (uint64_t)s->prm.ratio * I;
-    if (raw > (1u << 26)) return pf_error_set(err, PF_ERR_ARGUMENT, "smc: ratio %u x %u VPLs is too many rays", s->prm.ratio, I);
+    if (raw > (1u << 26))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "smc: ratio %u x %u VPLs is too many rays", s->prm.ratio, I);
     s->I = I;
     s->raw_cap = (uint32_t)raw;
     s->x_cap = s->prm.points;
@@ -253,8 +260,8 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->knn_pts = calloc(big, sizeof(pf_vec3));
     s->knn_slot = calloc(big, sizeof(uint32_t));
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
-    if (!s->sortkeys ||!s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 || !s->knn_pts ||
-        !s->knn_slot) {
+    if (!s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
+        !s->knn_pts || !s->knn_slot) {
         gi__smc_free_buffers(s);
         s->I = 0;
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u VPLs", I);
@@ -267,24 +274,22 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
 /* ---------------------------------------------------------------- lights */
 
 /* Bumps light_epoch when the scene's punctual lights differ from the ones
- * the radiosities were estimated with (area lights are static). */
+ * the radiosities were estimated with (area lights are static). The copy
+ * grows only when the scene has more lights than ever before. */
 static pf_result gi__smc_track_lights(gi__smc_state *s, const pf_scene *scene, pf_error *err)
 {
-    if (s->lights && s->light_count == scene->light_count &&
-        !memcmp(s->lights, scene->lights, sizeof(pf_light) * scene->light_count))
+    uint32_t n = scene->light_count;
+    if (s->lights_tracked && s->light_count == n && (!n || !memcmp(s->lights, scene->lights, sizeof(pf_light) * n)))
         return PF_OK;
-    free(s->lights);
-    s->lights = NULL;
-    s->light_count = 0;
-    if (scene->light_count) {
-        s->lights = malloc(sizeof(pf_light) * scene->light_count);
-        if (!s->lights) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
-        memcpy(s->lights, scene->lights, sizeof(pf_light) * scene->light_count);
-    } else {
-        s->lights = malloc(1); /* non-NULL: "tracked" */
-        if (!s->lights) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+    if (n > s->light_cap) {
+        pf_light *l = realloc(s->lights, sizeof(pf_light) * n);
+        if (!l) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+        s->lights = l;
+        s->light_cap = n;
     }
-    s->light_count = scene->light_count;
+    if (n) memcpy(s->lights, scene->lights, sizeof(pf_light) * n);
+    s->light_count = n;
+    s->lights_tracked = 1;
     s->light_epoch++;
     return PF_OK;
 }
@@ -451,7 +456,8 @@ static void gi__smc_trace_job(void *ctx, uint32_t chunk, uint32_t worker)
     (void)worker;
     gi__smc_ray_ctx *c = ctx;
     gi__smc_state *s = c->s;
-    uint32_t r0 = chunk * GI__SMC_RAY_CHUNK, n = s->raw_cap - r0 < GI__SMC_RAY_CHUNK ? s->raw_cap - r0 : GI__SMC_RAY_CHUNK;
+    uint32_t r0 = chunk * GI__SMC_RAY_CHUNK;
+    uint32_t n = s->raw_cap - r0 < GI__SMC_RAY_CHUNK ? s->raw_cap - r0 : GI__SMC_RAY_CHUNK;
     pf_ray rays[GI__SMC_RAY_CHUNK];
     pf_hit hits[GI__SMC_RAY_CHUNK];
     uint32_t from[GI__SMC_RAY_CHUNK];
@@ -852,5 +858,6 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 }
 
 const gi_vpl_method gi_method_smc = {
-    "smc", "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)", gi__smc_create, gi__smc_update, gi__smc_destroy,
+    "smc", "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)",
+    gi__smc_create, gi__smc_update, gi__smc_destroy,
 };

@@ -8,6 +8,7 @@ Writes, each as one self-contained .gltf (geometry in an embedded base64 data-UR
   scenes/closed-sphere/closed-sphere.gltf  inward-facing emissive icosphere (furnace test)
   scenes/box-room-hole/box-room-hole.gltf  closed room lit by the sun through one window
   scenes/maze/maze.gltf                    8 x 8 maze of thin wall boxes (heavy occlusion)
+  scenes/corridor/corridor.gltf            two rooms joined by a Z-shaped corridor (indirect visibility)
 
 Conventions (softgi README "Light units", src/platform/pf_scene.h): right-handed world, +Y up,
 metres. KHR_lights_punctual point/spot intensity is radiant intensity in W/sr (E = I cos(theta) / r^2),
@@ -664,12 +665,64 @@ def make_maze():
 
 
 # --------------------------------------------------------------------------------------------
+# Corridor: two rooms joined by a Z-shaped corridor on a grid of 1 m cells (x right, z towards
+# the camera's left), 2.5 m high, for SMC Instant Radiosity's indirect visibility (Hedman 2017
+# Sec. 3.2.2 and Fig. 5). The free space is a union of cell rectangles; every face of a free cell
+# that borders solid space is one inward-facing quad, so the interior is closed.
+#   room A (camera)  x 0..4,   z 0..4
+#   leg 1            x 4..8,   z 1..2   (leaves room A eastwards)
+#   leg 2            x 7..8,   z 2..7   (turns south)
+#   leg 3            x 8..11,  z 6..7   (turns east again)
+#   room B (light)   x 11..15, z 4..9
+# The camera looks down leg 1. Any segment from a point of leg 1 or room A into leg 3 must pass
+# through leg 2 (x 7..8 for z 2..6), so it reaches at most x = 8.25 in leg 3: room B and leg 3
+# beyond x = 8.25 are hidden from every directly visible point (second-order hidden). The light
+# hangs in room B, where it shines down leg 3; room A gets light only around two corners.
+
+CORRIDOR_H = 2.5
+CORRIDOR_RECTS = [(0, 4, 0, 4), (4, 8, 1, 2), (7, 8, 2, 7), (8, 11, 6, 7), (11, 15, 4, 9)]
+CORRIDOR_LIGHT = (12.5, 2.0, 6.5)
+CORRIDOR_LIGHT_INTENSITY = 200.0  # W/sr
+
+
+def make_corridor():
+    s = Scene("corridor")
+    wall = s.material("wall", (0.75, 0.75, 0.75))
+    floor = s.material("floor", (0.6, 0.6, 0.6))
+    free = set()
+    for x0, x1, z0, z1 in CORRIDOR_RECTS:
+        for x in range(x0, x1):
+            for z in range(z0, z1):
+                free.add((x, z))
+    h = CORRIDOR_H
+    gf, gw = Geometry(), Geometry()
+    for x, z in sorted(free):
+        gf.quad([(x, 0.0, z), (x + 1, 0.0, z), (x + 1, 0.0, z + 1), (x, 0.0, z + 1)], (0, 1, 0))
+        gw.quad([(x, h, z), (x + 1, h, z), (x + 1, h, z + 1), (x, h, z + 1)], (0, -1, 0))
+        if (x + 1, z) not in free:
+            gw.quad([(x + 1, 0.0, z), (x + 1, h, z), (x + 1, h, z + 1), (x + 1, 0.0, z + 1)], (-1, 0, 0))
+        if (x - 1, z) not in free:
+            gw.quad([(x, 0.0, z), (x, h, z), (x, h, z + 1), (x, 0.0, z + 1)], (1, 0, 0))
+        if (x, z + 1) not in free:
+            gw.quad([(x, 0.0, z + 1), (x + 1, 0.0, z + 1), (x + 1, h, z + 1), (x, h, z + 1)], (0, 0, -1))
+        if (x, z - 1) not in free:
+            gw.quad([(x, 0.0, z), (x + 1, 0.0, z), (x + 1, h, z), (x, h, z)], (0, 0, 1))
+    s.mesh("floor", floor, gf)
+    s.mesh("walls", wall, gw)
+    eye = (0.5, 1.5, 1.6)
+    s.camera("camera", eye, v_sub((8.0, 1.2, 1.5), eye), round(math.radians(60.0), 12), znear=0.05, zfar=50.0)
+    s.light("lamp", "point", CORRIDOR_LIGHT_INTENSITY, position=CORRIDOR_LIGHT)
+    return s
+
+
+# --------------------------------------------------------------------------------------------
 
 SCENES = [
     ("scenes/cornell-box/cornell-box.gltf", make_cornell_box),
     ("scenes/closed-sphere/closed-sphere.gltf", make_closed_sphere),
     ("scenes/box-room-hole/box-room-hole.gltf", make_box_room_hole),
     ("scenes/maze/maze.gltf", make_maze),
+    ("scenes/corridor/corridor.gltf", make_corridor),
 ]
 
 

@@ -105,10 +105,13 @@ uint32_t gi_invtm_sample(const gi_invtm_cdf *c, const gi_sample_domain *d, int d
 
 /* Independent Metropolis-Hastings, one chain (Barak 2013 Algorithm 1, in
  * gi_tcas.c): chain j of N, length M (M samples: the initial proposal and
- * M - 1 moves), proposals from Halton indices 1 + j + N k, k = 0 .. M-1
+ * M - 1 moves), proposal k from Halton index gi_imh_index(j, k, N, M)
  * (bases 2, 3, 5 for the vector, 7 for the acceptance number).
  * Returns the final texel; *w the chain's mean of f(v)/q(v) over its M
  * proposals (an estimate of sum f), *fv = f(final). */
+/* Halton index of chain j's k-th proposal: 1 + pi(j + N k), pi a fixed
+ * permutation of [0, N M) (gi_tcas.c says why). N M must be < 2^32 - 1. */
+uint32_t gi_imh_index(uint32_t j, uint32_t k, uint32_t N, uint32_t M);
 uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uint32_t N, uint32_t M, double *w,
                       float *fv);
 

@@ -14,18 +14,20 @@
  *                              Phi_v * w_j / (pi N f(v_j)).
  *
  * Algorithm 1 as implemented (chain j of N, length M):
- *   v   <- proposal(h(1 + j))                     k = 0: the initial sample
+ *   v   <- proposal(h(j, 0))                      k = 0: the initial sample
  *   s   <- g(v)
  *   for k = 1 .. M-1:
- *       v'  <- proposal(h(1 + j + N k))
+ *       v'  <- proposal(h(j, k))
  *       s   <- s + g(v')
- *       if g(v') / g(v) >= h7(1 + j + N k): v <- v'   (always when g(v) = 0)
+ *       if g(v') / g(v) >= h7(h(j, k)): v <- v'   (always when g(v) = 0)
  *   w   <- s / M
- * h(i) = (h2(i), h3(i), h5(i)) is the Halton vector of index i and h7 its
- * 4th dimension ("rand.nextScalar()"): the seeds j + N k (0 <= k < M) of
- * Sec. 4.3 give every chain disjoint proposals, the same every frame ("we
- * use the same Halton sequence in each frame"); index 0 (all zeros) is
- * skipped by the + 1. g(v) = f(v) / q(v) is the importance per unit volume
+ * h(i) = (h2(i), h3(i), h5(i)) is the Halton vector of index i and h7(i)
+ * its 4th dimension ("rand.nextScalar()"), and
+ *   h(j, k) = 1 + pi(j + N k)   (gi_imh_index; pi a fixed permutation)
+ * The seeds j + N k (0 <= k < M) of Sec. 4.3 (permuted: deviation, see
+ * gi_imh_index) give every chain disjoint proposals, the same every frame
+ * ("we use the same Halton sequence in each frame"); index 0 (all zeros)
+ * is skipped by the + 1. g(v) = f(v) / q(v) is the importance per unit volume
  * of the proposal space [0, 1)^3 (q = the proposal's texel probability,
  * gi_importance.h), which is the paper's f when all maps have as many
  * texels; with a spot map and a cube map the maps' texels have different
@@ -58,15 +60,44 @@
 
 /* ------------------------------------------------------- 3. one IM-H chain */
 
+/* The Halton index of chain j's k-th proposal: 1 + pi(j + N k), pi a fixed
+ * bijection of [0, N M) (cycle-walking an invertible xorshift-multiply hash
+ * on the next power of two). So the chains together use exactly the first
+ * N M Halton points, each once (the paper's disjoint seeds j + N k), the
+ * same every frame, but a chain's successive proposals are no longer a
+ * fixed rotation of each other. Deviation, measured: with the plain index
+ * 1 + j + N k the proposals along a chain are (in every base b) shifted by
+ * the constant N / b^a digits, the chain becomes a deterministic rotation,
+ * and its final samples do not follow f: in test_rsm_methods' 1D case
+ * (f(i) = 1 + i on 16 cells, N = 20000, M = 16) chi-square is 15907 with
+ * bases 2, 3, 5, 7 and 2006 with bases coprime to N, against a 0.001
+ * critical value of 37.8; with pi it passes (gi_tcas.c, README). */
+uint32_t gi_imh_index(uint32_t j, uint32_t k, uint32_t N, uint32_t M)
+{
+    uint64_t L = (uint64_t)N * M, i = (uint64_t)j + (uint64_t)N * k;
+    uint32_t m = 1;
+    while (((uint64_t)1 << m) < L) m++;
+    uint64_t mask = ((uint64_t)1 << m) - 1, x = i;
+    do { /* each operation is a bijection of [0, 2^m) */
+        for (int r = 0; r < 3; r++) {
+            x ^= x >> ((m + 1) / 2);
+            x = (x * 0x2c1b3c6dull) & mask;
+            x ^= x >> ((m + 1) / 3 + 1);
+            x = (x * 0x297a2d39ull) & mask;
+        }
+    } while (x >= L);
+    return (uint32_t)(x + 1);
+}
+
 uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uint32_t N, uint32_t M, double *w,
                       float *fv)
 {
     double q;
-    uint32_t h = 1 + j;
+    uint32_t h = gi_imh_index(j, 0, N, M);
     uint32_t v = gi_domain_texel(d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
     double gv = (double)f[v] / q, s = gv;
     for (uint32_t k = 1; k < M; k++) {
-        h = 1 + j + N * k;
+        h = gi_imh_index(j, k, N, M);
         uint32_t vn = gi_domain_texel(d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
         double gn = (double)f[vn] / q;
         s += gn;
@@ -171,6 +202,9 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     if (!in->gbuf)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--method tcas needs the frame's G-buffer (camera points)");
     uint32_t N = in->budget;
+    if ((uint64_t)N * s->M >= 0xffffffffull)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--method tcas: %u VPLs x M=%u proposals exceed the Halton index range",
+                            N, s->M);
     pf_result r = gi_vpl_set_reserve(out, N ? N : 1, err);
     if (r != PF_OK) return r;
     if (s->cap < N) {

@@ -665,6 +665,70 @@ static void bench_rsm_sibenik(void **state)
             gi_vpl_set_free(&set);
             fx_end(&x);
         }
+    /* The stages on their own (Barak 2013 Table 2 times the sampling
+     * without the importance map): the importance map, InvTM's CDFs plus
+     * 256 samples, and 256 IM-H chains of M = 16, on the last frame's
+     * G-buffer; median of 15 repetitions. */
+    for (uint32_t threads = 1; threads <= 2; threads++) {
+        fx x;
+        if (!tu_load_or_skip(&x.scene, SIBENIK)) return;
+        pf_light L;
+        memset(&L, 0, sizeof L);
+        L.type = PF_LIGHT_POINT;
+        L.color = pf_v3(1, 1, 1);
+        L.intensity = 50.0f;
+        x.scene.lights = realloc(x.scene.lights, sizeof L);
+        x.scene.lights[0] = L;
+        x.scene.light_count = 1;
+        pf_error err;
+        fx_begin(&x, threads, 1024, 768, NULL);
+        assert_int_equal(pf_camera_look_at(&x.f.camera, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err),
+                         PF_OK);
+        gi_stage_gbuffer_raster(&x.f);
+        gi_stage_gbuffer_resolve(&x.f);
+        gi_rsm_set rsm;
+        gi_rsm_set_init(&rsm, 0);
+        double t0 = 1000.0 * pf_time_now();
+        assert_int_equal(gi_rsm_set_update(&rsm, &x.scene, x.jobs, &err), PF_OK);
+        double t_rsm = 1000.0 * pf_time_now() - t0;
+        gi_importance im;
+        gi_importance_init(&im, 0);
+        gi_invtm_cdf cdf;
+        memset(&cdf, 0, sizeof cdf);
+        float diag = pf_v3_length(pf_v3_sub(x.scene.bounds_max, x.scene.bounds_min));
+        enum { R = 15 };
+        double ti[R], tc[R], th[R];
+        volatile uint32_t sink = 0;
+        for (int r = 0; r < R; r++) {
+            t0 = 1000.0 * pf_time_now();
+            assert_int_equal(gi_importance_update(&im, &rsm, &x.f.gbuf, diag, x.jobs, &err), PF_OK);
+            double t1 = 1000.0 * pf_time_now();
+            assert_int_equal(gi_invtm_build(&cdf, &im.domain, im.f, x.jobs, &err), PF_OK);
+            for (uint32_t i = 0; i < 256; i++)
+                sink += gi_invtm_sample(&cdf, &im.domain, 3, gi_halton(i + 1, 2), gi_halton(i + 1, 3),
+                                        gi_halton(i + 1, 5));
+            double t2 = 1000.0 * pf_time_now();
+            for (uint32_t j = 0; j < 256; j++) {
+                double w;
+                float fv;
+                sink += gi_imh_chain(&im.domain, im.f, j, 256, 16, &w, &fv);
+            }
+            double t3 = 1000.0 * pf_time_now();
+            ti[r] = t1 - t0, tc[r] = t2 - t1, th[r] = t3 - t2;
+        }
+        qsort(ti, R, sizeof ti[0], cmp_d);
+        qsort(tc, R, sizeof tc[0], cmp_d);
+        qsort(th, R, sizeof th[0], cmp_d);
+        print_message("bench stages: sibenik, %u texels, %u camera points, %u thread(s): RSM render+resolve %.2f ms "
+                      "(once); importance map %.2f ms; InvTM CDFs + 256 samples %.3f ms; 256 IM-H chains (M=16, "
+                      "serial) %.3f ms (medians of %d)\n",
+                      rsm.texel_count, im.count, threads, t_rsm, ti[R / 2], tc[R / 2], th[R / 2], R);
+        (void)sink;
+        gi_invtm_free(&cdf);
+        gi_importance_free(&im);
+        gi_rsm_set_free(&rsm);
+        fx_end(&x);
+    }
 }
 
 int main(void)

@@ -388,7 +388,7 @@ pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs,
     /* The planes are reallocated only when the layout changes (light
      * count or a map's kind); otherwise a moved light re-lays out its
      * matrices in place, so moving lights do not allocate per frame. */
-    int relayout = !s->maps || s->count != scene->light_count;
+    int relayout = !s->maps || !s->lights_ || s->count != scene->light_count;
     for (uint32_t l = 0; !relayout && l < scene->light_count; l++) {
         gi_rsm_map probe;
         memset(&probe, 0, sizeof probe);

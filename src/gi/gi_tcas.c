@@ -201,6 +201,7 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     out->count = 0;
     if (!in->gbuf)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--method tcas needs the frame's G-buffer (camera points)");
+    if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method tcas needs a job system");
     uint32_t N = in->budget;
     if ((uint64_t)N * s->M >= 0xffffffffull)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--method tcas: %u VPLs x M=%u proposals exceed the Halton index range",

@@ -13,7 +13,8 @@
  *   quad), and every texel's position lies on its texel's ray;
  * - each method: 30 frames (moving camera, a light that moves for a few
  *   frames) give bit-identical VPL sets with 1 and 2 threads, and a static
- *   frame moves no VPL;
+ *   frame moves no VPL; under a camera pan TCAS moves fewer than half as
+ *   many VPLs as InvTM (Barak 2013's temporal coherence);
  * - each method converges to Instant Radiosity (1 bounce, many VPLs) on the
  *   Cornell box, indirect light only;
  * - bad parameters are errors.
@@ -400,6 +401,7 @@ static void fx_end(fx *x)
 /* 30 frames of a method on the Cornell box: the camera turns a little every
  * frame except 20-24 (static), the light moves on frames 10-14. Returns a
  * hash of all VPL sets; *static_moved counts moved VPLs on frames 21-24. */
+static uint32_t g_pan_moved; /* moved VPLs on frames 1-9 of the last method_frames (camera turning, light static) */
 static uint64_t method_frames(const gi_vpl_method *method, const char *param, uint32_t threads,
                               uint32_t *static_moved)
 /* (small RSMs and few camera points keep the 4 x 30 frames fast; the code
@@ -419,6 +421,7 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
     gi_vpl_set set = {0};
     uint64_t hash = 1469598103934665603ull;
     *static_moved = 0;
+    g_pan_moved = 0;
     pf_camera cam0 = x.scene.cameras[0];
     pf_vec3 light0 = x.scene.lights[0].position;
     for (uint32_t frame = 0; frame < 30; frame++) {
@@ -437,6 +440,7 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
             assert_int_equal(set.v[i].id, i);
             assert_true(pf_v3_is_finite(set.v[i].pos) && pf_v3_is_finite(set.v[i].intensity));
             if (frame >= 21 && frame < 25) *static_moved += set.v[i].moved;
+            if (frame >= 1 && frame < 10) g_pan_moved += set.v[i].moved;
             if (frame == 0) assert_int_equal(set.v[i].moved, 1);
         }
         hash = hash * 1099511628211ull ^ pf_imageio_hash((const float *)set.v, set.count * (sizeof(gi_vpl) / 4));
@@ -469,6 +473,23 @@ static void test_tcas_deterministic(void **state)
 {
     (void)state;
     check_deterministic(&gi_method_tcas, NULL);
+}
+
+/* Barak 2013's claim (Sec. 4.3, 6.2): under a moving camera IM-H keeps most
+ * VPLs where they were, while InvTM's global CDF shifts almost all of them.
+ * Frames 1-9 of method_frames (the camera turns, the light is static, 128
+ * VPLs): TCAS must move fewer than half as many VPLs as InvTM. */
+static void test_tcas_more_coherent(void **state)
+{
+    (void)state;
+    uint32_t unused;
+    method_frames(&gi_method_invtm, NULL, 2, &unused);
+    uint32_t inv = g_pan_moved;
+    method_frames(&gi_method_tcas, NULL, 2, &unused);
+    uint32_t tc = g_pan_moved;
+    print_message("moved VPLs over 9 frames of a camera pan (128 VPLs): invtm %u, tcas %u\n", inv, tc);
+    assert_true(inv > 0);
+    assert_true(2 * tc < inv);
 }
 
 /* Indirect light (1 bounce) of the Cornell box with `method`, every pixel
@@ -742,6 +763,7 @@ int main(void)
         cmocka_unit_test(test_rsm_flux_spot_and_directional),
         cmocka_unit_test(test_invtm_deterministic),
         cmocka_unit_test(test_tcas_deterministic),
+        cmocka_unit_test(test_tcas_more_coherent),
         cmocka_unit_test(test_converge_to_ir),
         cmocka_unit_test(test_bad_params),
         cmocka_unit_test(bench_rsm_sibenik),

@@ -86,6 +86,7 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     io->clamp = o->clamp_set ? o->clamp : -1.0f;
     io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
+                 : !strcmp(o->filter, "gaussian")        ? GI_FILTER_GAUSSIAN
                                                          : GI_FILTER_NONE;
     return PF_OK;
 }

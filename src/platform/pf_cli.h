@@ -41,7 +41,7 @@ typedef struct pf_options {
     const char *params[32];
     int visibility_ism;      /* --visibility ism: imperfect shadow maps */
     uint32_t bounces;        /* light bounces (0: 3) */
-    const char *filter;      /* "box" (default), "bilateral", "none" */
+    const char *filter;      /* "box" (default), "bilateral", "gaussian", "none" */
     const char *dump_dir;    /* --dump-stages DIR */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */

@@ -27,43 +27,50 @@ static uint64_t gi__splitmix(uint64_t *s)
 }
 
 /* "At the beginning of the first iteration, a random VPL is chosen as the
- * centroid seed for each cluster": the first k steps of a Fisher-Yates
- * shuffle of the VPL indices driven by a fixed splitmix64 stream, so the
- * seeds are distinct VPLs and the same for every run. With more clusters
- * than VPLs, cluster j >= count reuses VPL j mod count. */
-void gi_kmeans_seed(const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count, pf_vec3 *cpos, pf_vec3 *cnrm,
-                    uint32_t k)
+ * centroid seed for each cluster." Deviation (README "ssvp"): the random
+ * VPLs are drawn as k-means++ does (Arthur and Vassilvitskii 2007): the first
+ * uniformly, each further one with probability proportional to D^2, its
+ * squared Eq. 2 distance to the nearest seed so far. Uniform picks put two
+ * seeds in one group of similar VPLs often enough (2 in 9 for three equal
+ * groups) that five iterations cannot separate them; D^2 picks almost never
+ * do. The random stream is a fixed splitmix64 sequence, so seeds are the
+ * same for every run. VPLs already chosen have D = 0 and are not picked
+ * again while another VPL has D > 0; with more clusters than distinct VPLs
+ * the extra clusters repeat VPL j mod count. */
+void gi_kmeans_seed(const gi_kmeans_options *o, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count,
+                    pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, float *d2)
 {
-    if (!count) return;
+    if (!count || !k) return;
     uint64_t rng = 0x55535650u; /* "SSVP" */
-    /* the shuffle touches only the first min(k, count) slots: a sparse swap
-     * list keeps it O(k) without a count-sized permutation array */
-    uint32_t m = k < count ? k : count;
-    uint32_t from[64], to[64], nswap = 0;
-    for (uint32_t j = 0; j < k; j++) {
-        uint32_t pick;
-        if (j < m && m <= 64) {
-            uint32_t r = j + (uint32_t)(gi__splitmix(&rng) % (uint64_t)(count - j));
-            /* value at r and at j after earlier swaps */
-            uint32_t vr = r, vj = j;
-            for (uint32_t s = 0; s < nswap; s++) {
-                if (from[s] == r) vr = to[s];
-                if (from[s] == j) vj = to[s];
-            }
-            pick = vr;
-            /* slot r now holds vj */
-            int found = 0;
-            for (uint32_t s = 0; s < nswap; s++)
-                if (from[s] == r) to[s] = vj, found = 1;
-            if (!found) from[nswap] = r, to[nswap] = vj, nswap++;
-        } else if (j < m) {
-            /* more than 64 clusters: a stride through the VPLs (distinct) */
-            pick = (uint32_t)(((uint64_t)j * count) / m);
-        } else {
+    uint32_t pick = (uint32_t)(gi__splitmix(&rng) % count);
+    cpos[0] = pos[pick], cnrm[0] = nrm[pick];
+    for (uint32_t i = 0; i < count; i++) {
+        float d = gi_kmeans_distance(o, pos[i], nrm[i], cpos[0], cnrm[0]);
+        d2[i] = d * d;
+    }
+    for (uint32_t j = 1; j < k; j++) {
+        double total = 0.0;
+        for (uint32_t i = 0; i < count; i++) total += d2[i];
+        if (!(total > 0.0)) {
             pick = j % count;
+        } else {
+            /* u in [0, total): the first VPL whose running sum exceeds it */
+            double u = (double)(gi__splitmix(&rng) >> 11) * (1.0 / 9007199254740992.0) * total, run = 0.0;
+            pick = count - 1;
+            for (uint32_t i = 0; i < count; i++) {
+                run += d2[i];
+                if (d2[i] > 0.0f && u < run) {
+                    pick = i;
+                    break;
+                }
+            }
+            while (!(d2[pick] > 0.0f)) pick--; /* rounding at the end: the last VPL with D > 0 */
         }
-        cpos[j] = pos[pick];
-        cnrm[j] = nrm[pick];
+        cpos[j] = pos[pick], cnrm[j] = nrm[pick];
+        for (uint32_t i = 0; i < count; i++) {
+            float d = gi_kmeans_distance(o, pos[i], nrm[i], cpos[j], cnrm[j]);
+            if (d * d < d2[i]) d2[i] = d * d;
+        }
     }
 }
 
@@ -112,13 +119,14 @@ uint32_t gi_kmeans_update(const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count
 }
 
 uint32_t gi_kmeans_run(const gi_kmeans_options *o, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count,
-                       pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, int reuse, uint32_t *assign, uint32_t *members)
+                       pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, int reuse, uint32_t *assign, uint32_t *members,
+                       float *scratch)
 {
     if (!count || !k) {
         for (uint32_t j = 0; j < k; j++) members[j] = 0;
         return 0;
     }
-    if (!reuse) gi_kmeans_seed(pos, nrm, count, cpos, cnrm, k);
+    if (!reuse) gi_kmeans_seed(o, pos, nrm, count, cpos, cnrm, k, scratch);
     uint32_t it = 0;
     for (uint32_t i = 0; i < count; i++) assign[i] = 0;
     while (it < o->max_iter) {

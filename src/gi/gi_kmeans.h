@@ -15,9 +15,10 @@
  *   way in a 0.5 m Cornell box and a 30 m cathedral.
  *
  * Algorithm (the paper's outline, each step a function):
- *   gi_kmeans_seed    a random VPL (stable hash of the cluster index) as
- *                     each cluster's first centroid, used only when there
- *                     are no centroids from the previous frame;
+ *   gi_kmeans_seed    a random VPL as each cluster's first centroid (drawn
+ *                     k-means++ style, a deviation: see gi_kmeans.c), used
+ *                     only when there are no centroids from the previous
+ *                     frame;
  *   gi_kmeans_assign  every VPL to the nearest centroid by D (ties: lowest
  *                     cluster index);
  *   gi_kmeans_update  centroid = mean position, normalised mean normal of
@@ -49,10 +50,11 @@ gi_kmeans_options gi_kmeans_defaults(void);
 /* Eq. 2 between a VPL (p, n) and a centroid (c, cn); normals unit length. */
 float gi_kmeans_distance(const gi_kmeans_options *o, pf_vec3 p, pf_vec3 n, pf_vec3 c, pf_vec3 cn);
 
-/* Centroid j = VPL number (hash of j) for k clusters over `count` VPLs
- * (distinct VPLs while k <= count). */
-void gi_kmeans_seed(const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count, pf_vec3 *cpos, pf_vec3 *cnrm,
-                    uint32_t k);
+/* Seeds centroid j = a VPL drawn by D^2 (k-means++, fixed random stream;
+ * distinct VPLs while k <= the number of distinct VPLs). d2: count floats of
+ * scratch. */
+void gi_kmeans_seed(const gi_kmeans_options *o, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count,
+                    pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, float *d2);
 /* assign[i] = nearest centroid of VPL i. Returns how many assignments
  * differ from assign's previous contents. */
 uint32_t gi_kmeans_assign(const gi_kmeans_options *o, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count,
@@ -64,9 +66,10 @@ uint32_t gi_kmeans_update(const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count
 
 /* Clusters pos/nrm[0..count) into k clusters. `reuse`: cpos/cnrm hold last
  * frame's centroids (else they are seeded). assign (count) and members (k)
- * are outputs. Returns the number of assign/update iterations run (0 when
- * count or k is 0). */
+ * are outputs; scratch: count floats. Returns the number of assign/update
+ * iterations run (0 when count or k is 0). */
 uint32_t gi_kmeans_run(const gi_kmeans_options *o, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t count,
-                       pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, int reuse, uint32_t *assign, uint32_t *members);
+                       pf_vec3 *cpos, pf_vec3 *cnrm, uint32_t k, int reuse, uint32_t *assign, uint32_t *members,
+                       float *scratch);
 
 #endif

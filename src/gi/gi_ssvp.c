@@ -12,7 +12,8 @@
  *   gi_ssvp_cluster         (III-B) k-means over the first-bounce VPLs with
  *                           the Eq. 2 metric (w1 = 0.6, w2 = 0.4; gi_kmeans.h),
  *                           at most 5 iterations, centroids reused from the
- *                           previous frame (seeded only on the first frame);
+ *                           previous frame (seeded only on the first frame,
+ *                           k-means++ style: see gi_kmeans.c);
  *   gi_ssvp_cluster_maps    (III-C) one 256 x 256 paraboloid RSM per cluster
  *                           centroid (hemisphere around the centroid's
  *                           normal, rs_paraboloid.h's mapping), holding the
@@ -114,6 +115,7 @@ typedef struct gi__ssvp_state {
     /* first-bounce VPLs of this frame (cap = first) */
     pf_vec3 *fpos, *fnrm;
     uint32_t *assign;
+    float *kscratch;       /* k-means seeding */
     /* frame scratch (allocated at create, or on the first frame for the
      * per-worker map rows) */
     pf_ray *rays;          /* first: light RSM rays */
@@ -134,7 +136,7 @@ static void gi__ssvp_destroy(void *state)
     if (!s) return;
     for (uint32_t j = 0; j < GI__SSVP_MAX_CLUSTERS; j++)
         free(s->map[j].pos), free(s->map[j].nrm), free(s->map[j].alb), free(s->map[j].hit);
-    free(s->fpos), free(s->fnrm), free(s->assign), free(s->rays), free(s->hits), free(s->flux), free(s->lit);
+    free(s->fpos), free(s->fnrm), free(s->assign), free(s->kscratch), free(s->rays), free(s->hits), free(s->flux), free(s->lit);
     free(s->wrays), free(s->whits);
     gi_vpl_set_free(&s->prev);
     free(s);
@@ -142,8 +144,9 @@ static void gi__ssvp_destroy(void *state)
 
 static int gi__has(const gi_params *p, const char *key)
 {
+    size_t n = strlen(key); /* gi_params keeps "KEY=VALUE" as the key */
     for (uint32_t i = 0; p && i < p->count; i++)
-        if (!strcmp(p->key[i], key)) return 1;
+        if (!strncmp(p->key[i], key, n) && (p->key[i][n] == '=' || p->key[i][n] == '\0')) return 1;
     return 0;
 }
 
@@ -175,11 +178,12 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->fpos = calloc(s->first, sizeof(pf_vec3));
     s->fnrm = calloc(s->first, sizeof(pf_vec3));
     s->assign = calloc(s->first, sizeof(uint32_t));
+    s->kscratch = calloc(s->first, sizeof(float));
     s->rays = calloc(s->first, sizeof(pf_ray));
     s->hits = calloc(s->first, sizeof(pf_hit));
     s->flux = calloc(s->first, sizeof(pf_vec3));
     s->lit = calloc(s->first, 1);
-    if (!s->fpos || !s->fnrm || !s->assign || !s->rays || !s->hits || !s->flux || !s->lit) {
+    if (!s->fpos || !s->fnrm || !s->assign || !s->kscratch || !s->rays || !s->hits || !s->flux || !s->lit) {
         gi__ssvp_destroy(s);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     }
@@ -317,7 +321,8 @@ static void gi_ssvp_cluster(gi__ssvp_state *s, const pf_scene *sc, uint32_t coun
     o.max_iter = s->iters;
     int reuse = s->have_centroids && count > 0;
     s->last_iterations =
-        gi_kmeans_run(&o, s->fpos, s->fnrm, count, s->cpos, s->cnrm, s->clusters, reuse, s->assign, s->members);
+        gi_kmeans_run(&o, s->fpos, s->fnrm, count, s->cpos, s->cnrm, s->clusters, reuse, s->assign, s->members,
+                      s->kscratch);
     if (count) s->have_centroids = 1;
 }
 

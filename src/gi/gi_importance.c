@@ -1,0 +1,172 @@
+/* gi_importance: the importance map of RSM texels from camera points
+ * (Barak 2013 Sec. 4.1, Eq. 1-2; Ritschel 2011) and the VPL helpers the
+ * RSM methods share. Conventions in gi_importance.h. */
+#include "gi_importance.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pf_rt.h"
+
+void gi_importance_init(gi_importance *im, uint32_t P)
+{
+    memset(im, 0, sizeof *im);
+    im->P = P ? P : GI_IMPORTANCE_DEFAULT_P;
+}
+
+void gi_importance_free(gi_importance *im)
+{
+    float **planes[] = {&im->x, &im->y, &im->z, &im->nx, &im->ny, &im->nz, &im->alb, &im->f};
+    for (size_t k = 0; k < sizeof planes / sizeof planes[0]; k++) {
+        free(*planes[k]);
+        *planes[k] = NULL;
+    }
+    free(im->first);
+    free(im->rows);
+    free(im->cols);
+    im->first = im->rows = im->cols = NULL;
+}
+
+uint32_t gi_domain_texel(const gi_sample_domain *d, double xi1, double xi2, double xi3, double *q)
+{
+    uint32_t l = (uint32_t)(xi1 * d->maps);
+    if (l >= d->maps) l = d->maps - 1;
+    uint32_t row = (uint32_t)(xi2 * d->rows[l]), col = (uint32_t)(xi3 * d->cols[l]);
+    if (row >= d->rows[l]) row = d->rows[l] - 1;
+    if (col >= d->cols[l]) col = d->cols[l] - 1;
+    if (q) *q = 1.0 / ((double)d->maps * d->rows[l] * d->cols[l]);
+    return d->first[l] + row * d->cols[l] + col;
+}
+
+/* ------------------------------------------------- 1. camera points x_k */
+
+static float gi__lum(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
+
+static void gi__importance_camera_points(gi_importance *im, const rs_gbuffer *g)
+{
+    im->count = 0;
+    for (uint32_t k = 0; k < im->P; k++) {
+        uint32_t x = (uint32_t)(gi_halton(k + 1, 2) * g->width), y = (uint32_t)(gi_halton(k + 1, 3) * g->height);
+        if (x >= g->width) x = g->width - 1;
+        if (y >= g->height) y = g->height - 1;
+        size_t i = (size_t)y * g->width + x;
+        if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
+        uint32_t c = im->count++;
+        im->x[c] = g->pos_x[i], im->y[c] = g->pos_y[i], im->z[c] = g->pos_z[i];
+        im->nx[c] = g->nrm_x[i], im->ny[c] = g->nrm_y[i], im->nz[c] = g->nrm_z[i];
+        im->alb[c] = gi__lum(g->alb_r[i], g->alb_g[i], g->alb_b[i]);
+    }
+}
+
+/* --------------------------------------------- 2. f(v), Eq. 1-2 per texel */
+
+typedef struct gi__imp_ctx {
+    gi_importance *im;
+    const gi_rsm_set *rsm;
+    float g_max;
+    uint32_t row_len;
+} gi__imp_ctx;
+
+/* f for the texels [row * row_len, (row + 1) * row_len): a fixed-order sum
+ * over the camera points, written so the compiler can vectorise the inner
+ * loop (no branches, no sqrt: G = max(0, n_k.d) max(0, -n_v.d) / |d|^4). */
+static void gi__importance_row(void *p, uint32_t row, uint32_t worker)
+{
+    (void)worker;
+    const gi__imp_ctx *c = p;
+    const gi_importance *im = c->im;
+    const gi_rsm_set *s = c->rsm;
+    const uint32_t K = im->count;
+    const float *X = im->x, *Y = im->y, *Z = im->z, *NX = im->nx, *NY = im->ny, *NZ = im->nz, *A = im->alb;
+    const float g_max = c->g_max;
+    for (uint32_t t = row * c->row_len, e = t + c->row_len; t < e; t++) {
+        float I = gi__lum(s->flux_r[t], s->flux_g[t], s->flux_b[t]);
+        if (!s->valid[t] || !(I > 0.0f)) {
+            im->f[t] = 0.0f;
+            continue;
+        }
+        const float px = s->pos_x[t], py = s->pos_y[t], pz = s->pos_z[t];
+        const float vx = s->nrm_x[t], vy = s->nrm_y[t], vz = s->nrm_z[t];
+        float sum = 0.0f;
+        for (uint32_t k = 0; k < K; k++) {
+            float dx = px - X[k], dy = py - Y[k], dz = pz - Z[k];
+            float d2 = dx * dx + dy * dy + dz * dz;
+            float ck = fmaxf(0.0f, NX[k] * dx + NY[k] * dy + NZ[k] * dz);
+            float cv = fmaxf(0.0f, -(vx * dx + vy * dy + vz * dz));
+            float G = fminf(ck * cv / fmaxf(d2 * d2, 1e-30f), g_max);
+            sum += A[k] * G;
+        }
+        im->f[t] = I * sum;
+    }
+}
+
+static pf_result gi__grow(void **p, uint32_t *cap, uint32_t need, size_t elem, pf_error *err)
+{
+    if (*cap >= need && *p) return PF_OK;
+    void *q = realloc(*p, (size_t)(need ? need : 1) * elem);
+    if (!q) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the importance map");
+    *p = q;
+    *cap = need;
+    return PF_OK;
+}
+
+pf_result gi_importance_update(gi_importance *im, const gi_rsm_set *rsm, const rs_gbuffer *g, float diagonal,
+                               pf_jobs *jobs, pf_error *err)
+{
+    pf_result r;
+    if (!im->x) {
+        float **planes[] = {&im->x, &im->y, &im->z, &im->nx, &im->ny, &im->nz, &im->alb};
+        for (size_t k = 0; k < sizeof planes / sizeof planes[0]; k++)
+            if (!(*planes[k] = malloc((size_t)im->P * sizeof(float))))
+                return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the importance map");
+    }
+    uint32_t fcap = im->f_cap;
+    if ((r = gi__grow((void **)&im->f, &fcap, rsm->texel_count, sizeof(float), err)) != PF_OK) return r;
+    im->f_cap = fcap;
+    uint32_t mc = im->map_cap, mc2 = im->map_cap, mc3 = im->map_cap;
+    if ((r = gi__grow((void **)&im->first, &mc, rsm->count, sizeof(uint32_t), err)) != PF_OK ||
+        (r = gi__grow((void **)&im->rows, &mc2, rsm->count, sizeof(uint32_t), err)) != PF_OK ||
+        (r = gi__grow((void **)&im->cols, &mc3, rsm->count, sizeof(uint32_t), err)) != PF_OK)
+        return r;
+    im->map_cap = mc;
+    for (uint32_t m = 0; m < rsm->count; m++) {
+        im->first[m] = rsm->maps[m].first;
+        im->rows[m] = rsm->maps[m].face_count * rsm->maps[m].size;
+        im->cols[m] = rsm->maps[m].size;
+    }
+    im->domain = (gi_sample_domain){rsm->count, im->first, im->rows, im->cols, rsm->texel_count};
+    gi__importance_camera_points(im, g);
+    if (rsm->texel_count == 0) return PF_OK;
+    gi__imp_ctx c = {im, rsm, 400.0f / (diagonal * diagonal), rsm->size};
+    pf_jobs_parallel_for(jobs, gi__importance_row, &c, rsm->texel_count / rsm->size, 0);
+    return PF_OK;
+}
+
+/* ------------------------------------------------------------------ VPLs */
+
+void gi_rsm_vpl(const gi_rsm_set *s, uint32_t t, double scale, uint32_t id, gi_vpl *out)
+{
+    pf_vec3 p = pf_v3(s->pos_x[t], s->pos_y[t], s->pos_z[t]);
+    pf_vec3 ng = pf_v3(s->ng_x[t], s->ng_y[t], s->ng_z[t]);
+    float k = (float)(scale * (double)PF_INV_PI);
+    out->pos = pf_rt_offset_origin(p, ng, ng);
+    out->nrm = pf_v3(s->nrm_x[t], s->nrm_y[t], s->nrm_z[t]);
+    out->intensity = pf_v3(s->flux_r[t] * k, s->flux_g[t] * k, s->flux_b[t] * k);
+    out->id = id;
+    out->moved = 1;
+}
+
+pf_result gi_vpl_mark_moved(gi_vpl_set *cur, gi_vpl_set *prev, pf_error *err)
+{
+    for (uint32_t i = 0; i < cur->count; i++) {
+        gi_vpl *v = &cur->v[i];
+        v->moved = !(i < prev->count && !memcmp(&prev->v[i].pos, &v->pos, sizeof v->pos) &&
+                     !memcmp(&prev->v[i].nrm, &v->nrm, sizeof v->nrm));
+    }
+    pf_result r = gi_vpl_set_reserve(prev, cur->count ? cur->count : 1, err);
+    if (r != PF_OK) return r;
+    memcpy(prev->v, cur->v, sizeof(gi_vpl) * cur->count);
+    prev->count = cur->count;
+    return PF_OK;
+}

@@ -5,7 +5,9 @@
  *
  *   gi_ssvp_first_bounce    (III-A) the light's reflective shadow map (RSM,
  *                           Dachsbacher 2005: position, normal, flux per
- *                           texel) sampled at the 2D Hammersley set of Eq. 1,
+ *                           texel; rasterized by gi_rsm.c, 256^2 per map or
+ *                           cube face by default) sampled at the 2D
+ *                           Hammersley set of Eq. 1,
  *                           (k / n, radical inverse of k), n = 256: one
  *                           first-bounce VPL per sample that lands on a lit
  *                           texel;
@@ -35,11 +37,12 @@
  * Carlo normalisation "divide each VPL's contribution by the probability of
  * it being selected":
  *
- * - First bounce. RSM texel t carries the flux the light sends through it,
+ * - First bounce. RSM texel t receives the flux the light sends through it,
  *   Phi_t = I_light * cone(w_t) * dOmega_t (spot; point: I dOmega_t;
- *   directional: E * texel area). A Hammersley point picks texel t with
- *   probability 1 / R^2 (uniform over the R x R map), so with n samples the
- *   VPL's flux is Phi = Phi_t * R^2 / n: the n VPLs together are an unbiased
+ *   directional: E * texel area; gi_rsm.h stores albedo * Phi_t). A
+ *   Hammersley point picks texel t with probability 1 / T (uniform over the
+ *   map's T texels), so with n samples the VPL's flux is Phi = Phi_t T / n
+ *   and its intensity Phi albedo / pi: the n VPLs together are an unbiased
  *   estimate of the light's flux landing on the scene.
  * - Second bounce. A cluster radiates from its centroid what its members
  *   reflect: radiant intensity J(w) = sum_i I_i (n_i . w)^+ (each member
@@ -60,13 +63,10 @@
  *   over both lists and n = 256 first- plus 256 second-bounce VPLs every
  *   contribution would be halved, i.e. the two bounces averaged instead of
  *   added.
- * - The light's RSM is evaluated only at the texels the Hammersley points
- *   read (one Embree ray through each such texel centre): the same values a
- *   full R x R RSM would hold there, without the R^2 texels nobody reads.
- *   The RSM of the first punctual light in the scene is used ("the main
- *   light source"); further lights and emissive triangles get no VPLs.
- *   Point lights (the paper's scenes have a spot/directional main light)
- *   get an equal-area latitude-longitude RSM (cos theta and phi uniform).
+ * - Only the RSM of the first punctual light in the scene is sampled ("the
+ *   main light source"); further lights and emissive triangles get no
+ *   VPLs. Point lights (the paper's main light is a spot or the sun) get
+ *   gi_rsm's cube map, its six faces sampled as one tall image.
  * - The cluster maps hold position, normal and albedo; the flux of a texel
  *   (J(w_t) dOmega_t above) is evaluated when a sample reads it, because it
  *   changes whenever the light moves while the geometry seen from an
@@ -86,7 +86,7 @@
 #include <string.h>
 
 #include "gi_kmeans.h"
-#include "gi_light.h"
+#include "gi_rsm.h"
 #include "gi_vpl.h"
 #include "rs_paraboloid.h"
 
@@ -116,12 +116,8 @@ typedef struct gi__ssvp_state {
     pf_vec3 *fpos, *fnrm;
     uint32_t *assign;
     float *kscratch;       /* k-means seeding */
-    /* frame scratch (allocated at create, or on the first frame for the
-     * per-worker map rows) */
-    pf_ray *rays;          /* first: light RSM rays */
-    pf_hit *hits;
-    pf_vec3 *flux;         /* first: texel flux */
-    uint8_t *lit;          /* first: texel carries light */
+    gi_rsm_set rsm;        /* the light's reflective shadow map */
+    /* per-worker rays of the map rows (allocated on the first frame) */
     pf_ray *wrays;         /* per worker: map_res rays */
     pf_hit *whits;
     uint32_t workers;
@@ -136,9 +132,10 @@ static void gi__ssvp_destroy(void *state)
     if (!s) return;
     for (uint32_t j = 0; j < GI__SSVP_MAX_CLUSTERS; j++)
         free(s->map[j].pos), free(s->map[j].nrm), free(s->map[j].alb), free(s->map[j].hit);
-    free(s->fpos), free(s->fnrm), free(s->assign), free(s->kscratch), free(s->rays), free(s->hits), free(s->flux), free(s->lit);
+    free(s->fpos), free(s->fnrm), free(s->assign), free(s->kscratch);
     free(s->wrays), free(s->whits);
     gi_vpl_set_free(&s->prev);
+    gi_rsm_set_free(&s->rsm);
     free(s);
 }
 
@@ -162,13 +159,13 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->first = 256;        /* Sec. III-A: 256 Hammersley samples */
     s->second = 256;       /* Sec. IV-A: 256 second-bounce VPLs */
     s->map_res = 256;      /* Sec. III-C: "a resolution of 256^2 pixels is sufficient" */
-    s->rsm_res = 512;      /* not given by the paper */
+    s->rsm_res = 256;      /* not given by the paper */
     s->iters = GI_KMEANS_MAX_ITER;
     if ((r = gi_param_u32(params, "clusters", 1, GI__SSVP_MAX_CLUSTERS, &s->clusters, err)) != PF_OK ||
         (r = gi_param_u32(params, "first", 1, GI__SSVP_MAX_SAMPLES, &s->first, err)) != PF_OK ||
         (r = gi_param_u32(params, "second", 0, GI__SSVP_MAX_SAMPLES, &s->second, err)) != PF_OK ||
         (r = gi_param_u32(params, "map_res", 8, 2048, &s->map_res, err)) != PF_OK ||
-        (r = gi_param_u32(params, "rsm_res", 8, 8192, &s->rsm_res, err)) != PF_OK ||
+        (r = gi_param_u32(params, "rsm_res", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &s->rsm_res, err)) != PF_OK ||
         (r = gi_param_u32(params, "iters", 1, 100, &s->iters, err)) != PF_OK) {
         gi__ssvp_destroy(s);
         return r;
@@ -179,11 +176,8 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->fnrm = calloc(s->first, sizeof(pf_vec3));
     s->assign = calloc(s->first, sizeof(uint32_t));
     s->kscratch = calloc(s->first, sizeof(float));
-    s->rays = calloc(s->first, sizeof(pf_ray));
-    s->hits = calloc(s->first, sizeof(pf_hit));
-    s->flux = calloc(s->first, sizeof(pf_vec3));
-    s->lit = calloc(s->first, 1);
-    if (!s->fpos || !s->fnrm || !s->assign || !s->kscratch || !s->rays || !s->hits || !s->flux || !s->lit) {
+    gi_rsm_set_init(&s->rsm, s->rsm_res);
+    if (!s->fpos || !s->fnrm || !s->assign || !s->kscratch) {
         gi__ssvp_destroy(s);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     }
@@ -213,53 +207,6 @@ static void gi__hammersley(uint32_t k, uint32_t n, float *u, float *v)
 
 /* ------------------------------------------------- III-A first bounce */
 
-/* The light RSM's texel (i, j) of an R x R map: the ray through its centre
- * and the flux the light sends through it (RGB). Returns 0 for texels that
- * carry no light (outside a spot's cone). */
-static int gi__light_rsm_texel(const pf_light *L, const pf_scene *sc, uint32_t R, uint32_t i, uint32_t j,
-                               pf_ray *ray, pf_vec3 *flux)
-{
-    float s = (2.0f * (float)i + 1.0f) / (float)R - 1.0f, t = (2.0f * (float)j + 1.0f) / (float)R - 1.0f;
-    ray->tnear = 0.0f;
-    ray->tfar = INFINITY;
-    if (L->type == PF_LIGHT_SPOT) {
-        /* perspective RSM: the square image plane at distance 1 that holds
-         * the outer cone; texel solid angle (2 tan / R)^2 cos^3 */
-        pf_vec3 T, B;
-        pf_v3_basis(L->direction, &T, &B);
-        float th = tanf(fminf(L->outer_cone, 1.55f));
-        pf_vec3 d = pf_v3_add(L->direction, pf_v3_add(pf_v3_scale(T, s * th), pf_v3_scale(B, t * th)));
-        float len = pf_v3_length(d), ca = 1.0f / len;
-        float cone = gi_light_spot_factor(L, ca);
-        if (!(cone > 0.0f)) return 0;
-        float side = 2.0f * th / (float)R;
-        ray->org = L->position;
-        ray->dir = pf_v3_scale(d, ca);
-        *flux = pf_v3_scale(L->color, L->intensity * cone * side * side * ca * ca * ca);
-        return 1;
-    }
-    if (L->type == PF_LIGHT_POINT) {
-        /* equal-area latitude-longitude RSM: every texel 4 pi / R^2 sr */
-        float ct = -t, ph = PF_PI * (s + 1.0f);
-        float st = sqrtf(fmaxf(0.0f, 1.0f - ct * ct));
-        ray->org = L->position;
-        ray->dir = pf_v3(st * cosf(ph), ct, st * sinf(ph));
-        *flux = pf_v3_scale(L->color, L->intensity * 4.0f * PF_PI / ((float)R * (float)R));
-        return 1;
-    }
-    /* directional: orthographic RSM over the scene's bounding sphere */
-    pf_vec3 centre = pf_v3_scale(pf_v3_add(sc->bounds_min, sc->bounds_max), 0.5f);
-    float rad = 0.5f * pf_v3_length(pf_v3_sub(sc->bounds_max, sc->bounds_min)) * 1.001f;
-    pf_vec3 T, B;
-    pf_v3_basis(L->direction, &T, &B);
-    ray->org = pf_v3_add(pf_v3_sub(centre, pf_v3_scale(L->direction, 2.0f * rad)),
-                         pf_v3_add(pf_v3_scale(T, s * rad), pf_v3_scale(B, t * rad)));
-    ray->dir = L->direction;
-    float side = 2.0f * rad / (float)R;
-    *flux = pf_v3_scale(L->color, L->intensity * side * side);
-    return 1;
-}
-
 /* A surface hit as a VPL site: position pushed off the surface towards the
  * ray's origin side, shading normal turned to that side. */
 static void gi__site(const pf_rt *rt, const pf_hit *h, pf_vec3 dir, pf_vec3 *pos, pf_vec3 *nrm, pf_vec3 *alb)
@@ -275,37 +222,37 @@ static void gi__site(const pf_rt *rt, const pf_hit *h, pf_vec3 dir, pf_vec3 *pos
 }
 
 /* Returns the number of first-bounce VPLs appended to out (their sites are
- * also kept in s->fpos/fnrm for clustering). */
-static uint32_t gi_ssvp_first_bounce(gi__ssvp_state *s, const gi_vpl_inputs *in, uint32_t n, gi_vpl_set *out)
+ * also kept in s->fpos/fnrm for clustering). The light's RSM (gi_rsm.h) is
+ * re-rendered by gi_rsm_set_update only when a light changed. Texel t of
+ * the map, picked with probability 1 / T (T texels: the Hammersley point
+ * (u, v) addresses column floor(u size), row floor(v rows), a cube map's six
+ * faces stacked as rows), gives a VPL of intensity flux_t T / (pi n)
+ * (flux_t is the flux the texel's surface reflects, albedo included). */
+static uint32_t gi_ssvp_first_bounce(gi__ssvp_state *s, uint32_t n, gi_vpl_set *out)
 {
-    const pf_light *L = &in->scene->lights[0];
-    const uint32_t R = s->rsm_res;
-    pf_vec3 *flux = s->flux;
-    uint8_t *lit = s->lit;
+    const gi_rsm_set *R = &s->rsm;
+    const gi_rsm_map *mp = &R->maps[0]; /* "the main light source" */
+    const uint32_t cols = mp->size, rows = mp->size * mp->face_count;
+    const float scale = (float)mp->texel_count / (float)n * PF_INV_PI;
+    uint32_t c = 0;
     for (uint32_t k = 0; k < n; k++) {
         float u, v;
         gi__hammersley(k, n, &u, &v);
-        uint32_t i = (uint32_t)(u * (float)R), j = (uint32_t)(v * (float)R);
-        if (i >= R) i = R - 1;
-        if (j >= R) j = R - 1;
-        lit[k] = (uint8_t)gi__light_rsm_texel(L, in->scene, R, i, j, &s->rays[k], &flux[k]);
-        if (!lit[k]) s->rays[k].tfar = -1.0f; /* inactive: Embree reports a miss */
-    }
-    pf_rt_intersect(in->rt, s->rays, s->hits, n);
-    uint32_t c = 0;
-    const float scale = (float)R * (float)R / (float)n * PF_INV_PI;
-    for (uint32_t k = 0; k < n; k++) {
-        if (!lit[k] || s->hits[k].prim == PF_RT_MISS) continue;
-        pf_vec3 p, nn, alb;
-        gi__site(in->rt, &s->hits[k], s->rays[k].dir, &p, &nn, &alb);
+        uint32_t x = (uint32_t)(u * (float)cols), y = (uint32_t)(v * (float)rows);
+        if (x >= cols) x = cols - 1;
+        if (y >= rows) y = rows - 1;
+        uint32_t t = mp->first + y * cols + x;
+        if (!R->valid[t]) continue; /* nothing seen, or outside a spot's cone */
+        pf_vec3 p = pf_v3(R->pos_x[t], R->pos_y[t], R->pos_z[t]);
+        pf_vec3 ng = pf_v3(R->ng_x[t], R->ng_y[t], R->ng_z[t]);
         gi_vpl *vp = &out->v[out->count++];
-        vp->pos = p;
-        vp->nrm = nn;
-        vp->intensity = pf_v3_scale(pf_v3_mul(flux[k], alb), scale);
+        vp->pos = pf_rt_offset_origin(p, ng, ng); /* off the surface, on the lit side */
+        vp->nrm = pf_v3(R->nrm_x[t], R->nrm_y[t], R->nrm_z[t]);
+        vp->intensity = pf_v3_scale(pf_v3(R->flux_r[t], R->flux_g[t], R->flux_b[t]), scale);
         vp->id = k;
         vp->moved = 1;
-        s->fpos[c] = p;
-        s->fnrm[c] = nn;
+        s->fpos[c] = vp->pos;
+        s->fnrm[c] = vp->nrm;
         c++;
     }
     return c;
@@ -484,8 +431,10 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     pf_result r = gi_vpl_set_reserve(out, n1 + n2 ? n1 + n2 : 1, err);
     if (r != PF_OK) return r;
     s->maps_rendered = 0;
-    if (in->scene->light_count > 0 && n1) {
-        uint32_t nf = gi_ssvp_first_bounce(s, in, n1, out);
+    if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method ssvp: needs the job system (inputs.jobs)");
+    if ((r = gi_rsm_set_update(&s->rsm, in->scene, in->jobs, err)) != PF_OK) return r;
+    if (s->rsm.count > 0 && n1) {
+        uint32_t nf = gi_ssvp_first_bounce(s, n1, out);
         gi_ssvp_cluster(s, in->scene, nf);
         if (n2 && nf) {
             if (!gi_ssvp_cluster_maps(s, in)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");

@@ -11,7 +11,7 @@
  *   the light's 4 pi I (0.5%), and the second bounce what the clusters
  *   reflect (pi sum I_1 within Monte Carlo error);
  * - the VPL sets of 30 frames with a moving light are identical with 1 and 2
- *   threads;
+ *   threads, and with whole cluster maps or only the texels read (lazy_maps);
  * - on scenes/cornell-box the second bounce adds light where the point light
  *   does not reach (Fig. 4's claim), and both bounce counts agree with
  *   Instant Radiosity's unbiased estimate;
@@ -28,6 +28,7 @@
 #include "gi_frame.h"
 #include "gi_kmeans.h"
 #include "pf_gltf.h"
+#include "pf_timer.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -136,11 +137,15 @@ typedef struct ctx {
     gi_vpl_inputs in;
 } ctx;
 
+/* Embree's ISA: sse2 in the tests (the golden-test convention: the same
+ * bits on every x86-64 CPU), the CPU's best in the bench. */
+static pf_isa g_isa = PF_ISA_SSE2;
+
 static void ctx_begin(ctx *c, uint32_t threads, const char *const *kv, uint32_t nkv, uint32_t budget)
 {
     pf_error err;
     assert_int_equal(pf_scene_validate(&c->scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&c->rt, &c->scene, PF_ISA_SSE2, 1, &err), PF_OK);
+    assert_int_equal(pf_rt_create(&c->rt, &c->scene, g_isa, 1, &err), PF_OK);
     c->jobs = pf_jobs_create(threads);
     memset(&c->area, 0, sizeof c->area);
     gi_params p;
@@ -302,12 +307,12 @@ static void test_static_reuse(void **state)
 
 /* ------------------------------------------------------- determinism */
 
-static void run_frames(uint32_t threads, gi_vpl_set *sets, int frames)
+static void run_frames(uint32_t threads, gi_vpl_set *sets, int frames, const char *const *kv, uint32_t nkv)
 {
     ctx c;
     pf_error err;
     assert_int_equal(pf_gltf_load(&c.scene, CORNELL, NULL, &err), PF_OK);
-    ctx_begin(&c, threads, NULL, 0, 512);
+    ctx_begin(&c, threads, kv, nkv, 512);
     pf_vec3 p0 = c.scene.lights[0].position;
     for (int fr = 0; fr < frames; fr++) {
         /* the light circles under the ceiling; static every third frame */
@@ -324,8 +329,8 @@ static void test_threads_30_frames(void **state)
     enum { F = 30 };
     gi_vpl_set a[F], b[F];
     memset(a, 0, sizeof a), memset(b, 0, sizeof b);
-    run_frames(1, a, F);
-    run_frames(2, b, F);
+    run_frames(1, a, F, NULL, 0);
+    run_frames(2, b, F, NULL, 0);
     uint32_t moved = 0, unmoved = 0;
     for (int fr = 0; fr < F; fr++) {
         if (!vpls_equal(&a[fr], &b[fr])) fail_msg("frame %d: VPL sets differ between 1 and 2 threads", fr);
@@ -337,6 +342,23 @@ static void test_threads_30_frames(void **state)
     }
     /* the test exercised both moving and static frames */
     assert_true(moved > 0 && unmoved > 0);
+}
+
+/* lazy_maps=1 traces only the texels the samples read: the same VPLs */
+static void test_lazy_maps_identical(void **state)
+{
+    (void)state;
+    enum { F = 6 };
+    gi_vpl_set a[F], b[F];
+    memset(a, 0, sizeof a), memset(b, 0, sizeof b);
+    const char *lazy[] = {"lazy_maps=1"};
+    run_frames(2, a, F, NULL, 0);
+    run_frames(2, b, F, lazy, 1);
+    for (int fr = 0; fr < F; fr++) {
+        assert_true(a[fr].count > 300);
+        if (!vpls_equal(&a[fr], &b[fr])) fail_msg("frame %d: lazy maps give other VPLs", fr);
+        gi_vpl_set_free(&a[fr]), gi_vpl_set_free(&b[fr]);
+    }
 }
 
 /* ------------------------------------------ second bounce on the Cornell box */
@@ -504,6 +526,7 @@ static void test_errors(void **state)
     expect_create_error("rsm_res=100000", "rsm_res");
     expect_create_error("iters=0", "iters");
     expect_create_error("cluster=8", "cluster");
+    expect_create_error("lazy_maps=2", "lazy_maps");
     /* explicit counts over the VPL budget: an error at update, no VPLs */
     ctx c;
     closed_box(&c.scene);
@@ -535,13 +558,93 @@ static void test_errors(void **state)
                      "clusters");
 }
 
+/* ---------------------------------------------------------------- bench */
+
+/* Not a test: SOFTGI_SSVP_BENCH=1 ./build/tests/test_ssvp prints SSVP's
+ * per-frame VPL management time (the method's update: light RSM, first
+ * bounce, k-means, cluster maps, second bounce) on Sibenik with a spot light,
+ * 1 and 2 threads: 30 frames with the light sweeping along the nave (every
+ * frame re-renders the RSM and the moved clusters' maps), then 30 frames with
+ * it still (maps reused). Paper defaults: 256 + 256 VPLs, 8 clusters,
+ * 256^2 maps. */
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void bench_sibenik(uint32_t threads, const char *const *kv, uint32_t nkv, const char *label)
+{
+    ctx c;
+    if (!tu_load_or_skip(&c.scene, SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf")) return;
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "spot");
+    L.type = PF_LIGHT_SPOT;
+    L.direction = pf_v3_normalize(pf_v3(-0.3f, -1.0f, 0.0f));
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 200.0f;
+    L.inner_cone = pf_radians(35.0f);
+    L.outer_cone = pf_radians(45.0f);
+    pf_error err;
+    free(c.scene.lights);
+    c.scene.lights = NULL;
+    c.scene.light_count = 0;
+    assert_int_equal(pf_scene_add_light(&c.scene, &L, &err), PF_OK);
+    ctx_begin(&c, threads, kv, nkv, 512);
+    enum { F = 30 };
+    double moving[F], still[F], first = 0.0;
+    gi_vpl_set v = {0};
+    uint32_t nv = 0;
+    for (int fr = 0; fr < 2 * F; fr++) {
+        float t = fr < F ? (float)fr / (F - 1) : 1.0f;
+        c.scene.lights[0].position = pf_v3(8.0f - 16.0f * t, 4.0f, 0.0f);
+        double t0 = pf_time_now();
+        update(&c, &v);
+        double ms = (pf_time_now() - t0) * 1e3;
+        if (fr == 0) first = ms;
+        if (fr < F) moving[fr] = ms;
+        else still[fr - F] = ms;
+        nv = v.count;
+    }
+    double sum_m = 0.0;
+    for (int i = 1; i < F; i++) sum_m += moving[i];
+    qsort(moving + 1, F - 1, sizeof(double), cmp_double);
+    qsort(still, F, sizeof(double), cmp_double);
+    print_message("BENCH ssvp sibenik %-22s %u thread%s: first frame %.1f ms; moving light: median %.1f ms, mean %.1f "
+                  "ms (frames 1-29); still light: median %.2f ms; %u VPLs\n",
+                  label, threads, threads > 1 ? "s" : " ", first, moving[F / 2], sum_m / (F - 1), still[F / 2], nv);
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+}
+
+static void test_bench(void **state)
+{
+    (void)state;
+    if (!getenv("SOFTGI_SSVP_BENCH")) {
+        print_message("SKIP: the bench runs with SOFTGI_SSVP_BENCH=1\n");
+        return;
+    }
+    const char *first_only[] = {"second=0"}, *lazy[] = {"lazy_maps=1"};
+    g_isa = pf_isa_detect();
+    print_message("BENCH Embree ISA %s\n", pf_isa_name(g_isa));
+    for (uint32_t t = 1; t <= 2; t++) {
+        bench_sibenik(t, NULL, 0, "256+256 (defaults)");
+        bench_sibenik(t, lazy, 1, "256+256 lazy_maps=1");
+        bench_sibenik(t, first_only, 1, "256 first bounce only");
+    }
+    g_isa = PF_ISA_SSE2;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_kmeans_metric),     cmocka_unit_test(test_kmeans_recovers_groups),
         cmocka_unit_test(test_flux_closed_box),   cmocka_unit_test(test_static_reuse),
-        cmocka_unit_test(test_threads_30_frames), cmocka_unit_test(test_second_bounce_adds_light),
+        cmocka_unit_test(test_threads_30_frames), cmocka_unit_test(test_lazy_maps_identical),
+        cmocka_unit_test(test_second_bounce_adds_light),
         cmocka_unit_test(test_gaussian_filter),   cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_bench),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

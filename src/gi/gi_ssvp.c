@@ -18,13 +18,15 @@
  *                           k-means++ style: see gi_kmeans.c);
  *   gi_ssvp_cluster_maps    (III-C) one 256 x 256 paraboloid RSM per cluster
  *                           centroid (hemisphere around the centroid's
- *                           normal, rs_paraboloid.h's mapping), holding the
- *                           position, normal and albedo seen through every
- *                           texel; rendered with Embree (one ray per inside
- *                           texel centre, 8-wide packets, one job item per
- *                           map row). A map is kept while its centroid does
- *                           not move (bitwise), so a static scene renders
- *                           its maps once;
+ *                           normal, rs_paraboloid.h's mapping), rendered with
+ *                           Embree: one ray per inside texel centre (8-wide
+ *                           packets, one job item per map row) whose closest
+ *                           hit the texel keeps, a visibility buffer whose
+ *                           position, normal and albedo are resolved for the
+ *                           texels the samples read (as rs_gbuffer resolves
+ *                           the camera's). A map is kept while its centroid
+ *                           does not move (bitwise), so a static scene
+ *                           renders its maps once;
  *   gi_ssvp_second_bounce   (III-C) "uniform sampling on the unit circle":
  *                           the Hammersley set mapped to the unit disc
  *                           (r = sqrt(u), phi = 2 pi v), each point read at
@@ -67,10 +69,18 @@
  *   main light source"); further lights and emissive triangles get no
  *   VPLs. Point lights (the paper's main light is a spot or the sun) get
  *   gi_rsm's cube map, its six faces sampled as one tall image.
- * - The cluster maps hold position, normal and albedo; the flux of a texel
- *   (J(w_t) dOmega_t above) is evaluated when a sample reads it, because it
+ * - The cluster maps hold each texel's hit (a visibility buffer); the
+ *   surface (position, normal, albedo) and the flux of a texel
+ *   (J(w_t) dOmega_t above) are evaluated when a sample reads it: the flux
  *   changes whenever the light moves while the geometry seen from an
- *   unmoved centroid does not.
+ *   unmoved centroid does not, and a frame reads only about 32 of a map's
+ *   51,000 inside texels.
+ * - Option (--param lazy_maps=1, off by default): no cluster map is
+ *   rendered; each second-bounce sample traces just its texel's ray, the
+ *   same ray the full map traces for that texel, so the VPLs are the same
+ *   bits (tested) for a fraction of the rays (32 instead of 51,000 per
+ *   cluster). On a GPU the paper renders whole maps because rasterizing is
+ *   cheap; on a CPU the unread texels are pure cost.
  * - Second-bounce samples are split evenly over the non-empty clusters (the
  *   paper does not say how they are distributed).
  * - The frame's VPL budget (--vpls) caps first + second; with the defaults
@@ -96,14 +106,16 @@
 typedef struct gi__ssvp_map {
     pf_vec3 cpos, cnrm;        /* the centroid the map was rendered from */
     int valid;
-    /* per texel (R*R, row j = v, column i = u); hit 0: outside or nothing hit */
-    pf_vec3 *pos, *nrm, *alb;
-    uint8_t *hit;
+    /* per texel (R*R, row j = v, column i = u): the closest hit of the ray
+     * through the texel centre (prim PF_RT_MISS: outside the disc or nothing
+     * hit). Position, normal and albedo are this hit's surface
+     * (pf_rt_surface), resolved for the texels a sample reads. */
+    pf_hit *hit;
 } gi__ssvp_map;
 
 typedef struct gi__ssvp_state {
     /* options */
-    uint32_t clusters, first, second, map_res, rsm_res, iters;
+    uint32_t clusters, first, second, map_res, rsm_res, iters, lazy_maps;
     int first_set, second_set;
     /* k-means state kept between frames */
     pf_vec3 cpos[GI__SSVP_MAX_CLUSTERS], cnrm[GI__SSVP_MAX_CLUSTERS];
@@ -119,7 +131,6 @@ typedef struct gi__ssvp_state {
     gi_rsm_set rsm;        /* the light's reflective shadow map */
     /* per-worker rays of the map rows (allocated on the first frame) */
     pf_ray *wrays;         /* per worker: map_res rays */
-    pf_hit *whits;
     uint32_t workers;
     gi_vpl_set prev;
 } gi__ssvp_state;
@@ -131,9 +142,9 @@ static void gi__ssvp_destroy(void *state)
     gi__ssvp_state *s = state;
     if (!s) return;
     for (uint32_t j = 0; j < GI__SSVP_MAX_CLUSTERS; j++)
-        free(s->map[j].pos), free(s->map[j].nrm), free(s->map[j].alb), free(s->map[j].hit);
+        free(s->map[j].hit);
     free(s->fpos), free(s->fnrm), free(s->assign), free(s->kscratch);
-    free(s->wrays), free(s->whits);
+    free(s->wrays);
     gi_vpl_set_free(&s->prev);
     gi_rsm_set_free(&s->rsm);
     free(s);
@@ -149,7 +160,7 @@ static int gi__has(const gi_params *p, const char *key)
 
 static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"clusters", "first", "second", "map_res", "rsm_res", "iters", NULL};
+    static const char *const known[] = {"clusters", "first", "second", "map_res", "rsm_res", "iters", "lazy_maps", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "ssvp", known, err);
     if (r != PF_OK) return r;
@@ -166,7 +177,8 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
         (r = gi_param_u32(params, "second", 0, GI__SSVP_MAX_SAMPLES, &s->second, err)) != PF_OK ||
         (r = gi_param_u32(params, "map_res", 8, 2048, &s->map_res, err)) != PF_OK ||
         (r = gi_param_u32(params, "rsm_res", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &s->rsm_res, err)) != PF_OK ||
-        (r = gi_param_u32(params, "iters", 1, 100, &s->iters, err)) != PF_OK) {
+        (r = gi_param_u32(params, "iters", 1, 100, &s->iters, err)) != PF_OK ||
+        (r = gi_param_u32(params, "lazy_maps", 0, 1, &s->lazy_maps, err)) != PF_OK) {
         gi__ssvp_destroy(s);
         return r;
     }
@@ -292,7 +304,6 @@ static void gi__map_row(void *p, uint32_t item, uint32_t worker)
     rs_para_frame fr = rs_para_frame_make(s->cpos[c], s->cnrm[c]);
     pf_vec3 org = pf_rt_offset_origin(s->cpos[c], fr.n, fr.n);
     pf_ray *rays = s->wrays + (size_t)worker * R; /* per-worker scratch */
-    pf_hit *hits = s->whits + (size_t)worker * R;
     for (uint32_t i = 0; i < R; i++) {
         pf_vec3 d = rs_para_uv_to_dir(rs_para_texel_uv(R, i, j));
         rays[i].org = org;
@@ -300,13 +311,7 @@ static void gi__map_row(void *p, uint32_t item, uint32_t worker)
         rays[i].tnear = 0.0f;
         rays[i].tfar = rs_para_texel_inside(R, i, j) ? INFINITY : -1.0f;
     }
-    pf_rt_intersect(J->rt, rays, hits, R);
-    for (uint32_t i = 0; i < R; i++) {
-        size_t t = (size_t)j * R + i;
-        m->hit[t] = hits[i].prim != PF_RT_MISS && rays[i].tfar > 0.0f;
-        if (m->hit[t]) gi__site(J->rt, &hits[i], rays[i].dir, &m->pos[t], &m->nrm[t], &m->alb[t]);
-        else m->pos[t] = m->nrm[t] = m->alb[t] = pf_v3(0, 0, 0);
-    }
+    pf_rt_intersect(J->rt, rays, m->hit + (size_t)j * R, R);
 }
 
 /* Renders the maps of the non-empty clusters whose centroid moved. Returns
@@ -321,13 +326,7 @@ static int gi_ssvp_cluster_maps(gi__ssvp_state *s, const gi_vpl_inputs *in)
         if (!s->members[c]) continue;
         if (m->valid && !memcmp(&m->cpos, &s->cpos[c], sizeof m->cpos) && !memcmp(&m->cnrm, &s->cnrm[c], sizeof m->cnrm))
             continue;
-        if (!m->pos) {
-            m->pos = malloc(texels * sizeof(pf_vec3));
-            m->nrm = malloc(texels * sizeof(pf_vec3));
-            m->alb = malloc(texels * sizeof(pf_vec3));
-            m->hit = malloc(texels);
-            if (!m->pos || !m->nrm || !m->alb || !m->hit) return 0;
-        }
+        if (!m->hit && !(m->hit = malloc(texels * sizeof(pf_hit)))) return 0;
         m->cpos = s->cpos[c];
         m->cnrm = s->cnrm[c];
         m->valid = 1;
@@ -337,10 +336,9 @@ static int gi_ssvp_cluster_maps(gi__ssvp_state *s, const gi_vpl_inputs *in)
     if (!nt) return 1;
     uint32_t workers = in->jobs ? pf_jobs_thread_count(in->jobs) : 1;
     if (workers > s->workers) { /* first frame (or more threads): grow once */
-        free(s->wrays), free(s->whits);
+        free(s->wrays);
         s->wrays = malloc(sizeof(pf_ray) * R * workers);
-        s->whits = malloc(sizeof(pf_hit) * R * workers);
-        s->workers = s->wrays && s->whits ? workers : 0;
+        s->workers = s->wrays ? workers : 0;
         if (!s->workers) {
             for (uint32_t k = 0; k < nt; k++) s->map[todo[k]].valid = 0;
             return 0;
@@ -369,7 +367,8 @@ static pf_vec3 gi__cluster_intensity(const gi_vpl *first, uint32_t nfirst, const
     return J;
 }
 
-static void gi_ssvp_second_bounce(gi__ssvp_state *s, uint32_t nfirst, uint32_t m_total, gi_vpl_set *out)
+static void gi_ssvp_second_bounce(gi__ssvp_state *s, const pf_rt *rt, uint32_t nfirst, uint32_t m_total,
+                                  gi_vpl_set *out)
 {
     const uint32_t R = s->map_res;
     const gi_vpl *first = out->v; /* the first nfirst VPLs of out, in assign's order */
@@ -384,24 +383,33 @@ static void gi_ssvp_second_bounce(gi__ssvp_state *s, uint32_t nfirst, uint32_t m
         rank++;
         if (!m) continue;
         const gi__ssvp_map *map = &s->map[c];
-        rs_para_frame fr = rs_para_frame_make(map->cpos, map->cnrm);
+        rs_para_frame fr = rs_para_frame_make(s->cpos[c], s->cnrm[c]);
+        pf_vec3 org = pf_rt_offset_origin(s->cpos[c], fr.n, fr.n);
         for (uint32_t k = 0; k < m; k++) {
             float u, v;
             gi__hammersley(k, m, &u, &v);
             float r = sqrtf(u), ph = 2.0f * PF_PI * v;
             pf_vec2 uv = {r * cosf(ph), r * sinf(ph)};
             uint32_t t = rs_para_texel_of(R, rs_para_uv_to_dir(uv));
-            if (!map->hit[t]) continue;
             pf_vec2 tc = rs_para_texel_uv(R, t % R, t / R);
             pf_vec3 dl = rs_para_uv_to_dir(tc);
+            /* the texel's ray, the same expression as gi__map_row's */
             pf_vec3 w = pf_v3_add(pf_v3_add(pf_v3_scale(fr.t, dl.x), pf_v3_scale(fr.b, dl.y)), pf_v3_scale(fr.n, dl.z));
+            pf_hit hit;
+            if (s->lazy_maps) {
+                pf_ray ray = {org, 0.0f, w, INFINITY};
+                hit = pf_rt_intersect1(rt, ray); /* the same bits as in a packet (pf_rt.h) */
+            } else {
+                hit = map->hit[t];
+            }
+            if (hit.prim == PF_RT_MISS) continue;
             pf_vec3 J = gi__cluster_intensity(first, nfirst, s->assign, c, w);
             float r2 = tc.x * tc.x + tc.y * tc.y, q = 1.0f + r2;
             float f = 4.0f * PF_PI / (q * q * (float)m) * PF_INV_PI; /* Phi / J, then albedo / pi */
+            pf_vec3 alb;
             gi_vpl *vp = &out->v[out->count++];
-            vp->pos = map->pos[t];
-            vp->nrm = map->nrm[t];
-            vp->intensity = pf_v3_scale(pf_v3_mul(J, map->alb[t]), f);
+            gi__site(rt, &hit, w, &vp->pos, &vp->nrm, &alb);
+            vp->intensity = pf_v3_scale(pf_v3_mul(J, alb), f);
             vp->id = 0x80000000u | (c << 16) | k;
             vp->moved = 1;
         }
@@ -437,8 +445,9 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
         uint32_t nf = gi_ssvp_first_bounce(s, n1, out);
         gi_ssvp_cluster(s, in->scene, nf);
         if (n2 && nf) {
-            if (!gi_ssvp_cluster_maps(s, in)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
-            gi_ssvp_second_bounce(s, nf, n2, out);
+            if (!s->lazy_maps && !gi_ssvp_cluster_maps(s, in))
+                return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+            gi_ssvp_second_bounce(s, in->rt, nf, n2, out);
         }
     }
     /* moved flags against the previous frame (same id at the same slot) */

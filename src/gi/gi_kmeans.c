@@ -31,9 +31,9 @@ static uint64_t gi__splitmix(uint64_t *s)
  * VPLs are drawn as k-means++ does (Arthur and Vassilvitskii 2007): the first
  * uniformly, each further one with probability proportional to D^2, its
  * squared Eq. 2 distance to the nearest seed so far. Uniform picks put two
- * seeds in one group of similar VPLs often enough (2 in 9 for three equal
- * groups) that five iterations cannot separate them; D^2 picks almost never
- * do. The random stream is a fixed splitmix64 sequence, so seeds are the
+ * seeds in one group of similar VPLs often (7 times in 9 for three equal
+ * groups: only 3!/3^3 of the picks are one per group), and five iterations
+ * cannot undo that; D^2 picks rarely do. The random stream is a fixed splitmix64 sequence, so seeds are the
  * same for every run. VPLs already chosen have D = 0 and are not picked
  * again while another VPL has D > 0; with more clusters than distinct VPLs
  * the extra clusters repeat VPL j mod count. */

@@ -32,7 +32,8 @@
  *                           (r = sqrt(u), phi = 2 pi v), each point read at
  *                           its paraboloid texel; a second-bounce VPL on every
  *                           texel that hit a surface;
- *   (III-D, shading, is the frame's: gi_indirect.c.)
+ *   (III-D, shading, is the frame's: gi_indirect.c, with the paper's
+ *   edge-aware Gaussian denoise as --filter gaussian.)
  *
  * Units (gi_vpl.h; the same as gi_ir.c): a VPL's intensity is
  * I = Phi * albedo / pi. How each VPL's Phi follows from Eq. 6's Monte

@@ -100,6 +100,7 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     io->pipeline = o->pipeline == 1; /* default off for every command */
     io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
+                 : !strcmp(o->filter, "gaussian")        ? GI_FILTER_GAUSSIAN
                                                          : GI_FILTER_NONE;
     return PF_OK;
 }

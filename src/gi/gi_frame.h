@@ -18,7 +18,7 @@
  *   6. assign              gi_stage_assign             (VPLs to tiles, intensity balanced)
  *   7. accumulate          gi_stage_accumulate         (bounded geometry term, map lookups)
  *   8. combine             gi_stage_combine
- *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, or bilateral)
+ *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)
  *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):

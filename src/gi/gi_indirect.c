@@ -652,6 +652,27 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
                     acc[0] += e[0], acc[1] += e[1], acc[2] += e[2];
                     wsum += 1.0f;
                 }
+        } else if (ind->opt.filter == GI_FILTER_GAUSSIAN) {
+            /* Aranha (SSVP) Sec. III-D: "an edge-aware gaussian blur" of the
+             * irradiance. The paper gives no kernel; softgi uses a Gaussian
+             * of sigma = max(n, m) / 2 pixels over a (2n+1) x (2m+1) window
+             * whose edges are Laine's tests (|p2 - p| < alpha, n2 . n > beta):
+             * pixels across a depth or normal edge get no weight. */
+            float sg = 0.5f * (float)(n > m ? n : m);
+            for (int dy = -m; dy <= m; dy++)
+                for (int dx = -n; dx <= n; dx++) {
+                    int tx = x + dx, ty = (int)y + dy;
+                    if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
+                    size_t j = (size_t)ty * f->width + (size_t)tx;
+                    if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
+                    pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
+                    float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
+                    if (!(pf_v3_dot(d, d) < a2) || !(nd > beta)) continue;
+                    float w = expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg));
+                    const float *e = ind->combined + 3 * j;
+                    acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
+                    wsum += w;
+                }
         } else {
             /* cross-bilateral (Hedman 2017 Sec. 4): a Gaussian over 2n x 2m
              * pixels weighted by position and normal similarity */

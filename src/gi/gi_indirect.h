@@ -28,7 +28,8 @@
  *   gi_stage_combine           back to image layout (Sec. 5.1)
  *   gi_stage_filter            Laine's geometry-aware n x m box filter
  *                              (Fig. 5: |p2 - p| < alpha, n2 . n > beta), or a
- *                              cross-bilateral filter, or none (Sec. 5.2)
+ *                              cross-bilateral filter, an edge-aware
+ *                              Gaussian (Aranha Sec. III-D), or none (Sec. 5.2)
  *
  * The receiving surface's albedo is applied at compose: radiance = albedo /
  * pi * E (Sec. 5.1: "the color of the receiving surface is not taken into
@@ -62,7 +63,8 @@
 #include "gi_ism.h"
 #include "rs_paraboloid.h"
 
-typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE } gi_filter_kind;
+/* GI_FILTER_GAUSSIAN: Aranha's "edge-aware gaussian blur" (SSVP Sec. III-D). */
+typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE, GI_FILTER_GAUSSIAN } gi_filter_kind;
 
 typedef struct gi_indirect_options {
     const gi_vpl_method *method; /* NULL: Instant Radiosity */

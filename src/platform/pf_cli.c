@@ -46,7 +46,8 @@ void pf_cli_usage(FILE *out)
           "  --tiles NxM             interleaved tiles (default 4x4)\n"
           "  --no-interleave         every pixel sees every VPL\n"
           "  --clamp C               bounded geometry term b = C / diagonal^2 (default 400, 0 = off)\n"
-          "  --filter box|bilateral|none  indirect-light filter (default box, Laine 2007 Fig. 5)\n"
+          "  --filter box|bilateral|gaussian|none  indirect-light filter (default box, Laine 2007 Fig. 5;\n"
+          "                        gaussian: Aranha SSVP Sec. III-D edge-aware Gaussian)\n"
           "  --visibility paraboloid|ism|raytrace  VPL visibility (default exact paraboloid maps)\n"
           "  --ism-res N             --visibility ism: texels per ISM side, a power of two 8..512 (default 64)\n"
           "  --ism-points N          --visibility ism: points splatted per frame (default 1000000)\n"
@@ -274,8 +275,8 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         }
         else if (!strcmp(a, "--filter")) {
             o->filter = val;
-            if (strcmp(val, "box") && strcmp(val, "bilateral") && strcmp(val, "none"))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral or none", val);
+            if (strcmp(val, "box") && strcmp(val, "bilateral") && strcmp(val, "gaussian") && strcmp(val, "none"))
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian or none", val);
         } else if (!strcmp(a, "--visibility")) {
             if (!strcmp(val, "raytrace")) o->visibility_raytrace = 1;
             else if (!strcmp(val, "ism")) o->visibility_ism = 1;

@@ -46,7 +46,7 @@ typedef struct pf_options {
     uint32_t ism_points;     /* --ism-points N: ISM points per frame (0: default) */
     float ism_bias;          /* --ism-bias S: ISM bias scale (0: default) */
     uint32_t bounces;        /* light bounces (0: 3) */
-    const char *filter;      /* "box" (default), "bilateral", "none" */
+    const char *filter;      /* "box" (default), "bilateral", "gaussian", "none" */
     const char *dump_dir;    /* --dump-stages DIR */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */

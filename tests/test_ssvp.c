@@ -1,0 +1,662 @@
+/* test_ssvp: Screen-space VPL propagation (Aranha, Sec. III; gi_ssvp.c) and
+ * its k-means (gi_kmeans.c).
+ * - Eq. 2 distances against hand-computed values;
+ * - k-means with the Eq. 2 metric recovers authored groups (two of them
+ *   touching at a corner, told apart only by their normals), ends on a fixed
+ *   point (every VPL at its nearest centroid, every centroid its members'
+ *   mean), and plain Euclidean k-means (w2 = 0) does not separate the corner;
+ * - reused centroids keep the assignment unchanged over 30 frames of a static
+ *   scene (one iteration each), and the method moves nothing after frame 1;
+ * - flux: in a closed box lit by a point light the first-bounce VPLs carry
+ *   the light's 4 pi I (0.5%), and the second bounce what the clusters
+ *   reflect (pi sum I_1 within Monte Carlo error);
+ * - the VPL sets of 30 frames with a moving light are identical with 1 and 2
+ *   threads, and with whole cluster maps or only the texels read (lazy_maps);
+ * - on scenes/cornell-box the second bounce adds light where the point light
+ *   does not reach (Fig. 4's claim), and both bounce counts agree with
+ *   Instant Radiosity's unbiased estimate;
+ * - --filter gaussian: edge-aware (no blur across a depth step) and smoothing;
+ * - bad --param values and budgets give clear errors. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <math.h>
+#include <time.h>
+
+#include "gi_frame.h"
+#include "gi_kmeans.h"
+#include "pf_gltf.h"
+#include "pf_timer.h"
+#include "test_util.h"
+
+#define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+
+/* ------------------------------------------------------------ k-means */
+
+static void test_kmeans_metric(void **state)
+{
+    (void)state;
+    gi_kmeans_options o = gi_kmeans_defaults();
+    assert_true(o.w1 == 0.6f && o.w2 == 0.4f && o.max_iter == 5);
+    pf_vec3 up = pf_v3(0, 1, 0), x = pf_v3(1, 0, 0), down = pf_v3(0, -1, 0);
+    /* same normal: w1 |V - C| */
+    assert_float_equal(gi_kmeans_distance(&o, pf_v3(3, 4, 0), up, pf_v3(0, 0, 0), up), 0.6f * 5.0f, 1e-6);
+    /* perpendicular and opposite normals: + w2 */
+    assert_float_equal(gi_kmeans_distance(&o, pf_v3(0, 0, 0), up, pf_v3(0, 0, 0), x), 0.4f, 1e-6);
+    assert_float_equal(gi_kmeans_distance(&o, pf_v3(0, 0, 0), up, pf_v3(0, 0, 0), down), 0.4f, 1e-6);
+    /* 60 degrees: w2 (1 - 0.5) */
+    pf_vec3 n60 = pf_v3(sqrtf(3.0f) / 2.0f, 0.5f, 0);
+    assert_float_equal(gi_kmeans_distance(&o, pf_v3(0, 0, 0), up, pf_v3(0, 0, 0), n60), 0.2f, 1e-6);
+    /* scale divides the distance term only */
+    o.scale = 10.0f;
+    assert_float_equal(gi_kmeans_distance(&o, pf_v3(3, 4, 0), up, pf_v3(0, 0, 0), x), 0.6f * 0.5f + 0.4f, 1e-6);
+}
+
+#define GROUP 40
+/* Three groups of 40 VPLs: a floor patch (normal +y) and a wall patch
+ * (normal +x) meeting at the edge x = y = 0, and a ceiling patch far away. */
+static void authored_groups(pf_vec3 *pos, pf_vec3 *nrm, uint32_t *truth)
+{
+    for (uint32_t k = 0; k < GROUP; k++) {
+        float a = (float)(k % 8) / 8.0f * 0.5f, b = (float)(k / 8) / 5.0f * 0.5f;
+        pos[k] = pf_v3(a, 0, b), nrm[k] = pf_v3(0, 1, 0), truth[k] = 0;
+        pos[GROUP + k] = pf_v3(0, a, b), nrm[GROUP + k] = pf_v3(1, 0, 0), truth[GROUP + k] = 1;
+        pos[2 * GROUP + k] = pf_v3(3 + a, 3, 3 + b), nrm[2 * GROUP + k] = pf_v3(0, -1, 0), truth[2 * GROUP + k] = 2;
+    }
+}
+
+/* 1 when `assign` is the same partition as `truth`. */
+static int same_partition(const uint32_t *assign, const uint32_t *truth, uint32_t n, uint32_t k)
+{
+    uint32_t map[8];
+    for (uint32_t j = 0; j < k; j++) map[j] = 0xffffffffu;
+    for (uint32_t i = 0; i < n; i++) {
+        if (map[truth[i]] == 0xffffffffu) map[truth[i]] = assign[i];
+        if (map[truth[i]] != assign[i]) return 0;
+    }
+    for (uint32_t a = 0; a < k; a++)
+        for (uint32_t b = a + 1; b < k; b++)
+            if (map[a] == map[b]) return 0;
+    return 1;
+}
+
+static void test_kmeans_recovers_groups(void **state)
+{
+    (void)state;
+    enum { N = 3 * GROUP, K = 3 };
+    pf_vec3 pos[N], nrm[N], cpos[K], cnrm[K];
+    uint32_t truth[N], assign[N], members[K];
+    float scratch[N];
+    authored_groups(pos, nrm, truth);
+    gi_kmeans_options o = gi_kmeans_defaults();
+    o.scale = 1.0f;
+    uint32_t it = gi_kmeans_run(&o, pos, nrm, N, cpos, cnrm, K, 0, assign, members, scratch);
+    assert_true(it >= 1 && it <= 5);
+    if (!same_partition(assign, truth, N, K)) fail_msg("Eq. 2 k-means did not recover the three groups");
+    for (uint32_t j = 0; j < K; j++) assert_int_equal(members[j], GROUP);
+    /* a fixed point: one more assign/update changes nothing */
+    uint32_t again[N];
+    memcpy(again, assign, sizeof again);
+    assert_int_equal(gi_kmeans_assign(&o, pos, nrm, N, cpos, cnrm, K, again), 0);
+    assert_int_equal(gi_kmeans_update(pos, nrm, N, again, cpos, cnrm, K, members), 0);
+    /* centroids: the groups' means, with their normals */
+    for (uint32_t j = 0; j < K; j++) {
+        uint32_t g = 0;
+        for (uint32_t i = 0; i < N; i++)
+            if (assign[i] == j) g = truth[i];
+        pf_vec3 mean = pf_v3(0, 0, 0);
+        for (uint32_t i = 0; i < N; i++)
+            if (truth[i] == g) mean = pf_v3_add(mean, pos[i]);
+        mean = pf_v3_scale(mean, 1.0f / GROUP);
+        assert_true(pf_v3_length(pf_v3_sub(mean, cpos[j])) < 1e-5f);
+        assert_true(pf_v3_dot(cnrm[j], nrm[g * GROUP]) > 0.99999f);
+    }
+    /* starting from last frame's centroids, perturbed: the same partition */
+    for (uint32_t j = 0; j < K; j++) cpos[j] = pf_v3_add(cpos[j], pf_v3(0.05f, -0.03f, 0.02f));
+    gi_kmeans_run(&o, pos, nrm, N, cpos, cnrm, K, 1, assign, members, scratch);
+    assert_true(same_partition(assign, truth, N, K));
+    /* the normal term is what separates the corner: without it (w2 = 0) the
+     * floor and wall VPLs on the shared edge (a = 0: same positions,
+     * perpendicular normals) are at the same distance from every centroid
+     * and always land in one cluster */
+    o.w2 = 0.0f;
+    gi_kmeans_run(&o, pos, nrm, N, cpos, cnrm, K, 0, assign, members, scratch);
+    assert_false(same_partition(assign, truth, N, K));
+}
+
+/* ------------------------------------------------------ method helpers */
+
+typedef struct ctx {
+    pf_scene scene;
+    pf_rt *rt;
+    pf_jobs *jobs;
+    gi_area_lights area;
+    void *st;
+    gi_vpl_inputs in;
+} ctx;
+
+/* Embree's ISA: sse2 in the tests (the golden-test convention: the same
+ * bits on every x86-64 CPU), the CPU's best in the bench. */
+static pf_isa g_isa = PF_ISA_SSE2;
+
+static void ctx_begin(ctx *c, uint32_t threads, const char *const *kv, uint32_t nkv, uint32_t budget)
+{
+    pf_error err;
+    assert_int_equal(pf_scene_validate(&c->scene, &err), PF_OK);
+    assert_int_equal(pf_rt_create(&c->rt, &c->scene, g_isa, 1, &err), PF_OK);
+    c->jobs = pf_jobs_create(threads);
+    memset(&c->area, 0, sizeof c->area);
+    gi_params p;
+    memset(&p, 0, sizeof p);
+    for (uint32_t i = 0; i < nkv; i++) assert_int_equal(gi_params_add(&p, kv[i], &err), PF_OK);
+    if (gi_method_ssvp.create(&c->st, &p, &err) != PF_OK) fail_msg("%s", err.message);
+    gi_vpl_inputs in = {&c->scene, c->rt, c->jobs, NULL, 0, budget, 2, NULL, 0, 0, &c->area};
+    c->in = in;
+}
+
+static void ctx_end(ctx *c)
+{
+    gi_method_ssvp.destroy(c->st);
+    pf_jobs_destroy(c->jobs);
+    pf_rt_destroy(c->rt);
+    pf_scene_free(&c->scene);
+}
+
+static void update(ctx *c, gi_vpl_set *out)
+{
+    pf_error err;
+    if (gi_method_ssvp.update(c->st, &c->in, out, &err) != PF_OK) fail_msg("%s", err.message);
+    c->in.frame++;
+}
+
+static int vpls_equal(const gi_vpl_set *a, const gi_vpl_set *b)
+{
+    if (a->count != b->count) return 0;
+    for (uint32_t i = 0; i < a->count; i++) {
+        const gi_vpl *x = &a->v[i], *y = &b->v[i];
+        if (x->id != y->id || x->moved != y->moved || memcmp(&x->pos, &y->pos, sizeof x->pos) ||
+            memcmp(&x->nrm, &y->nrm, sizeof x->nrm) || memcmp(&x->intensity, &y->intensity, sizeof x->intensity))
+            return 0;
+    }
+    return 1;
+}
+
+/* A closed 2 x 2 x 2 box of inward-facing quads (albedo 0.5, 0.25, 0.75 per
+ * channel) with a point light inside. */
+static void closed_box(pf_scene *s)
+{
+    const float al[4] = {0.5f, 0.25f, 0.75f, 1.0f};
+    tu_quad q[6] = {
+        {{-1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* x = -1, normal +x */
+        {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f},  /* x = +1, normal -x */
+        {{0, -1, 0}, {0, 0, 1}, {1, 0, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* y = -1, normal +y */
+        {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0}, PF_ALPHA_OPAQUE, 0.5f},  /* y = +1, normal -y */
+        {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f}, /* z = -1, normal +z */
+        {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0}, PF_ALPHA_OPAQUE, 0.5f},  /* z = +1, normal -z */
+    };
+    for (int k = 0; k < 6; k++) memcpy(q[k].albedo, al, sizeof al);
+    tu_make_scene(s, q, 6);
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "bulb");
+    L.type = PF_LIGHT_POINT;
+    L.position = pf_v3(0.1f, 0.2f, -0.15f);
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 2.0f;
+    pf_error err;
+    assert_int_equal(pf_scene_add_light(s, &L, &err), PF_OK);
+}
+
+/* ---------------------------------------------------------------- flux */
+
+static void test_flux_closed_box(void **state)
+{
+    (void)state;
+    ctx c;
+    closed_box(&c.scene);
+    /* 6 clusters: one per wall */
+    const char *kv[] = {"clusters=6", "first=256", "second=1536", "map_res=128"};
+    ctx_begin(&c, 2, kv, 4, 2048);
+    gi_vpl_set v = {0};
+    update(&c, &v);
+    const double albedo[3] = {0.5, 0.25, 0.75};
+    double phi1[3] = {0, 0, 0}, i1[3] = {0, 0, 0}, phi2[3] = {0, 0, 0};
+    uint32_t n1 = 0, n2 = 0;
+    for (uint32_t i = 0; i < v.count; i++) {
+        const gi_vpl *p = &v.v[i];
+        const float I[3] = {p->intensity.x, p->intensity.y, p->intensity.z};
+        for (int ch = 0; ch < 3; ch++) {
+            /* I = Phi albedo / pi */
+            double phi = I[ch] * M_PI / albedo[ch];
+            if (p->id & 0x80000000u) phi2[ch] += phi;
+            else phi1[ch] += phi, i1[ch] += I[ch];
+        }
+        if (p->id & 0x80000000u) n2++;
+        else n1++;
+    }
+    /* every Hammersley sample hits a wall: n = 256 VPLs */
+    assert_int_equal(n1, 256);
+    assert_true(n2 > 1500);
+    for (int ch = 0; ch < 3; ch++) {
+        double want = 4.0 * M_PI * 2.0;
+        /* the RSM's cube texels tile the sphere exactly (gi_rsm.h); the 256
+         * stratified Hammersley samples weigh them equally, though their
+         * solid angles vary by up to 5x over a face: within 0.5% */
+        if (fabs(phi1[ch] - want) > 5e-3 * want) fail_msg("first-bounce flux %.6g, want 4 pi I = %.6g", phi1[ch], want);
+        /* each wall's cluster radiates pi sum I over its hemisphere, all of
+         * which lands on the box (stratified disc samples: a few %) */
+        double want2 = M_PI * i1[ch];
+        if (fabs(phi2[ch] - want2) > 0.04 * want2)
+            fail_msg("channel %d: second-bounce flux %.6g, want pi sum I_1 = %.6g", ch, phi2[ch], want2);
+    }
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+}
+
+/* -------------------------------------------------- static scene, reuse */
+
+static void test_static_reuse(void **state)
+{
+    (void)state;
+    ctx c;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&c.scene, CORNELL, NULL, &err), PF_OK);
+    ctx_begin(&c, 2, NULL, 0, 512);
+    gi_vpl_set first = {0}, v = {0};
+    update(&c, &first);
+    assert_true(first.count > 300);
+    for (uint32_t i = 0; i < first.count; i++) assert_int_equal(first.v[i].moved, 1);
+    /* the method: nothing moves and nothing changes over 30 frames */
+    for (int fr = 1; fr < 30; fr++) {
+        update(&c, &v);
+        assert_int_equal(v.count, first.count);
+        for (uint32_t i = 0; i < v.count; i++) {
+            gi_vpl a = first.v[i];
+            a.moved = 0;
+            if (memcmp(&a, &v.v[i], sizeof a)) fail_msg("frame %d: VPL %u changed or moved", fr, i);
+        }
+    }
+    /* the k-means alone on the first-bounce VPLs: after the first frame,
+     * reused centroids converge at once and keep every assignment */
+    pf_vec3 pos[512], nrm[512], cpos[8], cnrm[8];
+    uint32_t n = 0, assign[512], assign0[512], members[8];
+    float scratch[512];
+    for (uint32_t i = 0; i < first.count; i++)
+        if (!(first.v[i].id & 0x80000000u)) pos[n] = first.v[i].pos, nrm[n] = first.v[i].nrm, n++;
+    gi_kmeans_options o = gi_kmeans_defaults();
+    o.scale = pf_v3_length(pf_v3_sub(c.scene.bounds_max, c.scene.bounds_min));
+    uint32_t it = gi_kmeans_run(&o, pos, nrm, n, cpos, cnrm, 8, 0, assign0, members, scratch);
+    /* frame 1 may stop at 5 iterations short of convergence; frame 2 goes on
+     * from there; from then on nothing changes */
+    it = gi_kmeans_run(&o, pos, nrm, n, cpos, cnrm, 8, 1, assign0, members, scratch);
+    if (it > 1) it = gi_kmeans_run(&o, pos, nrm, n, cpos, cnrm, 8, 1, assign0, members, scratch);
+    for (int fr = 0; fr < 30; fr++) {
+        it = gi_kmeans_run(&o, pos, nrm, n, cpos, cnrm, 8, 1, assign, members, scratch);
+        assert_int_equal(it, 1);
+        assert_memory_equal(assign, assign0, n * sizeof(uint32_t));
+    }
+    /* every cluster holds VPLs of one wall or block face mostly: the Eq. 2
+     * normal term keeps normals within 90 degrees of the centroid's */
+    for (uint32_t i = 0; i < n; i++) assert_true(pf_v3_dot(nrm[i], cnrm[assign[i]]) > 0.0f);
+    gi_vpl_set_free(&first);
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+}
+
+/* ------------------------------------------------------- determinism */
+
+static void run_frames(uint32_t threads, gi_vpl_set *sets, int frames, const char *const *kv, uint32_t nkv)
+{
+    ctx c;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&c.scene, CORNELL, NULL, &err), PF_OK);
+    ctx_begin(&c, threads, kv, nkv, 512);
+    pf_vec3 p0 = c.scene.lights[0].position;
+    for (int fr = 0; fr < frames; fr++) {
+        /* the light circles under the ceiling; static every third frame */
+        float a = 0.2f * (float)(fr - fr / 3);
+        c.scene.lights[0].position = pf_v3_add(p0, pf_v3(0.1f * cosf(a), -0.05f, 0.1f * sinf(a)));
+        update(&c, &sets[fr]);
+    }
+    ctx_end(&c);
+}
+
+static void test_threads_30_frames(void **state)
+{
+    (void)state;
+    enum { F = 30 };
+    gi_vpl_set a[F], b[F];
+    memset(a, 0, sizeof a), memset(b, 0, sizeof b);
+    run_frames(1, a, F, NULL, 0);
+    run_frames(2, b, F, NULL, 0);
+    uint32_t moved = 0, unmoved = 0;
+    for (int fr = 0; fr < F; fr++) {
+        if (!vpls_equal(&a[fr], &b[fr])) fail_msg("frame %d: VPL sets differ between 1 and 2 threads", fr);
+        for (uint32_t i = 0; i < a[fr].count; i++) {
+            if (a[fr].v[i].moved) moved++;
+            else unmoved++;
+        }
+        gi_vpl_set_free(&a[fr]), gi_vpl_set_free(&b[fr]);
+    }
+    /* the test exercised both moving and static frames */
+    assert_true(moved > 0 && unmoved > 0);
+}
+
+/* lazy_maps=1 traces only the texels the samples read: the same VPLs */
+static void test_lazy_maps_identical(void **state)
+{
+    (void)state;
+    enum { F = 6 };
+    gi_vpl_set a[F], b[F];
+    memset(a, 0, sizeof a), memset(b, 0, sizeof b);
+    const char *lazy[] = {"lazy_maps=1"};
+    run_frames(2, a, F, NULL, 0);
+    run_frames(2, b, F, lazy, 1);
+    for (int fr = 0; fr < F; fr++) {
+        assert_true(a[fr].count > 300);
+        if (!vpls_equal(&a[fr], &b[fr])) fail_msg("frame %d: lazy maps give other VPLs", fr);
+        gi_vpl_set_free(&a[fr]), gi_vpl_set_free(&b[fr]);
+    }
+}
+
+/* ------------------------------------------ second bounce on the Cornell box */
+
+typedef struct frame_means {
+    double shadow, all; /* mean indirect irradiance (luminance) in shadowed / all pixels */
+    uint32_t shadow_px;
+} frame_means;
+
+static frame_means cornell_indirect(const gi_vpl_method *m, uint32_t vpls, uint32_t bounces, const char *const *kv,
+                                    uint32_t nkv)
+{
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(2);
+    rs_context *rs;
+    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
+    gi_frame f;
+    enum { W = 128, H = 128 };
+    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &s.cameras[0], W, H, 256, &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.method = m;
+    io.vpls = vpls;
+    io.bounces = bounces;
+    io.visibility_raytrace = 1;
+    io.filter = GI_FILTER_NONE;
+    for (uint32_t i = 0; i < nkv; i++) assert_int_equal(gi_params_add(&io.params, kv[i], &err), PF_OK);
+    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
+    gi_frame_render_raster(&f);
+    frame_means r = {0, 0, 0};
+    uint32_t all = 0;
+    for (uint32_t i = 0; i < W * H; i++) {
+        if (f.gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+        const float *e = f.ind.filtered + 3 * i, *d = f.direct + 3 * i;
+        double lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+        r.all += lum, all++;
+        if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) r.shadow += lum, r.shadow_px++;
+    }
+    r.all /= all;
+    r.shadow /= r.shadow_px ? r.shadow_px : 1;
+    gi_frame_free(&f);
+    rs_context_destroy(rs);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+    return r;
+}
+
+static void test_second_bounce_adds_light(void **state)
+{
+    (void)state;
+    /* the paper's configuration: 256 + 256 VPLs, 8 clusters, 256^2 maps */
+    frame_means one = cornell_indirect(&gi_method_ssvp, 512, 1, NULL, 0);
+    frame_means two = cornell_indirect(&gi_method_ssvp, 512, 2, NULL, 0);
+    print_message("ssvp Cornell box, mean indirect irradiance: shadowed %.4f -> %.4f (%u px), all %.4f -> %.4f\n",
+                  one.shadow, two.shadow, two.shadow_px, one.all, two.all);
+    assert_true(two.shadow_px > 500); /* the ceiling and behind the blocks */
+    assert_true(two.shadow > 1.15 * one.shadow);
+    assert_true(two.all > 1.15 * one.all);
+    /* against Instant Radiosity (random walks, unbiased) with the same
+     * bounces: SSVP's estimates agree within 10% on the whole image */
+    frame_means ir1 = cornell_indirect(&gi_method_ir, 2048, 1, NULL, 0);
+    frame_means ir2 = cornell_indirect(&gi_method_ir, 2048, 2, NULL, 0);
+    print_message("ir: all %.4f (1 bounce), %.4f (2 bounces)\n", ir1.all, ir2.all);
+    assert_true(fabs(one.all - ir1.all) < 0.10 * ir1.all);
+    assert_true(fabs(two.all - ir2.all) < 0.10 * ir2.all);
+}
+
+/* ------------------------------------------------------ gaussian filter */
+
+static void test_gaussian_filter(void **state)
+{
+    (void)state;
+    pf_scene s;
+    tu_quad q[2] = {
+        {{-1, 0, -3}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+        {{1, 0, -4}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
+    };
+    tu_make_scene(&s, q, 2);
+    pf_error err;
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_camera cam;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(2);
+    rs_context *rs;
+    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
+    gi_frame f;
+    enum { W = 96, H = 64 };
+    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &cam, W, H, 64, &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.visibility_raytrace = 1;
+    io.filter = GI_FILTER_GAUSSIAN;
+    io.alpha_rel = 0.05f;
+    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
+    gi_stage_gbuffer_raster(&f);
+    gi_stage_gbuffer_resolve(&f);
+    /* near wall 1.0, far wall 3.0, each with a +-0.5 checkerboard of pixels */
+    double var_in = 0.0, var_out = 0.0;
+    for (uint32_t y = 0; y < H; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            size_t i = (size_t)y * W + x;
+            float base = f.gbuf.prim[i] < 2 ? 1.0f : 3.0f, p = ((x + y) & 1) ? 0.5f : -0.5f;
+            for (int ch = 0; ch < 3; ch++) f.ind.combined[3 * i + ch] = base + p;
+        }
+    gi_stage_filter(&f);
+    int interior = 0;
+    for (uint32_t y = 4; y + 4 < H; y++)
+        for (uint32_t x = 4; x + 4 < W; x++) {
+            size_t i = (size_t)y * W + x;
+            if (f.gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+            float want = f.gbuf.prim[i] < 2 ? 1.0f : 3.0f, got = f.ind.filtered[3 * i];
+            /* never takes the other wall: the result stays within this wall's range */
+            assert_true(got >= want - 0.5f && got <= want + 0.5f);
+            int mixed = 0;
+            for (int dy = -4; dy <= 4; dy++)
+                for (int dx = -4; dx <= 4; dx++) {
+                    uint32_t pj = f.gbuf.prim[i + dy * W + dx];
+                    mixed |= pj == RS_GBUFFER_EMPTY || (pj < 2) != (f.gbuf.prim[i] < 2);
+                }
+            if (!mixed) {
+                double din = f.ind.combined[3 * i] - want, dout = got - want;
+                var_in += din * din, var_out += dout * dout;
+                interior++;
+            }
+        }
+    assert_true(interior > 1000);
+    /* a 9 x 9 Gaussian of sigma 2 shrinks a checkerboard's variance > 100x */
+    assert_true(var_out < var_in / 100.0);
+    gi_frame_free(&f);
+    rs_context_destroy(rs);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* ------------------------------------------------------------- errors */
+
+static void expect_create_error(const char *kv, const char *needle)
+{
+    gi_params p;
+    memset(&p, 0, sizeof p);
+    pf_error err;
+    assert_int_equal(gi_params_add(&p, kv, &err), PF_OK);
+    void *st = (void *)1;
+    assert_int_not_equal(gi_method_ssvp.create(&st, &p, &err), PF_OK);
+    assert_null(st);
+    if (!strstr(err.message, needle)) fail_msg("--param %s: message '%s' lacks '%s'", kv, err.message, needle);
+}
+
+static void test_errors(void **state)
+{
+    (void)state;
+    expect_create_error("clusters=0", "clusters");
+    expect_create_error("clusters=65", "clusters");
+    expect_create_error("clusters=x", "clusters");
+    expect_create_error("first=0", "first");
+    expect_create_error("map_res=4", "map_res");
+    expect_create_error("rsm_res=100000", "rsm_res");
+    expect_create_error("iters=0", "iters");
+    expect_create_error("cluster=8", "cluster");
+    expect_create_error("lazy_maps=2", "lazy_maps");
+    /* explicit counts over the VPL budget: an error at update, no VPLs */
+    ctx c;
+    closed_box(&c.scene);
+    const char *kv[] = {"first=200", "second=200"};
+    ctx_begin(&c, 1, kv, 2, 256);
+    gi_vpl_set v = {0};
+    pf_error err;
+    assert_int_not_equal(gi_method_ssvp.update(c.st, &c.in, &v, &err), PF_OK);
+    assert_non_null(strstr(err.message, "budget"));
+    assert_int_equal(v.count, 0);
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+    /* defaults halve to fit a smaller budget */
+    closed_box(&c.scene);
+    ctx_begin(&c, 1, NULL, 0, 256);
+    update(&c, &v);
+    uint32_t n1 = 0, n2 = 0;
+    for (uint32_t i = 0; i < v.count; i++) {
+        if (v.v[i].id & 0x80000000u) n2++;
+        else n1++;
+    }
+    assert_int_equal(n1, 128);
+    assert_true(n2 > 100 && n2 <= 128);
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+    /* the CLI */
+    tu_softgi_expect("render --filter blur", 2, "gaussian");
+    tu_softgi_expect("render --method ssvp --param clusters=0 --size 32x32 --output /tmp/test-ssvp-x.png", 2,
+                     "clusters");
+}
+
+/* ---------------------------------------------------------------- bench */
+
+/* Not a test: SOFTGI_SSVP_BENCH=1 ./build/tests/test_ssvp prints SSVP's
+ * per-frame VPL management time (the method's update: light RSM, first
+ * bounce, k-means, cluster maps, second bounce) on Sibenik with a spot light,
+ * 1 and 2 threads: 30 frames with the light sweeping along the nave (every
+ * frame re-renders the RSM and the moved clusters' maps), then 30 frames with
+ * it still (maps reused). Paper defaults: 256 + 256 VPLs, 8 clusters,
+ * 256^2 maps. */
+/* CPU seconds of the whole process (all its threads): on a shared machine
+ * the wall clock also counts the time other jobs hold the cores. */
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void bench_sibenik(uint32_t threads, const char *const *kv, uint32_t nkv, const char *label)
+{
+    ctx c;
+    if (!tu_load_or_skip(&c.scene, SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf")) return;
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    snprintf(L.name, sizeof L.name, "spot");
+    L.type = PF_LIGHT_SPOT;
+    L.direction = pf_v3_normalize(pf_v3(-0.3f, -1.0f, 0.0f));
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 200.0f;
+    L.inner_cone = pf_radians(35.0f);
+    L.outer_cone = pf_radians(45.0f);
+    pf_error err;
+    free(c.scene.lights);
+    c.scene.lights = NULL;
+    c.scene.light_count = 0;
+    assert_int_equal(pf_scene_add_light(&c.scene, &L, &err), PF_OK);
+    ctx_begin(&c, threads, kv, nkv, 512);
+    enum { F = 30 };
+    double moving[F], still[F], first = 0.0, cpu_moving = 0.0;
+    gi_vpl_set v = {0};
+    uint32_t nv = 0;
+    for (int fr = 0; fr < 2 * F; fr++) {
+        float t = fr < F ? (float)fr / (F - 1) : 1.0f;
+        c.scene.lights[0].position = pf_v3(8.0f - 16.0f * t, 4.0f, 0.0f);
+        double t0 = pf_time_now(), c0 = cpu_now();
+        update(&c, &v);
+        double ms = (pf_time_now() - t0) * 1e3;
+        if (fr >= 1 && fr < F) cpu_moving += (cpu_now() - c0) * 1e3;
+        if (fr == 0) first = ms;
+        if (fr < F) moving[fr] = ms;
+        else still[fr - F] = ms;
+        nv = v.count;
+    }
+    double sum_m = 0.0;
+    for (int i = 1; i < F; i++) sum_m += moving[i];
+    qsort(moving + 1, F - 1, sizeof(double), cmp_double);
+    qsort(still, F, sizeof(double), cmp_double);
+    print_message("BENCH ssvp sibenik %-22s %u thread%s: first frame %.1f ms; moving light: median %.1f ms, mean %.1f "
+                  "ms, CPU %.1f ms (all threads) per frame (frames 1-29); still light: median %.2f ms; %u VPLs\n",
+                  label, threads, threads > 1 ? "s" : " ", first, moving[F / 2], sum_m / (F - 1),
+                  cpu_moving / (F - 1), still[F / 2], nv);
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+}
+
+static void test_bench(void **state)
+{
+    (void)state;
+    if (!getenv("SOFTGI_SSVP_BENCH")) {
+        print_message("SKIP: the bench runs with SOFTGI_SSVP_BENCH=1\n");
+        return;
+    }
+    const char *first_only[] = {"second=0"}, *lazy[] = {"lazy_maps=1"};
+    g_isa = pf_isa_detect();
+    print_message("BENCH Embree ISA %s\n", pf_isa_name(g_isa));
+    for (uint32_t t = 1; t <= 2; t++) {
+        bench_sibenik(t, NULL, 0, "256+256 (defaults)");
+        bench_sibenik(t, lazy, 1, "256+256 lazy_maps=1");
+        bench_sibenik(t, first_only, 1, "256 first bounce only");
+    }
+    g_isa = PF_ISA_SSE2;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_kmeans_metric),     cmocka_unit_test(test_kmeans_recovers_groups),
+        cmocka_unit_test(test_flux_closed_box),   cmocka_unit_test(test_static_reuse),
+        cmocka_unit_test(test_threads_30_frames), cmocka_unit_test(test_lazy_maps_identical),
+        cmocka_unit_test(test_second_bounce_adds_light),
+        cmocka_unit_test(test_gaussian_filter),   cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_bench),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

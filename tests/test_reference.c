@@ -327,6 +327,49 @@ static void test_threads_identical(void **state)
     pf_scene_free(&s);
 }
 
+/* gi_reference_render_pixels gives a listed pixel exactly its value in the
+ * full image (same options), touches no other pixel, and rejects pixels
+ * outside the image. */
+static void test_pixels_equal_full_image(void **state)
+{
+    (void)state;
+    enum { W = 40, H = 30 };
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    gi_reference_options o = {0};
+    o.spp = 5;
+    o.indirect_only = 1;
+    float *full = render(&s, best_isa(), 2, &s.cameras[0], W, H, &o);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, best_isa(), 1, &err), PF_OK);
+    pf_jobs *jobs = pf_jobs_create(2);
+    float *part = calloc(3 * W * H, sizeof(float));
+    assert_non_null(part);
+    const uint32_t xy[] = {0, 0, 39, 29, 7, 13, 20, 15, 33, 2};
+    assert_int_equal(gi_reference_render_pixels(part, &s, rt, jobs, &s.cameras[0], W, H, xy, 5, &o, &err), PF_OK);
+    int listed[W * H] = {0};
+    for (int i = 0; i < 5; i++) listed[xy[2 * i + 1] * W + xy[2 * i]] = 1;
+    double sum = 0.0;
+    for (int p = 0; p < W * H; p++)
+        for (int c = 0; c < 3; c++) {
+            float want = listed[p] ? full[3 * p + c] : 0.0f;
+            if (memcmp(&part[3 * p + c], &want, sizeof want))
+                fail_msg("pixel %d channel %d: %.9g, want %.9g", p, c, part[3 * p + c], want);
+            if (listed[p]) sum += want;
+        }
+    assert_true(sum > 0.0); /* the listed pixels see indirect light: the comparison means something */
+    const uint32_t out[] = {40, 0};
+    assert_int_equal(gi_reference_render_pixels(part, &s, rt, jobs, &s.cameras[0], W, H, out, 1, &o, &err),
+                     PF_ERR_ARGUMENT);
+    assert_non_null(strstr(err.message, "outside"));
+    free(part);
+    free(full);
+    pf_jobs_destroy(jobs);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
 static void test_golden_cornell(void **state)
 {
     (void)state;
@@ -441,6 +484,7 @@ int main(void)
         cmocka_unit_test(test_form_factor),
         cmocka_unit_test(test_decomposition),
         cmocka_unit_test(test_threads_identical),
+        cmocka_unit_test(test_pixels_equal_full_image),
         cmocka_unit_test(test_golden_cornell),
         cmocka_unit_test(test_progress),
         cmocka_unit_test(test_bad_arguments),

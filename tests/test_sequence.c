@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "pf_sequence.h"
+#include "pf_imageio.h"
 #include "test_util.h"
 
 
@@ -646,6 +647,47 @@ static void test_reference_and_evaluate(void **state)
     assert_int_equal(na, nb);
     assert_memory_equal(ia, ib, na);
     tu_softgi_expect("sequence x.seq.json --reference --raytrace --spp 0", 2, "--spp");
+    tu_softgi_expect("sequence x.seq.json --track-spp 64", 2, "--track-spp: only with sequence --reference");
+    tu_softgi_expect("sequence x.seq.json --reference --reuse-frames", 2, "--reuse-frames: only with");
+
+    /* --track-spp: the tracked pixels get exactly the reference's value at
+     * that many samples, the others keep --spp's; --reuse-frames redoes only
+     * the tracked pixels of the frames already there */
+    char tseq[512], r4[600], r64[600];
+    snprintf(tseq, sizeof tseq, "%s/track.seq.json", g_tmp);
+    write_file(tseq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [32, 24],"
+                     " \"track\": [[10, 10], [20, 5]]}");
+    snprintf(dir, sizeof dir, "%s/tracked", g_tmp);
+    snprintf(args, sizeof args,
+             "sequence '%s' --reference --spp 4 --track-spp 64 --indirect-only --isa sse2 -q -o '%s'", tseq, dir);
+    tu_softgi_expect(args, 0, "");
+    for (int k = 0; k < 2; k++) {
+        snprintf(k ? r64 : r4, 600, "%s/r%d.pfm", g_tmp, k ? 64 : 4);
+        snprintf(args, sizeof args,
+                 "reference --spp %d --indirect-only --size 32x24 --isa sse2 -q -o '%s/r.png' --hdr '%s'", k ? 64 : 4,
+                 g_tmp, k ? r64 : r4);
+        tu_softgi_expect(args, 0, "");
+    }
+    float *img[4] = {NULL, NULL, NULL, NULL};
+    uint32_t w, h;
+    pf_error err;
+    snprintf(a, sizeof a, "%s/frame_0000.pfm", dir);
+    assert_int_equal(pf_imageio_read_pfm(a, &img[0], &w, &h, &err), PF_OK);
+    assert_int_equal(pf_imageio_read_pfm(r4, &img[1], &w, &h, &err), PF_OK);
+    assert_int_equal(pf_imageio_read_pfm(r64, &img[2], &w, &h, &err), PF_OK);
+    size_t t1 = 3 * (10 * 32 + 10), t2 = 3 * (5 * 32 + 20), other = 3 * (12 * 32 + 16);
+    assert_memory_equal(&img[0][t1], &img[2][t1], 3 * sizeof(float));
+    assert_memory_equal(&img[0][t2], &img[2][t2], 3 * sizeof(float));
+    assert_memory_equal(&img[0][other], &img[1][other], 3 * sizeof(float));
+    assert_memory_not_equal(&img[1][t1], &img[2][t1], 3 * sizeof(float)); /* the samples differ: not vacuous */
+    snprintf(args, sizeof args,
+             "sequence '%s' --reference --spp 4 --track-spp 8 --reuse-frames --indirect-only --isa sse2 -q -o '%s'",
+             tseq, dir);
+    tu_softgi_expect(args, 0, "");
+    assert_int_equal(pf_imageio_read_pfm(a, &img[3], &w, &h, &err), PF_OK);
+    assert_memory_equal(&img[3][other], &img[1][other], 3 * sizeof(float));
+    assert_memory_not_equal(&img[3][t1], &img[0][t1], 3 * sizeof(float));
+    for (int k = 0; k < 4; k++) free(img[k]);
     tu_softgi_expect("render --reference", 2, "--reference is an option of sequence");
 
     /* evaluate: table with the method's row; the reference is reused */

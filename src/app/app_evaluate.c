@@ -8,7 +8,9 @@
  * For each sequence file (default: the six in scenes/sequences: the McGuire
  * Cornell box, Sibenik and the conference room, each with a moving camera and
  * a moving light):
- *   1. the reference: `softgi sequence FILE --reference --spp N` into
+ *   1. the reference: `softgi sequence FILE --reference --spp N --track-spp T`
+ *      (the tracked pixels, where |E| and |E'| are measured, with T samples, so
+ *      the reference's own noise stays out of |E'|) into
  *      OUT/NAME/reference (kept and reused while OUT/NAME/reference/stamp
  *      records the same size, spp and image kind; --rerun-reference forces it);
  *   2. every method: `softgi sequence FILE --method M --vpls N` into
@@ -48,7 +50,7 @@ typedef struct ev__args {
     const char *sequences[EV_MAX_ITEMS];
     uint32_t sequence_count;
     const char *out;
-    const char *size, *spp, *vpls, *threads, *isa;
+    const char *size, *spp, *track_spp, *vpls, *threads, *isa;
     const char *params[EV_MAX_ITEMS];
     uint32_t param_count;
     int full, rerun_reference, quiet;
@@ -59,7 +61,7 @@ typedef struct ev__args {
 static void ev__usage(FILE *f)
 {
     fputs("usage: softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]\n"
-          "                       [--size WxH] [--spp N] [--vpls N] [--threads N] [--isa NAME]\n"
+          "                       [--size WxH] [--spp N] [--track-spp N] [--vpls N] [--threads N] [--isa NAME]\n"
           "                       [--param KEY=VALUE ...] [--full] [--rerun-reference] [-q]\n"
           "\n"
           "Hedman et al. 2017, Table 1 on softgi's sequences: for each sequence, per-frame\n"
@@ -76,6 +78,8 @@ static void ev__usage(FILE *f)
           "  --out DIR           output folder (default out/evaluate)\n"
           "  --size WxH          image size for every sequence (default 256x192)\n"
           "  --spp N             reference samples per pixel (default 256)\n"
+          "  --track-spp N       reference samples at the tracked pixels, where |E| and |E'| are\n"
+          "                      measured (default 4096)\n"
           "  --vpls N            VPL budget of every method (default 256)\n"
           "  --param KEY=VALUE   passed to every method that knows KEY (repeatable)\n"
           "  --full              compare whole images (default: indirect light only)\n"
@@ -115,6 +119,7 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
     a->out = "out/evaluate";
     a->size = "256x192";
     a->spp = "256";
+    a->track_spp = "4096";
     a->vpls = "256";
     for (int i = 2; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -127,7 +132,8 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
         else if (!strcmp(o, "-q") || !strcmp(o, "--quiet")) a->quiet = 1;
         else {
             static const char *const with_value[] = {"--methods", "--sequences", "--out",   "--size", "--spp",
-                                                     "--vpls",    "--threads",   "--param", "--isa"};
+                                                     "--vpls",    "--threads",   "--param", "--isa",
+                                                     "--track-spp"};
             int known = 0;
             for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++) known |= !strcmp(o, with_value[k]);
             if (!known) return ev__fail(2, "unknown option '%s' (see softgi evaluate --help)%s", o, "");
@@ -145,6 +151,7 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
             else if (!strcmp(o, "--out")) a->out = v;
             else if (!strcmp(o, "--size")) a->size = v;
             else if (!strcmp(o, "--spp")) a->spp = v;
+            else if (!strcmp(o, "--track-spp")) a->track_spp = v;
             else if (!strcmp(o, "--vpls")) a->vpls = v;
             else if (!strcmp(o, "--threads")) a->threads = v;
             else if (!strcmp(o, "--isa")) a->isa = v;
@@ -262,23 +269,34 @@ static int ev__write_text(const char *path, const char *text)
  * they were made with the same settings). */
 static int ev__reference(const ev__args *a, const char *file, const char *dir)
 {
-    char stamp_path[2600], want[512], have[512];
+    char stamp_path[2600], want[640], have[640], base[512];
     snprintf(stamp_path, sizeof stamp_path, "%s/stamp", dir);
-    snprintf(want, sizeof want, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
-    if (!a->rerun_reference && ev__read_text(stamp_path, have, sizeof have) && !strcmp(have, want)) {
-        if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
-        return 0;
+    snprintf(base, sizeof base, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
+    snprintf(want, sizeof want, "%strack-spp=%s\n", base, a->track_spp);
+    int reuse = 0;
+    if (!a->rerun_reference && ev__read_text(stamp_path, have, sizeof have)) {
+        if (!strcmp(have, want)) {
+            if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
+            return 0;
+        }
+        /* the same images with other tracked-pixel samples: keep them */
+        reuse = !strncmp(have, base, strlen(base));
     }
     ev__argv v = {0};
     ev__common(&v, a, file, dir);
     ev__push(&v, "--reference");
     ev__push(&v, "--spp");
     ev__push(&v, a->spp);
+    ev__push(&v, "--track-spp");
+    ev__push(&v, a->track_spp);
+    if (reuse) ev__push(&v, "--reuse-frames");
     double t0 = pf_time_now();
     int rc = ev__run_sequence(&v);
     if (rc) return rc;
     if (!ev__write_text(stamp_path, want)) return ev__fail(1, "%s: cannot write: %s", stamp_path, strerror(errno));
-    if (!a->quiet) printf("  reference: %s spp in %.1f s\n", a->spp, pf_time_now() - t0);
+    if (!a->quiet)
+        printf("  reference: %s spp (tracked pixels %s)%s in %.1f s\n", a->spp, a->track_spp,
+               reuse ? ", images reused" : "", pf_time_now() - t0);
     return 0;
 }
 

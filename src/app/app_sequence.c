@@ -114,6 +114,9 @@ typedef struct app__seq_run {
     rs_context *raster;
     gi_frame frame;
     int frame_ready;
+    /* --reference --track-spp: the pixels `softgi compare` will track */
+    uint32_t track_xy[2 * PF_SEQUENCE_MAX_TRACK];
+    uint32_t track_count;
 } app__seq_run;
 
 static void app__cleanup(app__seq_run *s)
@@ -130,7 +133,8 @@ static void app__cleanup(app__seq_run *s)
 
 /* --reference: the frame's G-buffer (for the depth file TID reprojects
  * with) and the path-traced image in place of the VPL frame's. */
-static pf_result app__render_reference(app__seq_run *s, const pf_options *o, pf_error *err)
+static pf_result app__render_reference(app__seq_run *s, const pf_options *o, const char *dir, uint32_t frame,
+                                        pf_error *err)
 {
     gi_frame *fr = &s->frame;
     if (o->raytrace) gi_stage_gbuffer_raytrace(fr);
@@ -146,9 +150,33 @@ static pf_result app__render_reference(app__seq_run *s, const pf_options *o, pf_
     ro.indirect_only = o->indirect_only;
     fr->times.count = 0;
     double t0 = pf_time_now();
-    pf_result r = gi_reference_render(fr->final, &s->scene, s->rt, s->jobs, &fr->camera, fr->width, fr->height, &ro,
-                                      err);
-    pf_stage_add(&fr->times, "reference", (pf_time_now() - t0) * 1e3);
+    pf_result r = PF_OK;
+    if (o->reuse_frames) {
+        /* --reuse-frames: the image the folder already holds (made with
+         * the same settings but fewer tracked-pixel samples) */
+        char path[4200];
+        float *rgb = NULL;
+        uint32_t w = 0, h = 0;
+        app__frame_path(path, sizeof path, dir, frame, ".pfm");
+        r = pf_imageio_read_pfm(path, &rgb, &w, &h, err);
+        if (r == PF_OK && (w != fr->width || h != fr->height))
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "%s: %ux%u, this sequence renders %ux%u (--reuse-frames)", path, w,
+                             h, fr->width, fr->height);
+        if (r == PF_OK) memcpy(fr->final, rgb, sizeof(float) * 3 * w * h);
+        free(rgb);
+    } else {
+        r = gi_reference_render(fr->final, &s->scene, s->rt, s->jobs, &fr->camera, fr->width, fr->height, &ro, err);
+    }
+    pf_stage_add(&fr->times, o->reuse_frames ? "reference (reused)" : "reference", (pf_time_now() - t0) * 1e3);
+    if (r != PF_OK || o->track_spp <= ro.spp) return r;
+    /* The tracked pixels again with more samples: |E| and |E'| are measured
+     * there, and a noisy reference would add its own frame-to-frame noise to
+     * every method's |E'|. */
+    t0 = pf_time_now();
+    ro.spp = o->track_spp;
+    r = gi_reference_render_pixels(fr->final, &s->scene, s->rt, s->jobs, &fr->camera, fr->width, fr->height,
+                                   s->track_xy, s->track_count, &ro, err);
+    pf_stage_add(&fr->times, "reference: tracked pixels", (pf_time_now() - t0) * 1e3);
     return r;
 }
 
@@ -188,6 +216,21 @@ int app_sequence(const pf_options *o)
                              seq->file, i, seq->track[i][0], seq->track[i][1], width, height);
     }
     if (r != PF_OK) return app__fail_run(&s, &err);
+    /* the pixels compare tracks: the file's, else compare's default grid */
+    if (seq->track_count) {
+        for (uint32_t i = 0; i < seq->track_count; i++) {
+            s.track_xy[2 * i] = track[i][0];
+            s.track_xy[2 * i + 1] = track[i][1];
+        }
+        s.track_count = seq->track_count;
+    } else {
+        gi_metrics_pixel grid[GI_METRICS_DEFAULT_TRACKED];
+        s.track_count = gi_metrics_track_grid(grid, GI_METRICS_DEFAULT_TRACKED, width, height);
+        for (uint32_t i = 0; i < s.track_count; i++) {
+            s.track_xy[2 * i] = grid[i].x;
+            s.track_xy[2 * i + 1] = grid[i].y;
+        }
+    }
 
     /* Scene: the sequence's scene, its first camera and its full lights
      * through the same path as `render`'s --camera and --light. */
@@ -304,7 +347,7 @@ int app_sequence(const pf_options *o)
 
         /* render */
         double t0 = pf_time_now();
-        if (o->reference) r = app__render_reference(&s, o, &err);
+        if (o->reference) r = app__render_reference(&s, o, dir, f, &err);
         else if (o->raytrace) gi_frame_render_raytraced(fr);
         else gi_frame_render_raster(fr);
         double t_render = (pf_time_now() - t0) * 1e3;

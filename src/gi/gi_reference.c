@@ -280,9 +280,11 @@ static void gi__reference_row(void *ctx, uint32_t y, uint32_t worker)
     if (c->progress && worker == c->caller_worker) c->progress(c->progress_user, done, c->height);
 }
 
-pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
-                              const pf_camera *camera, uint32_t width, uint32_t height,
-                              const gi_reference_options *opts, pf_error *err)
+/* The options checked and the context filled (c->area points at `area`,
+ * which the caller frees with gi_area_lights_free). */
+static pf_result gi__reference_setup(gi__ref_ctx *c, gi_area_lights *area, float *out_rgb, const pf_scene *scene,
+                                     const pf_rt *rt, pf_jobs *jobs, const pf_camera *camera, uint32_t width,
+                                     uint32_t height, const gi_reference_options *opts, pf_error *err)
 {
     gi_reference_options o;
     if (opts) o = *opts;
@@ -294,29 +296,79 @@ pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt
     if (o.bounces > GI_REFERENCE_MAX_BOUNCES)
         return pf_error_set(err, PF_ERR_ARGUMENT, "reference: %u bounces (at most %u)", o.bounces,
                             GI_REFERENCE_MAX_BOUNCES);
-    gi__ref_ctx c;
-    memset(&c, 0, sizeof c);
-    c.out = out_rgb;
-    c.scene = scene;
-    c.rt = rt;
-    c.camera = camera;
-    c.width = width;
-    c.height = height;
-    c.spp = o.spp ? o.spp : GI_REFERENCE_DEFAULT_SPP;
-    c.bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
-    c.indirect_only = o.indirect_only;
-    c.no_area_nee = o.no_area_nee;
-    gi_area_lights area;
-    pf_result r = gi_area_lights_build(&area, scene, err);
+    memset(c, 0, sizeof *c);
+    c->out = out_rgb;
+    c->scene = scene;
+    c->rt = rt;
+    c->camera = camera;
+    c->width = width;
+    c->height = height;
+    c->spp = o.spp ? o.spp : GI_REFERENCE_DEFAULT_SPP;
+    c->bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
+    c->indirect_only = o.indirect_only;
+    c->no_area_nee = o.no_area_nee;
+    pf_result r = gi_area_lights_build(area, scene, err);
     if (r != PF_OK) return r;
-    c.area = &area;
-    c.progress = o.progress;
-    c.progress_user = o.progress_user;
-    c.caller_worker = pf_jobs_thread_count(jobs) - 1u;
-    atomic_init(&c.rows_done, 0u);
+    c->area = area;
+    c->progress = o.progress;
+    c->progress_user = o.progress_user;
+    c->caller_worker = pf_jobs_thread_count(jobs) - 1u;
+    atomic_init(&c->rows_done, 0u);
+    return PF_OK;
+}
+
+pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
+                              const pf_camera *camera, uint32_t width, uint32_t height,
+                              const gi_reference_options *opts, pf_error *err)
+{
+    gi__ref_ctx c;
+    gi_area_lights area;
+    pf_result r = gi__reference_setup(&c, &area, out_rgb, scene, rt, jobs, camera, width, height, opts, err);
+    if (r != PF_OK) return r;
     /* grain 1: rows cost very different amounts (sky vs. deep corners) */
     pf_jobs_parallel_for(jobs, gi__reference_row, &c, height, 1);
     if (c.progress) c.progress(c.progress_user, height, height);
+    gi_area_lights_free(&area);
+    return PF_OK;
+}
+
+typedef struct gi__pixels_ctx {
+    gi__ref_ctx *c;
+    const uint32_t *xy;
+} gi__pixels_ctx;
+
+/* One listed pixel, traced alone: a packet of one path per sample index.
+ * Packets have one fixed width in pf_rt and the random numbers depend only
+ * on (pixel, sample, vertex, dimension), so this is the very estimate the
+ * pixel gets inside a full image with the same options. */
+static void gi__reference_pixel(void *ctx, uint32_t i, uint32_t worker)
+{
+    (void)worker;
+    const gi__pixels_ctx *p = ctx;
+    gi__ref_ctx *c = p->c;
+    uint32_t x = p->xy[2 * i], y = p->xy[2 * i + 1];
+    double acc[PF_RT_WIDTH][3];
+    memset(acc, 0, sizeof acc);
+    for (uint32_t sample = 0; sample < c->spp; sample++) gi__trace_packet(c, x, y, 1, sample, acc);
+    float *out = c->out + ((size_t)y * c->width + x) * 3;
+    for (int ch = 0; ch < 3; ch++) out[ch] = (float)(acc[0][ch] / c->spp);
+}
+
+pf_result gi_reference_render_pixels(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
+                                     const pf_camera *camera, uint32_t width, uint32_t height, const uint32_t *xy,
+                                     uint32_t count, const gi_reference_options *opts, pf_error *err)
+{
+    for (uint32_t i = 0; i < count; i++)
+        if (xy[2 * i] >= width || xy[2 * i + 1] >= height)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "reference: pixel (%u, %u) is outside the %ux%u image",
+                                xy[2 * i], xy[2 * i + 1], width, height);
+    gi__ref_ctx c;
+    gi_area_lights area;
+    pf_result r = gi__reference_setup(&c, &area, out_rgb, scene, rt, jobs, camera, width, height, opts, err);
+    if (r != PF_OK) return r;
+    c.progress = NULL;
+    gi__pixels_ctx p = {&c, xy};
+    if (count) pf_jobs_parallel_for(jobs, gi__reference_pixel, &p, count, 1);
     gi_area_lights_free(&area);
     return PF_OK;
 }

@@ -119,6 +119,16 @@ pf_result gi_reference_render(float *out_rgb, const pf_scene *scene, const pf_rt
                               const pf_camera *camera, uint32_t width, uint32_t height,
                               const gi_reference_options *opts, pf_error *err);
 
+/* Renders only the `count` pixels (xy[2 i], xy[2 i + 1]) into out_rgb (the
+ * same layout as gi_reference_render; other pixels are left as they are).
+ * Each listed pixel gets exactly the value gi_reference_render gives it with
+ * the same options (same random numbers, the same fixed-width packets):
+ * `softgi sequence --reference --track-spp N` uses it to render the tracked
+ * pixels with many more samples than the rest of the image. */
+pf_result gi_reference_render_pixels(float *out_rgb, const pf_scene *scene, const pf_rt *rt, pf_jobs *jobs,
+                                     const pf_camera *camera, uint32_t width, uint32_t height, const uint32_t *xy,
+                                     uint32_t count, const gi_reference_options *opts, pf_error *err);
+
 /* The random number in [0, 1) of (pixel = y * width + x, sample, path vertex,
  * dimension). Vertex 0 is the camera (dimensions 0, 1: the jitter within the
  * pixel); vertex k >= 1 is the bounce leaving x_k (dimensions 0, 1: the

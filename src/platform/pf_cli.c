@@ -58,6 +58,9 @@ void pf_cli_usage(FILE *out)
           "                          (one frame of VPL delay; default off; bench frame: both)\n"
           "  --spp N                 reference: samples per pixel (default 64)\n"
           "  --reference             sequence: path-trace every frame (the references evaluate uses)\n"
+          "  --track-spp N           sequence --reference: the tracked pixels with N samples\n"
+          "  --reuse-frames          sequence --reference --track-spp: keep the folder's frames, redo\n"
+          "                          only the tracked pixels\n"
           "  --raytrace              Embree primary rays and shadow rays (the reference\n"
           "                          path) instead of the rasterized G-buffer and shadow maps\n"
           "  --hash                  print a 64-bit hash of the linear output\n"
@@ -223,7 +226,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                                  "--exposure", "--frames", "--scenes", "--shadow-size", "--area-strata", "--area-points",
                                                  "--vpls",     "--tiles",  "--clamp",  "--method",
                                                  "--bounces",  "--filter", "--visibility", "--dump-stages",
-                                                 "--spp",      "--param",  "--screenshot", "--pipeline",
+                                                 "--spp",      "--param",  "--screenshot", "--pipeline", "--track-spp",
                                                  "--ism-res",  "--ism-points", "--ism-bias"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
@@ -235,6 +238,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--hash")) o->print_hash = 1;
         else if (!strcmp(a, "--raytrace")) o->raytrace = 1;
         else if (!strcmp(a, "--reference")) o->reference = 1;
+        else if (!strcmp(a, "--reuse-frames")) o->reuse_frames = 1;
         else if (!strcmp(a, "--moving-light")) o->moving_light = 1;
         else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
@@ -250,6 +254,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--vpls")) r = pf__uint(a, val, 1, 1u << 20, &o->vpls, err);
         else if (!strcmp(a, "--bounces")) r = pf__uint(a, val, 1, 64, &o->bounces, err);
         else if (!strcmp(a, "--spp")) r = pf__uint(a, val, 1, 1u << 20, &o->spp, err);
+        else if (!strcmp(a, "--track-spp")) r = pf__uint(a, val, 1, 1u << 24, &o->track_spp, err);
         else if (!strcmp(a, "--method")) o->method = val;
         else if (!strcmp(a, "--param")) {
             if (o->param_count >= 32) r = pf_error_set(err, PF_ERR_ARGUMENT, "--param: at most 32 parameters");
@@ -345,6 +350,10 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                 "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, "
                                 "compare, evaluate)",
                                 o->command);
+        if (o->reuse_frames && !o->track_spp)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--reuse-frames: only with sequence --reference --track-spp");
+        if (o->track_spp && !o->reference)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--track-spp: only with sequence --reference");
         if (o->reference && strcmp(o->command, "sequence") != 0)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--reference is an option of sequence (softgi reference renders "
                                                       "one image)");

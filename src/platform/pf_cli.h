@@ -52,6 +52,8 @@ typedef struct pf_options {
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
+    uint32_t track_spp;      /* sequence --reference --track-spp N: tracked pixels with N samples (0: --spp) */
+    int reuse_frames;        /* sequence --reference --reuse-frames: keep the folder's images, redo tracked pixels */
     int reference;           /* sequence --reference: path-traced frames (gi_reference) instead of the VPL frame */
     const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */

@@ -30,7 +30,9 @@
  * Everything runs in this process through the same functions as the
  * commands (app_sequence, app_compare), with argument vectors built here, so
  * the options are validated exactly as on the command line. */
+#define _DEFAULT_SOURCE /* realpath */
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -269,8 +271,11 @@ static int ev__write_text(const char *path, const char *text)
  * they were made with the same settings). */
 static int ev__reference(const ev__args *a, const char *file, const char *dir)
 {
-    char stamp_path[2600], want[640], have[640], base[512];
+    char stamp_path[2600], want[640], have[640], base[512], real[PATH_MAX];
     snprintf(stamp_path, sizeof stamp_path, "%s/stamp", dir);
+    /* the file by its absolute path, so a relative and an absolute name of
+     * the same sequence match */
+    if (realpath(file, real)) file = real;
     snprintf(base, sizeof base, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
     snprintf(want, sizeof want, "%strack-spp=%s\n", base, a->track_spp);
     int reuse = 0;

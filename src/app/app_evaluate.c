@@ -271,7 +271,7 @@ static int ev__write_text(const char *path, const char *text)
  * they were made with the same settings). */
 static int ev__reference(const ev__args *a, const char *file, const char *dir)
 {
-    char stamp_path[2600], want[640], have[640], base[512], real[PATH_MAX];
+    char stamp_path[2600], want[PATH_MAX + 384], have[PATH_MAX + 384], base[PATH_MAX + 256], real[PATH_MAX];
     snprintf(stamp_path, sizeof stamp_path, "%s/stamp", dir);
     /* the file by its absolute path, so a relative and an absolute name of
      * the same sequence match */

@@ -70,6 +70,7 @@
 #include "gi_area.h"
 #include "gi_light.h"
 #include "gi_reference.h"
+#include "gi_lightpath.h"
 #include "gi_vpl.h"
 
 #define GI__MIR_TAG_CAM 0x4d495201u  /* stream tags for gi_reference_random */
@@ -180,33 +181,6 @@ static void gi__mir_camera_points(gi__mir_state *s, const gi_vpl_inputs *in)
 
 /* ---------------------------------------------------------- 2. candidates */
 
-/* Emitted power of a light (luminance-weighted), as gi_ir.c. */
-static double gi__light_power(const pf_light *l, double radius)
-{
-    double c = gi__lum(l->color) * (double)l->intensity;
-    switch (l->type) {
-    case PF_LIGHT_POINT: return 4.0 * PF_PI * c;
-    case PF_LIGHT_SPOT: {
-        double co = cos((double)l->outer_cone), sum = 0.0;
-        for (int k = 0; k < 256; k++) {
-            double ct = co + (1.0 - co) * (k + 0.5) / 256.0;
-            sum += gi_light_spot_factor(l, (float)ct);
-        }
-        return 2.0 * PF_PI * c * sum * (1.0 - co) / 256.0;
-    }
-    default: return c * PF_PI * radius * radius;
-    }
-}
-
-static pf_vec3 gi__around(pf_vec3 n, float cos_t, float phi)
-{
-    pf_vec3 t, b;
-    pf_v3_basis(n, &t, &b);
-    float sin_t = sqrtf(fmaxf(0.0f, 1.0f - cos_t * cos_t));
-    return pf_v3_add(pf_v3_add(pf_v3_scale(t, sin_t * cosf(phi)), pf_v3_scale(b, sin_t * sinf(phi))),
-                     pf_v3_scale(n, cos_t));
-}
-
 /* Random number of light path `path` this frame: vertex 0 = emission. */
 static float gi__u(const gi_vpl_inputs *in, uint32_t path, uint32_t vertex, uint32_t dim)
 {
@@ -217,10 +191,8 @@ static float gi__u(const gi_vpl_inputs *in, uint32_t path, uint32_t vertex, uint
  * area lights) and the scene's bounding disc for directional lights. */
 typedef struct gi__mir_lights {
     const gi_vpl_inputs *in;
-    double total, cdf[65];
-    uint32_t np, nl, B;
-    pf_vec3 centre;
-    float radius;
+    gi_lightpath_lights lp;
+    uint32_t B;
 } gi__mir_lights;
 
 /* Traces light path `path` (its numbers depend on (path, frame) only) and
@@ -229,68 +201,26 @@ typedef struct gi__mir_lights {
 static uint32_t gi__mir_trace_path(const gi__mir_lights *c, uint32_t path, gi_vpl *out)
 {
     const gi_vpl_inputs *in = c->in;
-    const pf_scene *sc = in->scene;
-    double ul = (double)gi__u(in, path, 0, 0) * c->total;
-    uint32_t l = 0;
-    while (l + 1 < c->nl && c->cdf[l] <= ul) l++;
-    const pf_light *L = l < c->np ? &sc->lights[l] : NULL;
-    double lo = l ? c->cdf[l - 1] : 0.0, pl = (c->cdf[l] - lo) / c->total;
-    float u1 = gi__u(in, path, 0, 1), u2 = gi__u(in, path, 0, 2);
-    float radius = c->radius;
+    gi_lightpath_numbers u;
+    u.choice = (double)gi__u(in, path, 0, 0);
+    u.u1 = gi__u(in, path, 0, 1);
+    u.u2 = gi__u(in, path, 0, 2);
+    u.area = gi__u(in, path, 0, 3);
+    u.a1 = gi__u(in, path, 0, 4);
+    u.a2 = gi__u(in, path, 0, 5);
     pf_ray ray;
     pf_vec3 phi;
-    ray.tnear = 0.0f;
-    ray.tfar = INFINITY;
-    if (!L) {
-        gi_area_sample as;
-        gi_area_sample_point(in->area, gi__u(in, path, 0, 3), u1, u2, &as);
-        float a1 = gi__u(in, path, 0, 4), a2 = gi__u(in, path, 0, 5);
-        ray.org = pf_rt_offset_origin(as.p, as.n, as.n);
-        ray.dir = gi__around(as.n, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
-        phi = pf_v3_scale(as.radiance, (float)(PF_PI / ((double)as.pdf_area * pl)));
-    } else if (L->type == PF_LIGHT_POINT) {
-        ray.org = L->position;
-        ray.dir = gi__around(pf_v3(0, 0, 1), 1.0f - 2.0f * u1, 2.0f * PF_PI * u2);
-        phi = pf_v3_scale(L->color, (float)(L->intensity * 4.0 * PF_PI / pl));
-    } else if (L->type == PF_LIGHT_SPOT) {
-        float co = cosf(L->outer_cone), ct = 1.0f - u1 * (1.0f - co);
-        ray.org = L->position;
-        ray.dir = gi__around(L->direction, ct, 2.0f * PF_PI * u2);
-        float w = gi_light_spot_factor(L, ct) * 2.0f * PF_PI * (1.0f - co);
-        phi = pf_v3_scale(L->color, (float)(L->intensity * w / pl));
-    } else {
-        pf_vec3 t, b;
-        pf_v3_basis(L->direction, &t, &b);
-        float rr = radius * sqrtf(u1), a = 2.0f * PF_PI * u2;
-        ray.org = pf_v3_add(pf_v3_sub(c->centre, pf_v3_scale(L->direction, 2.0f * radius)),
-                            pf_v3_add(pf_v3_scale(t, rr * cosf(a)), pf_v3_scale(b, rr * sinf(a))));
-        ray.dir = L->direction;
-        phi = pf_v3_scale(L->color, (float)(L->intensity * PF_PI * radius * radius / pl));
-    }
+    gi_lightpath_emit(&c->lp, &u, &ray, &phi);
     uint32_t n = 0;
     for (uint32_t k = 0; k < c->B; k++) {
-        pf_hit h = pf_rt_intersect1(in->rt, ray);
-        if (h.prim == PF_RT_MISS) break;
-        pf_surface sf;
-        pf_rt_surface(in->rt, &h, 0.0f, &sf);
-        pf_vec3 nrm = sf.ns, ng = sf.ng;
-        if (pf_v3_dot(ng, ray.dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
-        if (pf_v3_dot(nrm, ng) < 0.0f) nrm = pf_v3_scale(nrm, -1.0f);
-        pf_vec3 albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
-        gi_vpl *v = &out[n++];
-        v->pos = pf_rt_offset_origin(sf.p, ng, ng);
-        v->nrm = nrm;
-        v->intensity = pf_v3_scale(pf_v3_mul(phi, albedo), PF_INV_PI);
+        gi_vpl *v = &out[n];
+        pf_vec3 albedo;
+        if (!gi_lightpath_hit(in->rt, ray, phi, v, &albedo)) break;
+        n++;
         v->id = path;
         v->moved = 1;
-        float q = fminf(1.0f, pf_v3_max_comp(albedo));
-        if (!(gi__u(in, path, k + 1, 2) < q)) break;
-        phi = pf_v3_scale(pf_v3_mul(phi, albedo), 1.0f / q);
-        float a1 = gi__u(in, path, k + 1, 0), a2 = gi__u(in, path, k + 1, 1);
-        ray.org = v->pos;
-        ray.dir = gi__around(nrm, sqrtf(1.0f - a1), 2.0f * PF_PI * a2);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
+        float rr = gi__u(in, path, k + 1, 2), a1 = gi__u(in, path, k + 1, 0), a2 = gi__u(in, path, k + 1, 1);
+        if (!gi_lightpath_bounce(v, albedo, rr, a1, a2, &phi, &ray)) break;
     }
     return n;
 }
@@ -320,25 +250,13 @@ static void gi__mir_trace_item(void *ctx, uint32_t item, uint32_t worker)
 
 static void gi__mir_trace_candidates(gi__mir_state *s, const gi_vpl_inputs *in, uint32_t M)
 {
-    const pf_scene *sc = in->scene;
     gi__mir_lights c;
     memset(&c, 0, sizeof c);
     c.in = in;
     c.B = in->bounces ? in->bounces : 3;
     s->count = 0;
-    c.centre = pf_v3_scale(pf_v3_add(sc->bounds_min, sc->bounds_max), 0.5f);
-    c.radius = 0.5f * pf_v3_length(pf_v3_sub(sc->bounds_max, sc->bounds_min)) * 1.001f;
-    c.np = sc->light_count < 64 ? sc->light_count : 64;
-    c.nl = c.np;
-    for (uint32_t l = 0; l < c.np; l++) {
-        c.total += gi__light_power(&sc->lights[l], c.radius);
-        c.cdf[l] = c.total;
-    }
-    if (in->area->count > 0 && in->area->total_power > 0.0) {
-        c.total += in->area->total_power;
-        c.cdf[c.nl++] = c.total;
-    }
-    if (c.nl == 0 || !(c.total > 0.0)) return;
+    gi_lightpath_lights_init(&c.lp, in->scene, in->area);
+    if (c.lp.nl == 0 || !(c.lp.total > 0.0)) return;
     uint64_t limit = (uint64_t)M * 64u, paths = 0;
     while (s->count < M && paths < limit) {
         gi__mir_round_ctx rc = {&c, s, (uint32_t)paths, 0};

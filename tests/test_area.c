@@ -46,6 +46,7 @@
 #include "gi_frame.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 static const float k_rho = 0.6f, k_le = 2.0f, k_h = 1.0f;
@@ -76,31 +77,14 @@ static double form_factor(double px, double pz)
     return corner_g(x1, z1) - corner_g(x0, z1) - corner_g(x1, z0) + corner_g(x0, z0);
 }
 
-typedef struct fx {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
-} fx;
+typedef tu_fx fx;
 
 static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_camera *cam)
 {
-    pf_error err;
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, w, h, 64, &err), PF_OK);
+    tu_fx_begin(x, threads, RS_SIMD_SCALAR, w, h, cam, NULL, 0);
 }
 
-static void fx_end(fx *x)
-{
-    gi_frame_free(&x->f);
-    rs_context_destroy(x->rs);
-    pf_jobs_destroy(x->jobs);
-    pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(x); }
 
 static void floor_camera(pf_camera *cam)
 {

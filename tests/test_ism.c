@@ -31,39 +31,21 @@
 #include "gi_ism.h"
 #include "pf_gltf.h"
 #include "pf_timer.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
 
-typedef struct fx {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
-} fx;
+typedef tu_fx fx;
 
 static void fx_begin(fx *x, uint32_t threads, rs_simd simd, uint32_t w, uint32_t h, const pf_camera *cam,
                      const gi_indirect_options *io)
 {
-    pf_error err;
-    assert_int_equal(pf_scene_validate(&x->scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, simd, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, w, h, 64, &err), PF_OK);
-    if (gi_frame_enable_indirect(&x->f, io, 1, &err) != PF_OK) fail_msg("%s", err.message);
+    tu_fx_begin(x, threads, simd, w, h, cam, io, 1);
 }
 
-static void fx_end(fx *x)
-{
-    gi_frame_free(&x->f);
-    rs_context_destroy(x->rs);
-    pf_jobs_destroy(x->jobs);
-    pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(x); }
 
 /* Sibenik as `softgi bench frame` lights and views it: one point light in
  * the nave. */

@@ -27,27 +27,17 @@
 #include "gi_frame.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 
-typedef struct fx {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
-} fx;
+typedef tu_fx fx;
 
 static void fx_begin_clamp(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_camera *cam, const char *method,
                            uint32_t vpls, const char *param, float clamp)
 {
     pf_error err;
-    assert_int_equal(pf_scene_validate(&x->scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, w, h, 64, &err), PF_OK);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = gi_vpl_method_find(method);
@@ -57,7 +47,7 @@ static void fx_begin_clamp(fx *x, uint32_t threads, uint32_t w, uint32_t h, cons
     io.vpls = vpls;
     io.clamp = clamp;
     io.filter = GI_FILTER_NONE;
-    assert_int_equal(gi_frame_enable_indirect(&x->f, &io, 1, &err), PF_OK);
+    tu_fx_begin(x, threads, RS_SIMD_SCALAR, w, h, cam, &io, 1);
 }
 
 static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_camera *cam, const char *method,
@@ -66,14 +56,7 @@ static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_c
     fx_begin_clamp(x, threads, w, h, cam, method, vpls, param, 0.0f);
 }
 
-static void fx_end(fx *x)
-{
-    gi_frame_free(&x->f);
-    rs_context_destroy(x->rs);
-    pf_jobs_destroy(x->jobs);
-    pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(x); }
 
 static void cornell(fx *x)
 {

@@ -43,6 +43,7 @@
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_timer.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -370,33 +371,14 @@ static void test_rsm_flux_spot_and_directional(void **state)
 
 /* ------------------------------------------------------ methods in frames */
 
-typedef struct fx {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
-} fx;
+typedef tu_fx fx;
 
 static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const gi_indirect_options *io)
 {
-    pf_error err;
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, &x->scene.cameras[0], w, h, 64, &err),
-                     PF_OK);
-    if (io) assert_int_equal(gi_frame_enable_indirect(&x->f, io, 1, &err), PF_OK);
+    tu_fx_begin(x, threads, RS_SIMD_SCALAR, w, h, &x->scene.cameras[0], io, 1);
 }
 
-static void fx_end(fx *x)
-{
-    gi_frame_free(&x->f);
-    rs_context_destroy(x->rs);
-    pf_jobs_destroy(x->jobs);
-    pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(x); }
 
 /* 30 frames of a method on the Cornell box: the camera turns a little every
  * frame except 20-24 (static), the light moves on frames 10-14. Returns a

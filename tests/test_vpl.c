@@ -352,6 +352,72 @@ static void test_accumulate_simd_identical(void **state)
     }
 }
 
+/* A method that breaks the frame's contract: NaN, zero and non-unit
+ * normals, NaN and negative intensities, a non-finite position, more VPLs
+ * than the budget. The frame must make those entries inert (gi__vpl_check):
+ * every path (scalar, AVX2, AVX-512 accumulation) renders without reading
+ * out of bounds and gives a finite image. */
+static pf_result bad_create(void **state, const gi_params *p, pf_error *err)
+{
+    return gi_method_ir.create(state, p, err);
+}
+static void bad_destroy(void *state) { gi_method_ir.destroy(state); }
+static pf_result bad_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+{
+    pf_result r = gi_method_ir.update(state, in, out, err);
+    if (r != PF_OK) return r;
+    uint32_t n = out->count;
+    assert_true(n >= 8 && gi_vpl_set_reserve(out, n + 40, err) == PF_OK);
+    for (uint32_t i = 0; i < 40; i++) { /* past the budget: dropped */
+        out->v[n + i] = out->v[i];
+        out->v[n + i].intensity = pf_v3(1e6f, 1e6f, 1e6f);
+    }
+    out->count = n + 40;
+    out->v[0].nrm = pf_v3(NAN, 0, 1);
+    out->v[1].nrm = pf_v3(0, 0, 0);
+    out->v[2].nrm = pf_v3(0, 3, 0);
+    out->v[3].intensity = pf_v3(NAN, 1, 1);
+    out->v[4].intensity = pf_v3(-1, 1, 1);
+    out->v[5].pos = pf_v3(INFINITY, 0, 0);
+    return PF_OK;
+}
+
+static void test_bad_vpls_are_inert(void **state)
+{
+    (void)state;
+    static const gi_vpl_method bad = {"bad", "test", bad_create, bad_update, bad_destroy};
+    const rs_simd simds[3] = {RS_SIMD_SCALAR, RS_SIMD_AVX2, RS_SIMD_AVX512};
+    for (int k = 0; k < 3; k++) {
+        if (k && pf_isa_detect() < (k == 1 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+        fx x;
+        memset(&x, 0, sizeof x);
+        pf_error err;
+        assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+        gi_indirect_options io;
+        memset(&io, 0, sizeof io);
+        io.method = &bad;
+        io.vpls = 64;
+        io.clamp = -1.0f;
+        tu_fx_begin(&x, 2, simds[k], 40, 30, &x.scene.cameras[0], &io, 1);
+        gi_frame_render_raster(&x.f);
+        const gi_vpl_set *vs = &x.f.ind.vpls;
+        assert_int_equal(vs->count, 64);
+        for (uint32_t i = 0; i < vs->count; i++) {
+            const gi_vpl *v = &vs->v[i];
+            assert_true(isfinite(v->pos.x) && isfinite(v->nrm.x) && isfinite(v->intensity.x));
+            assert_true(v->intensity.x >= 0.0f && fabsf(pf_v3_length(v->nrm) - 1.0f) < 1e-3f);
+        }
+        for (uint32_t i = 0; i < 6; i++) assert_true(vs->v[i].intensity.x == 0.0f); /* made inert */
+        double sum = 0.0;
+        for (size_t i = 0; i < (size_t)40 * 30 * 3; i++) {
+            assert_true(isfinite(x.f.final[i]));
+            sum += x.f.final[i];
+        }
+        assert_true(sum > 0.0); /* the valid VPLs still light the box */
+        fx_end(&x);
+    }
+}
+
 /* Golden: 80x60 Cornell box GI frame (64 VPLs, 4x4 tiles, paraboloid maps,
  * scalar raster, Embree pinned to sse2): vpls, maps, split, accumulated,
  * combined, filtered, direct, final. */
@@ -457,7 +523,7 @@ int main(void)
         cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
         cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
-        cmocka_unit_test(test_ir_converges_to_reference),
+        cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_bad_vpls_are_inert),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

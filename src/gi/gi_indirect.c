@@ -139,6 +139,30 @@ uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint
 
 /* The method's update into `out`; a failure renders without VPLs and says
  * so (only out-of-memory can fail once init succeeded). */
+static int gi__finite3(pf_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* The frame's contract on a method's VPL set, checked after every update so
+ * no method can make a later stage read out of bounds: at most the budget
+ * (the stages' buffers are sized for it), finite positions, unit normals and
+ * finite, non-negative intensities. An entry that breaks it (e.g. a slot a
+ * method keeps free, with no surface behind it) is kept in its slot but made
+ * inert: zero intensity, a valid frame for its map. */
+static void gi__vpl_check(gi_indirect *ind, gi_vpl_set *out)
+{
+    if (out->count > ind->opt.vpls) out->count = ind->opt.vpls;
+    for (uint32_t i = 0; i < out->count; i++) {
+        gi_vpl *v = &out->v[i];
+        float len = pf_v3_length(v->nrm);
+        int ok = gi__finite3(v->pos) && gi__finite3(v->nrm) && fabsf(len - 1.0f) < 1e-3f &&
+                 gi__finite3(v->intensity) && v->intensity.x >= 0.0f && v->intensity.y >= 0.0f &&
+                 v->intensity.z >= 0.0f;
+        if (ok) continue;
+        if (!gi__finite3(v->pos)) v->pos = pf_v3(0, 0, 0);
+        v->nrm = pf_v3(0, 0, 1);
+        v->intensity = pf_v3(0, 0, 0);
+    }
+}
+
 static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vpl_set *out)
 {
     pf_error err;
@@ -146,6 +170,7 @@ static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vp
         fprintf(stderr, "softgi: VPL update failed: %s\n", err.message);
         out->count = 0;
     }
+    gi__vpl_check(ind, out);
 }
 
 void gi_stage_vpl_update(gi_frame *f)
@@ -309,19 +334,31 @@ void gi_stage_assign(gi_frame *f)
     uint32_t T = ind->n * ind->m, N = ind->vpls.count;
     gi__lumkey *keys = ind->sort_keys;
     uint32_t *tile_of = ind->tile_of;
-    for (uint32_t i = 0; i < N; i++) keys[i] = (gi__lumkey){gi__lum(ind->vpls.v[i].intensity), i};
+    /* VPLs that emit nothing (a method's free slots) go to no tile: they
+     * would add exactly zero. Their key -1 sorts them after every other, so
+     * the others are dealt exactly as if they were not there. */
+    uint32_t live = 0;
+    for (uint32_t i = 0; i < N; i++) {
+        pf_vec3 c = ind->vpls.v[i].intensity;
+        int emits = c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
+        keys[i] = (gi__lumkey){emits ? gi__lum(c) : -1.0f, i};
+        tile_of[i] = UINT32_MAX;
+        live += (uint32_t)emits;
+    }
     qsort(keys, N, sizeof *keys, gi__by_lum);
     /* deal in boustrophedon order: 0..T-1, T-1..0, ... so each tile's share
      * of the bright VPLs is as even as the counts allow */
-    for (uint32_t r = 0; r < N; r++) {
+    for (uint32_t r = 0; r < live; r++) {
         uint32_t round = r / T, pos = r % T;
         tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
     }
     memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
-    for (uint32_t i = 0; i < N; i++) ind->assign_start[tile_of[i] + 1]++;
+    for (uint32_t i = 0; i < N; i++)
+        if (tile_of[i] != UINT32_MAX) ind->assign_start[tile_of[i] + 1]++;
     for (uint32_t t = 0; t < T; t++) ind->assign_start[t + 1] += ind->assign_start[t];
     memcpy(ind->cursor, ind->assign_start, sizeof(uint32_t) * T);
-    for (uint32_t i = 0; i < N; i++) ind->assign[ind->cursor[tile_of[i]]++] = i; /* VPL order within a tile */
+    for (uint32_t i = 0; i < N; i++) /* VPL order within a tile */
+        if (tile_of[i] != UINT32_MAX) ind->assign[ind->cursor[tile_of[i]]++] = i;
 }
 
 /* ---------------------------------------------------------- 7. accumulate */

@@ -150,6 +150,8 @@ static void gi__direct_sm_row8(void *ctx, uint32_t y, uint32_t worker)
     const rs_simd simd = rs_context_simd(f->raster);
     float *out = f->direct + (size_t)y * f->width * 3;
     memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    uint32_t ng_prim = RS_GBUFFER_EMPTY;
+    pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
     for (uint32_t x0 = 0; x0 < f->width; x0 += 8) {
         float px[8], py[8], pz[8], ngx[8], ngy[8], ngz[8], vis[8], e[8][3];
         pf_vec3 nrm[8];
@@ -164,7 +166,10 @@ static void gi__direct_sm_row8(void *ctx, uint32_t y, uint32_t worker)
             py[i] = g->pos_y[p];
             pz[i] = g->pos_z[p];
             nrm[i] = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
-            pf_vec3 ng = pf_scene_face_normal(s, g->prim[p]);
+            if (g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
+                ng_prim = g->prim[p];
+                ng = pf_scene_face_normal(s, ng_prim);
+            }
             ngx[i] = ng.x;
             ngy[i] = ng.y;
             ngz[i] = ng.z;

@@ -584,7 +584,13 @@ __attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, 
     const __m256 nx = _mm256_loadu_ps(g->nrm_x + i0), ny = _mm256_loadu_ps(g->nrm_y + i0),
                  nz = _mm256_loadu_ps(g->nrm_z + i0);
     const __m256i empty = _mm256_set1_epi32((int)RS_GBUFFER_EMPTY);
-    const __m256i idx3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    /* lane k of colour c is float 3k + c of the 24 floats e0|e1|e2 */
+    const __m256i pr0 = _mm256_setr_epi32(0, 3, 6, 0, 0, 0, 0, 0), pr1 = _mm256_setr_epi32(0, 0, 0, 1, 4, 7, 0, 0),
+                  pr2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 2, 5);
+    const __m256i pg0 = _mm256_setr_epi32(1, 4, 7, 0, 0, 0, 0, 0), pg1 = _mm256_setr_epi32(0, 0, 0, 2, 5, 0, 0, 0),
+                  pg2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 3, 6);
+    const __m256i pb0 = _mm256_setr_epi32(2, 5, 0, 0, 0, 0, 0, 0), pb1 = _mm256_setr_epi32(0, 0, 0, 3, 6, 0, 0, 0),
+                  pb2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 4, 7);
     __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, ws = ar, one = _mm256_set1_ps(1.0f);
     for (int dy = 0; dy < m; dy++) {
         int ty = y + dy - m / 2;
@@ -601,10 +607,22 @@ __attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, 
                                                     _mm256_mul_ps(ny, _mm256_loadu_ps(g->nrm_y + j))),
                                       _mm256_mul_ps(nz, _mm256_loadu_ps(g->nrm_z + j)));
             __m256 take = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(d2, a2, _CMP_LT_OQ), _mm256_cmp_ps(nd, beta, _CMP_GT_OQ)));
+            /* the 8 RGB triples de-interleaved with permutes and blends
+             * (data movement only: the values the gathers read) */
             const float *e = ind->combined + 3 * j;
-            ar = _mm256_add_ps(ar, _mm256_and_ps(take, _mm256_i32gather_ps(e, idx3, 4)));
-            ag = _mm256_add_ps(ag, _mm256_and_ps(take, _mm256_i32gather_ps(e + 1, idx3, 4)));
-            ab = _mm256_add_ps(ab, _mm256_and_ps(take, _mm256_i32gather_ps(e + 2, idx3, 4)));
+            __m256 e0 = _mm256_loadu_ps(e), e1 = _mm256_loadu_ps(e + 8), e2 = _mm256_loadu_ps(e + 16);
+            __m256 er = _mm256_blend_ps(
+                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pr0), _mm256_permutevar8x32_ps(e1, pr1), 0x38),
+                _mm256_permutevar8x32_ps(e2, pr2), 0xc0);
+            __m256 eg = _mm256_blend_ps(
+                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pg0), _mm256_permutevar8x32_ps(e1, pg1), 0x18),
+                _mm256_permutevar8x32_ps(e2, pg2), 0xe0);
+            __m256 eb = _mm256_blend_ps(
+                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pb0), _mm256_permutevar8x32_ps(e1, pb1), 0x1c),
+                _mm256_permutevar8x32_ps(e2, pb2), 0xe0);
+            ar = _mm256_add_ps(ar, _mm256_and_ps(take, er));
+            ag = _mm256_add_ps(ag, _mm256_and_ps(take, eg));
+            ab = _mm256_add_ps(ab, _mm256_and_ps(take, eb));
             ws = _mm256_add_ps(ws, _mm256_and_ps(take, one));
         }
     }

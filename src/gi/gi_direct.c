@@ -204,24 +204,14 @@ __attribute__((target("avx2"))) static void gi__direct_sm_row8(void *ctx, uint32
     uint32_t ng_prim = RS_GBUFFER_EMPTY;
     pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
     for (uint32_t x0 = 0; x0 < f->width; x0 += 8) {
-        /* the 8 pixels' G-buffer values (a full group straight from the
-         * planes, the row's last partial one copied with zeros after it) */
-        float tail[6][8], ngv[3][8], ev[3][8];
-        const float *in[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
-        const size_t p0 = (size_t)y * f->width + x0;
-        const int full = x0 + 8 <= f->width;
+        /* the 8 pixels' G-buffer values (zeros past the row's end) */
+        float in[6][8], ngv[3][8], ev[3][8];
         unsigned live = 0;
-        for (int c = 0; c < 6; c++) {
-            if (full) {
-                in[c] += p0;
-                continue;
-            }
-            for (uint32_t i = 0; i < 8; i++) tail[c][i] = x0 + i < f->width ? in[c][p0 + i] : 0.0f;
-            in[c] = tail[c];
-        }
+        const float *planes[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
         for (uint32_t i = 0; i < 8; i++) {
-            size_t p = p0 + i;
+            size_t p = (size_t)y * f->width + x0 + i;
             int on = x0 + i < f->width && g->prim[p] != RS_GBUFFER_EMPTY;
+            for (int c = 0; c < 6; c++) in[c][i] = on ? planes[c][p] : 0.0f;
             if (on && g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
                 ng_prim = g->prim[p];
                 ng = pf_scene_face_normal(s, ng_prim);
@@ -251,30 +241,6 @@ __attribute__((target("avx2"))) static void gi__direct_sm_row8(void *ctx, uint32
                 _mm256_cmpeq_epi32(_mm256_and_si256(bits, _mm256_set1_epi32((int)reached)), bits));
             take = _mm256_and_ps(take, _mm256_cmp_ps(v, _mm256_setzero_ps(), _CMP_GT_OQ));
             for (int c = 0; c < 3; c++) e[c] = _mm256_blendv_ps(e[c], _mm256_add_ps(e[c], _mm256_mul_ps(irr[c], v)), take);
-        }
-        if (full && !f->area_maps.rendered) {
-            /* out = e * albedo / pi per colour, interleaved to RGB with
-             * permutes and blends; pixels without a surface get 0 */
-            const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-            const __m256 on = _mm256_castsi256_ps(
-                _mm256_cmpeq_epi32(_mm256_and_si256(bits, _mm256_set1_epi32((int)live)), bits));
-            const __m256 inv_pi = _mm256_set1_ps(PF_INV_PI);
-            __m256 r = _mm256_and_ps(on, _mm256_mul_ps(_mm256_mul_ps(e[0], _mm256_loadu_ps(g->alb_r + p0)), inv_pi));
-            __m256 gg = _mm256_and_ps(on, _mm256_mul_ps(_mm256_mul_ps(e[1], _mm256_loadu_ps(g->alb_g + p0)), inv_pi));
-            __m256 b = _mm256_and_ps(on, _mm256_mul_ps(_mm256_mul_ps(e[2], _mm256_loadu_ps(g->alb_b + p0)), inv_pi));
-#define GI__P(v, a0, a1, a2, a3, a4, a5, a6, a7) _mm256_permutevar8x32_ps(v, _mm256_setr_epi32(a0, a1, a2, a3, a4, a5, a6, a7))
-            __m256 o0 = _mm256_blend_ps(_mm256_blend_ps(GI__P(r, 0, 0, 0, 1, 0, 0, 2, 0), GI__P(gg, 0, 0, 0, 0, 1, 0, 0, 2), 0x92),
-                                        GI__P(b, 0, 0, 0, 0, 0, 1, 0, 0), 0x24);
-            __m256 o1 = _mm256_blend_ps(_mm256_blend_ps(GI__P(b, 2, 0, 0, 3, 0, 0, 4, 0), GI__P(r, 0, 3, 0, 0, 4, 0, 0, 5), 0x92),
-                                        GI__P(gg, 0, 0, 3, 0, 0, 4, 0, 0), 0x24);
-            __m256 o2 = _mm256_blend_ps(_mm256_blend_ps(GI__P(gg, 5, 0, 0, 6, 0, 0, 7, 0), GI__P(b, 0, 5, 0, 0, 6, 0, 0, 7), 0x92),
-                                        GI__P(r, 0, 0, 6, 0, 0, 7, 0, 0), 0x24);
-#undef GI__P
-            float *o = out + 3 * (size_t)x0;
-            _mm256_storeu_ps(o, o0);
-            _mm256_storeu_ps(o + 8, o1);
-            _mm256_storeu_ps(o + 16, o2);
-            continue;
         }
         for (int c = 0; c < 3; c++) _mm256_storeu_ps(ev[c], e[c]);
         for (uint32_t i = 0; i < 8; i++) {

@@ -402,11 +402,12 @@ __attribute__((target("avx2"))) static inline __m256 rs__dot8(__m256 ax, __m256 
 }
 
 /* Element k of a per-face array (stride floats per face) for each lane's
- * face: a gather on cube maps, a broadcast of face 0 otherwise. */
-__attribute__((target("avx2"))) static inline __m256 rs__face_val8(const float *base, int cube, __m256i face_off,
+ * face: gathered (base: face 0) or, when every lane has the same face,
+ * broadcast (base: that face). */
+__attribute__((target("avx2"))) static inline __m256 rs__face_val8(const float *base, int gather, __m256i face_off,
                                                                   int k)
 {
-    if (!cube) return _mm256_set1_ps(base[k]);
+    if (!gather) return _mm256_set1_ps(base[k]);
     return _mm256_i32gather_ps(base, _mm256_add_epi32(face_off, _mm256_set1_epi32(k)), 4);
 }
 
@@ -441,11 +442,17 @@ __attribute__((target("avx2"))) static void rs__visibility8_avx2(const rs_shadow
         __m256 fyz = _mm256_blendv_ps(_mm256_castsi256_ps(f_z), _mm256_castsi256_ps(f_y), is_y);
         face = _mm256_castps_si256(_mm256_blendv_ps(fyz, _mm256_castsi256_ps(f_x), is_x));
     }
+    /* the face's constants: broadcast when the 8 points share a face (the
+     * usual case), gathered per lane otherwise */
+    const int f0 = _mm256_cvtsi256_si32(face);
+    const int one_face = _mm256_movemask_epi8(_mm256_cmpeq_epi32(face, _mm256_set1_epi32(f0))) == -1;
+    const int gather = cube && !one_face;
+    const int fb = gather ? 0 : f0;
     const __m256i off3 = _mm256_mullo_epi32(face, _mm256_set1_epi32(3));
     const __m256i off16 = _mm256_slli_epi32(face, 4);
-    const float *fwd = &m->forward[0].x, *rgt = &m->right[0].x, *upv = &m->up[0].x, *vp = m->view_proj[0].m;
-    __m256 f_x = rs__face_val8(fwd, cube, off3, 0), f_y = rs__face_val8(fwd, cube, off3, 1);
-    __m256 f_z = rs__face_val8(fwd, cube, off3, 2);
+    const float *fwd = &m->forward[fb].x, *rgt = &m->right[fb].x, *upv = &m->up[fb].x, *vp = m->view_proj[fb].m;
+    __m256 f_x = rs__face_val8(fwd, gather, off3, 0), f_y = rs__face_val8(fwd, gather, off3, 1);
+    __m256 f_z = rs__face_val8(fwd, gather, off3, 2);
     __m256 depth = rs__dot8(v_x, v_y, v_z, f_x, f_y, f_z);
 
     /* l (unit, towards the light) and texel (world size of a texel at p) */
@@ -492,17 +499,17 @@ __attribute__((target("avx2"))) static void rs__visibility8_avx2(const rs_shadow
     /* project with the face's matrix: c[r] = m[r] x + m[4+r] y + m[8+r] z + m[12+r] */
     __m256 c[4];
     for (int r = 0; r < 4; r++) {
-        __m256 acc = _mm256_mul_ps(rs__face_val8(vp, cube, off16, r), p_x);
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, cube, off16, 4 + r), p_y));
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, cube, off16, 8 + r), p_z));
-        c[r] = _mm256_add_ps(acc, rs__face_val8(vp, cube, off16, 12 + r));
+        __m256 acc = _mm256_mul_ps(rs__face_val8(vp, gather, off16, r), p_x);
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, gather, off16, 4 + r), p_y));
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, gather, off16, 8 + r), p_z));
+        c[r] = _mm256_add_ps(acc, rs__face_val8(vp, gather, off16, 12 + r));
     }
     const float s_s = (float)m->size;
     const __m256 s = _mm256_set1_ps(s_s);
-    __m256 nr = rs__dot8(n_x, n_y, n_z, rs__face_val8(rgt, cube, off3, 0), rs__face_val8(rgt, cube, off3, 1),
-                         rs__face_val8(rgt, cube, off3, 2));
-    __m256 nu = rs__dot8(n_x, n_y, n_z, rs__face_val8(upv, cube, off3, 0), rs__face_val8(upv, cube, off3, 1),
-                         rs__face_val8(upv, cube, off3, 2));
+    __m256 nr = rs__dot8(n_x, n_y, n_z, rs__face_val8(rgt, gather, off3, 0), rs__face_val8(rgt, gather, off3, 1),
+                         rs__face_val8(rgt, gather, off3, 2));
+    __m256 nu = rs__dot8(n_x, n_y, n_z, rs__face_val8(upv, gather, off3, 0), rs__face_val8(upv, gather, off3, 1),
+                         rs__face_val8(upv, gather, off3, 2));
     __m256 cap = _mm256_blendv_ps(one, _mm256_div_ps(tmax_cos, sin_t),
                                   _mm256_and_ps(capped, _mm256_cmp_ps(sin_t, zero, _CMP_GT_OQ)));
     __m256 x, y, zs_p, zs_bias, k, lit_early = zero, unlit_early = zero;

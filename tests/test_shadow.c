@@ -27,8 +27,9 @@
  * - Determinism: identical map bytes with 1 and 2 threads and on the scalar,
  *   AVX2 and AVX-512 paths (paths the CPU lacks are skipped).
  * - The 8-wide lookup (rs_shadow_visibility8) gives the scalar lookup's
- *   bits on Cornell and Sibenik for spot, cube and ortho maps with PCF16
- *   and PCF1, and so does the direct-light stage's 8-wide row.
+ *   bits on Cornell (maps of 700) and Sibenik (1024) for spot, cube and
+ *   ortho maps with PCF16 and PCF1, and so does the direct-light stage's
+ *   8-wide row.
  * - PCF gives fractional values across a shadow edge and exactly 0 or 1
  *   farther than 3 texels from it.
  * - Bias: every floor point a spot, a point light or a low sun reaches
@@ -561,7 +562,7 @@ static void test_deterministic(void **state)
  * every early return), for the spot, cube and ortho maps with PCF16 and
  * PCF1, all lanes on and random lane masks. Then the direct-light stage of
  * a rasterized frame: the 8-wide rows give the scalar rows' bytes. */
-static void simd_check_scene(const char *path, const pf_light lights[3], const view *v)
+static void simd_check_scene(const char *path, const pf_light lights[3], const view *v, uint32_t size)
 {
     if (!isa_has(PF_ISA_AVX2)) {
         print_message("SKIP: no AVX2\n");
@@ -570,7 +571,7 @@ static void simd_check_scene(const char *path, const pf_light lights[3], const v
     world w;
     if (!load(&w, path)) return;
     world_lights(&w, lights, 3);
-    world_build(&w, 0, 1);
+    world_build(&w, size, 1); /* 0: the default 1024 */
     pf_camera cam;
     pf_error err;
     if (v)
@@ -669,14 +670,14 @@ static void test_simd_matches_scalar(void **state)
         make_point(pf_v3(0.278f, 0.5388f, 0.2795f)),
         make_directional(pf_v3(-0.3f, -0.6f, 1.0f)),
     };
-    simd_check_scene(CORNELL_PATH, cornell, NULL);
+    simd_check_scene(CORNELL_PATH, cornell, NULL, 700); /* a size that is no power of two */
     const pf_light sibenik[3] = {
         make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
         make_point(pf_v3(-2.0f, -6.0f, 0.5f)),
         make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
     };
     const view nave = {{-17.0f, -12.0f, 0.0f}, {10.0f, -10.0f, 0.0f}};
-    simd_check_scene(SIBENIK_PATH, sibenik, &nave);
+    simd_check_scene(SIBENIK_PATH, sibenik, &nave, 0);
 }
 
 static void test_map_matches_rays(void **state)

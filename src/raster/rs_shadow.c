@@ -473,7 +473,11 @@ __attribute__((target("avx2"))) static void rs__visibility8_avx2(const rs_shadow
         l_x = _mm256_and_ps(ok, _mm256_mul_ps(d_x, inv));
         l_y = _mm256_and_ps(ok, _mm256_mul_ps(d_y, inv));
         l_z = _mm256_and_ps(ok, _mm256_mul_ps(d_z, inv));
-        texel = _mm256_div_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f * m->tan_half), depth), _mm256_set1_ps((float)m->size));
+        /* a power-of-two size divides exactly as a multiplication by its
+         * reciprocal (also exact), which is cheaper */
+        __m256 t2d = _mm256_mul_ps(_mm256_set1_ps(2.0f * m->tan_half), depth);
+        texel = (m->size & (m->size - 1)) == 0 ? _mm256_mul_ps(t2d, _mm256_set1_ps(1.0f / (float)m->size))
+                                               : _mm256_div_ps(t2d, _mm256_set1_ps((float)m->size));
     }
 
     /* n: unit geometric normal (l where it has none); the slope and bias */
@@ -577,7 +581,9 @@ __attribute__((target("avx2"))) static void rs__visibility8_avx2(const rs_shadow
             lit = _mm256_sub_epi32(lit, _mm256_castps_si256(le));
         }
     }
-    __m256 vis = _mm256_div_ps(_mm256_cvtepi32_ps(lit), _mm256_set1_ps((float)(n * n)));
+    /* lit / (n n): n n is 16 or 1, so the multiplication by 1/16 or 1 is the
+     * same exact operation */
+    __m256 vis = _mm256_mul_ps(_mm256_cvtepi32_ps(lit), _mm256_set1_ps(pcf ? 0.0625f : 1.0f));
 
     /* the scalar code's early returns, latest first */
     vis = _mm256_blendv_ps(vis, one, lit_early);

@@ -26,6 +26,10 @@
  *   hit, at the same depth (the lookup's axes match the matrices).
  * - Determinism: identical map bytes with 1 and 2 threads and on the scalar,
  *   AVX2 and AVX-512 paths (paths the CPU lacks are skipped).
+ * - The 8-wide lookup (rs_shadow_visibility8) gives the scalar lookup's
+ *   bits on Cornell (maps of 700) and Sibenik (1024) for spot, cube and
+ *   ortho maps with PCF16 and PCF1, and so does the direct-light stage's
+ *   8-wide row.
  * - PCF gives fractional values across a shadow edge and exactly 0 or 1
  *   farther than 3 texels from it.
  * - Bias: every floor point a spot, a point light or a low sun reaches
@@ -549,6 +553,133 @@ static void test_deterministic(void **state)
  * a silhouette may go either way (the rasterizer snaps vertices to 1/256
  * pixel, Embree does not), so a few mismatches are allowed: 1 in 2000
  * (measured: at most 3 in 65536). */
+/* ------------------------------------------------- SIMD lookup == scalar */
+
+/* rs_shadow_visibility8 (AVX2, also taken on AVX-512) against the scalar
+ * rs_shadow_visibility, bit for bit, on every lane: the points a camera
+ * sees (sample_camera) and points spread over the scene's bounds with
+ * random normals (behind lights, outside frusta and boxes, zero normals:
+ * every early return), for the spot, cube and ortho maps with PCF16 and
+ * PCF1, all lanes on and random lane masks. Then the direct-light stage of
+ * a rasterized frame: the 8-wide rows give the scalar rows' bytes. */
+static void simd_check_scene(const char *path, const pf_light lights[3], const view *v, uint32_t size)
+{
+    if (!isa_has(PF_ISA_AVX2)) {
+        print_message("SKIP: no AVX2\n");
+        return;
+    }
+    world w;
+    if (!load(&w, path)) return;
+    world_lights(&w, lights, 3);
+    world_build(&w, size, 1); /* 0: the default 1024 */
+    pf_camera cam;
+    pf_error err;
+    if (v)
+        assert_int_equal(pf_camera_look_at(&cam, v->eye, v->target, pf_radians(60.0f), &err), PF_OK);
+    else
+        cam = w.scene.cameras[0];
+    uint32_t nc;
+    sample *smp = sample_camera(&w, &cam, 200, 200, &nc);
+    const uint32_t nr = 8192, n = (nc + nr + 7) / 8 * 8;
+    float *pos[3], *ng[3];
+    for (int a = 0; a < 3; a++) {
+        pos[a] = calloc(n, sizeof(float));
+        ng[a] = calloc(n, sizeof(float));
+        assert_true(pos[a] && ng[a]);
+    }
+    for (uint32_t i = 0; i < nc; i++) {
+        pos[0][i] = smp[i].p.x, pos[1][i] = smp[i].p.y, pos[2][i] = smp[i].p.z;
+        ng[0][i] = smp[i].ng.x, ng[1][i] = smp[i].ng.y, ng[2][i] = smp[i].ng.z;
+    }
+    uint64_t rng = 12345;
+    pf_vec3 lo = w.scene.bounds_min, hi = w.scene.bounds_max;
+    for (uint32_t i = nc; i < n; i++) {
+        pos[0][i] = lo.x + (hi.x - lo.x) * (float)rng_unit(&rng);
+        pos[1][i] = lo.y + (hi.y - lo.y) * (float)rng_unit(&rng);
+        pos[2][i] = lo.z + (hi.z - lo.z) * (float)rng_unit(&rng);
+        int zero_normal = (i % 61) == 0;
+        for (int a = 0; a < 3; a++) ng[a][i] = zero_normal ? 0.0f : (float)(2.0 * rng_unit(&rng) - 1.0);
+    }
+    for (uint32_t l = 0; l < 3; l++) {
+        rs_shadow_map *m = &w.set.maps[l];
+        for (int filter = 0; filter < 2; filter++) {
+            m->desc.filter = filter ? RS_SHADOW_PCF1 : RS_SHADOW_PCF16;
+            uint32_t mismatches = 0, fractional = 0, zeros = 0, ones = 0;
+            for (uint32_t i = 0; i < n; i += 8) {
+                unsigned mask = (i / 8) % 3 == 2 ? (unsigned)(rng_next(&rng) & 0xffu) : 0xffu;
+                float simd[8];
+                rs_shadow_visibility8(m, RS_SIMD_AVX2, pos[0] + i, pos[1] + i, pos[2] + i, ng[0] + i, ng[1] + i,
+                                      ng[2] + i, mask, simd);
+                for (uint32_t k = 0; k < 8; k++) {
+                    float ref = (mask >> k) & 1u ? rs_shadow_visibility(m, pf_v3(pos[0][i + k], pos[1][i + k],
+                                                                                 pos[2][i + k]),
+                                                                        pf_v3(ng[0][i + k], ng[1][i + k], ng[2][i + k]))
+                                                 : 0.0f;
+                    if (memcmp(&ref, &simd[k], sizeof ref) != 0) {
+                        if (mismatches < 5)
+                            print_error("map %u filter %d point %u: scalar %a simd %a\n", l, filter, i + k,
+                                        (double)ref, (double)simd[k]);
+                        mismatches++;
+                    }
+                    fractional += ref > 0.0f && ref < 1.0f;
+                    zeros += ref == 0.0f;
+                    ones += ref == 1.0f;
+                }
+            }
+            print_message("%s map %u (%s): %u points, %u lit, %u dark, %u fractional, %u mismatches\n",
+                          strrchr(path, '/') + 1, l, filter ? "PCF1" : "PCF16", n, ones, zeros, fractional,
+                          mismatches);
+            assert_int_equal(mismatches, 0);
+            /* the comparison covered light, shadow and (PCF16) penumbrae */
+            assert_true(ones > n / 50 && zeros > n / 50);
+            if (!filter) assert_true(fractional > 0);
+        }
+        m->desc.filter = RS_SHADOW_PCF16;
+    }
+
+    /* the direct-light stage, scalar rows against 8-wide rows (width 197
+     * leaves a partial group of 5 pixels at the end of every row) */
+    gi_frame f;
+    assert_int_equal(gi_frame_init(&f, &w.scene, w.rt, w.ctx, w.jobs, &cam, 197, 120, 0, &err), PF_OK);
+    rs_simd best = rs_context_simd(w.ctx);
+    gi_frame_render_raster(&f);
+    size_t bytes = (size_t)197 * 120 * 3 * sizeof(float);
+    float *simd_rows = malloc(bytes);
+    assert_non_null(simd_rows);
+    memcpy(simd_rows, f.direct, bytes);
+    rs_context_set_simd(w.ctx, RS_SIMD_SCALAR);
+    memset(f.direct, 0xff, bytes);
+    gi_stage_direct_shadowmap(&f);
+    assert_memory_equal(simd_rows, f.direct, bytes);
+    uint32_t nonzero = 0;
+    for (size_t i = 0; i < (size_t)197 * 120 * 3; i++) nonzero += f.direct[i] > 0.0f;
+    assert_true(nonzero > 197 * 120 / 10);
+    rs_context_set_simd(w.ctx, best);
+    free(simd_rows);
+    gi_frame_free(&f);
+    for (int a = 0; a < 3; a++) free(pos[a]), free(ng[a]);
+    free(smp);
+    world_free(&w);
+}
+
+static void test_simd_matches_scalar(void **state)
+{
+    (void)state;
+    const pf_light cornell[3] = {
+        make_spot(pf_v3(0.45f, 0.5f, 0.1f), pf_v3(0.25f, 0.0f, 0.35f), 30.0f, 40.0f),
+        make_point(pf_v3(0.278f, 0.5388f, 0.2795f)),
+        make_directional(pf_v3(-0.3f, -0.6f, 1.0f)),
+    };
+    simd_check_scene(CORNELL_PATH, cornell, NULL, 700); /* a size that is no power of two */
+    const pf_light sibenik[3] = {
+        make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
+        make_point(pf_v3(-2.0f, -6.0f, 0.5f)),
+        make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
+    };
+    const view nave = {{-17.0f, -12.0f, 0.0f}, {10.0f, -10.0f, 0.0f}};
+    simd_check_scene(SIBENIK_PATH, sibenik, &nave, 0);
+}
+
 static void test_map_matches_rays(void **state)
 {
     (void)state;
@@ -822,7 +953,7 @@ int main(void)
         cmocka_unit_test(test_cube_faces),        cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_outside),           cmocka_unit_test(test_no_acne),
         cmocka_unit_test(test_pcf_edge),          cmocka_unit_test(test_map_matches_rays),
-        cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_deterministic),     cmocka_unit_test(test_simd_matches_scalar),
         cmocka_unit_test(test_agreement_cornell), cmocka_unit_test(test_agreement_maze),
         cmocka_unit_test(test_agreement_sibenik), cmocka_unit_test(test_timing),
     };

@@ -134,4 +134,144 @@ static void gi__direct_sm_row(void *ctx, uint32_t y, uint32_t worker)
     }
 }
 
-void gi_stage_direct_shadowmap(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__direct_sm_row, f, f->height, 1); }
+/* gi__direct_sm_row, 8 pixels at a time with AVX2: per light the unshadowed
+ * irradiance (gi__light_irradiance8, gi_light_irradiance lane-wise), then
+ * the shadow lookups of the pixels it reaches in one rs_shadow_visibility8
+ * call (bit-identical to the scalar lookup); pixels the light does not
+ * reach or that are fully shadowed are skipped as in the scalar row, and
+ * every pixel sums its lights in the same order with the same operations,
+ * so the row's bits are the scalar row's (tests/test_shadow.c
+ * test_simd_matches_scalar). */
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define GI__DIRECT_X86 1
+
+/* gi_light_irradiance for 8 points (unit normals n): the irradiance's three
+ * components and the mask of lanes it reaches, with the scalar function's
+ * operations in its order (the spot factor's cosines are per light, the
+ * same cosf calls as gi_light_spot_factor). */
+__attribute__((target("avx2"))) static __m256 gi__light_irradiance8(const pf_light *L, __m256 px, __m256 py,
+                                                                   __m256 pz, __m256 nx, __m256 ny, __m256 nz,
+                                                                   __m256 irr[3])
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 wx, wy, wz, e0 = _mm256_set1_ps(L->intensity), ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    if (L->type == PF_LIGHT_DIRECTIONAL) {
+        pf_vec3 wi = pf_v3_scale(L->direction, -1.0f);
+        wx = _mm256_set1_ps(wi.x), wy = _mm256_set1_ps(wi.y), wz = _mm256_set1_ps(wi.z);
+    } else {
+        __m256 dx = _mm256_sub_ps(_mm256_set1_ps(L->position.x), px);
+        __m256 dy = _mm256_sub_ps(_mm256_set1_ps(L->position.y), py);
+        __m256 dz = _mm256_sub_ps(_mm256_set1_ps(L->position.z), pz);
+        __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+        ok = _mm256_cmp_ps(r2, zero, _CMP_GT_OQ);
+        __m256 inv = _mm256_div_ps(one, _mm256_sqrt_ps(r2));
+        wx = _mm256_mul_ps(dx, inv), wy = _mm256_mul_ps(dy, inv), wz = _mm256_mul_ps(dz, inv);
+        e0 = _mm256_div_ps(e0, r2);
+        if (L->type == PF_LIGHT_SPOT) {
+            /* gi_light_spot_factor(L, -dot(wi, direction)) */
+            float cos_outer = cosf(L->outer_cone), cos_inner = cosf(L->inner_cone);
+            float scale = 1.0f / fmaxf(0.001f, cos_inner - cos_outer);
+            __m256 ca = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(wx, _mm256_set1_ps(L->direction.x)),
+                                                    _mm256_mul_ps(wy, _mm256_set1_ps(L->direction.y))),
+                                      _mm256_mul_ps(wz, _mm256_set1_ps(L->direction.z)));
+            ca = _mm256_xor_ps(ca, _mm256_set1_ps(-0.0f));
+            __m256 t = _mm256_mul_ps(_mm256_sub_ps(ca, _mm256_set1_ps(cos_outer)), _mm256_set1_ps(scale));
+            /* pf_clampf(t, 0, 1): t < 0 ? 0 : (t > 1 ? 1 : t) */
+            t = _mm256_blendv_ps(_mm256_blendv_ps(t, one, _mm256_cmp_ps(t, one, _CMP_GT_OQ)), zero,
+                                 _mm256_cmp_ps(t, zero, _CMP_LT_OQ));
+            e0 = _mm256_mul_ps(e0, _mm256_mul_ps(t, t));
+        }
+    }
+    __m256 cos_t = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, wx), _mm256_mul_ps(ny, wy)), _mm256_mul_ps(nz, wz));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(cos_t, zero, _CMP_GT_OQ), _mm256_cmp_ps(e0, zero, _CMP_GT_OQ)));
+    __m256 k = _mm256_mul_ps(e0, cos_t);
+    irr[0] = _mm256_mul_ps(_mm256_set1_ps(L->color.x), k);
+    irr[1] = _mm256_mul_ps(_mm256_set1_ps(L->color.y), k);
+    irr[2] = _mm256_mul_ps(_mm256_set1_ps(L->color.z), k);
+    return ok;
+}
+
+__attribute__((target("avx2"))) static void gi__direct_sm_row8(void *ctx, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ctx;
+    const rs_gbuffer *g = &f->gbuf;
+    const pf_scene *s = f->scene;
+    const rs_simd simd = rs_context_simd(f->raster);
+    float *out = f->direct + (size_t)y * f->width * 3;
+    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    uint32_t ng_prim = RS_GBUFFER_EMPTY;
+    pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
+    for (uint32_t x0 = 0; x0 < f->width; x0 += 8) {
+        /* the 8 pixels' G-buffer values (zeros past the row's end) */
+        float in[6][8], ngv[3][8], ev[3][8];
+        unsigned live = 0;
+        const float *planes[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
+        for (uint32_t i = 0; i < 8; i++) {
+            size_t p = (size_t)y * f->width + x0 + i;
+            int on = x0 + i < f->width && g->prim[p] != RS_GBUFFER_EMPTY;
+            for (int c = 0; c < 6; c++) in[c][i] = on ? planes[c][p] : 0.0f;
+            if (on && g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
+                ng_prim = g->prim[p];
+                ng = pf_scene_face_normal(s, ng_prim);
+            }
+            ngv[0][i] = on ? ng.x : 0.0f;
+            ngv[1][i] = on ? ng.y : 0.0f;
+            ngv[2][i] = on ? ng.z : 0.0f;
+            live |= (unsigned)on << i;
+        }
+        if (!live) continue;
+        const __m256 px = _mm256_loadu_ps(in[0]), py = _mm256_loadu_ps(in[1]), pz = _mm256_loadu_ps(in[2]);
+        const __m256 nx = _mm256_loadu_ps(in[3]), ny = _mm256_loadu_ps(in[4]), nz = _mm256_loadu_ps(in[5]);
+        __m256 e[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()};
+        for (uint32_t l = 0; l < s->light_count && l < f->shadows.count; l++) {
+            __m256 irr[3];
+            unsigned reached =
+                (unsigned)_mm256_movemask_ps(gi__light_irradiance8(&s->lights[l], px, py, pz, nx, ny, nz, irr)) & live;
+            if (!reached) continue;
+            float vis[8];
+            rs_shadow_visibility8(&f->shadows.maps[l], simd, in[0], in[1], in[2], ngv[0], ngv[1], ngv[2], reached,
+                                  vis);
+            /* e += irradiance * vis where reached and vis > 0 (skipped
+             * lanes keep e untouched, as the scalar `continue` does) */
+            __m256 v = _mm256_loadu_ps(vis);
+            const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            __m256 take = _mm256_castsi256_ps(
+                _mm256_cmpeq_epi32(_mm256_and_si256(bits, _mm256_set1_epi32((int)reached)), bits));
+            take = _mm256_and_ps(take, _mm256_cmp_ps(v, _mm256_setzero_ps(), _CMP_GT_OQ));
+            for (int c = 0; c < 3; c++) e[c] = _mm256_blendv_ps(e[c], _mm256_add_ps(e[c], _mm256_mul_ps(irr[c], v)), take);
+        }
+        for (int c = 0; c < 3; c++) _mm256_storeu_ps(ev[c], e[c]);
+        for (uint32_t i = 0; i < 8; i++) {
+            if (!((live >> i) & 1u)) continue;
+            size_t p = (size_t)y * f->width + x0 + i;
+            float ex = ev[0][i], ey = ev[1][i], ez = ev[2][i];
+            if (f->area_maps.rendered) {
+                pf_vec3 ea = gi__area_irradiance_maps(&f->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
+                                                      pf_v3(in[3][i], in[4][i], in[5][i]));
+                ex += ea.x;
+                ey += ea.y;
+                ez += ea.z;
+            }
+            float *o = out + 3 * (size_t)(x0 + i);
+            o[0] = ex * g->alb_r[p] * PF_INV_PI;
+            o[1] = ey * g->alb_g[p] * PF_INV_PI;
+            o[2] = ez * g->alb_b[p] * PF_INV_PI;
+        }
+    }
+}
+#endif
+
+/* The scalar row is the reference; with a SIMD raster path the 8-wide rows
+ * give the same bits. */
+void gi_stage_direct_shadowmap(gi_frame *f)
+{
+#ifdef GI__DIRECT_X86
+    if (f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
+        pf_jobs_parallel_for(f->jobs, gi__direct_sm_row8, f, f->height, 1);
+        return;
+    }
+#endif
+    pf_jobs_parallel_for(f->jobs, gi__direct_sm_row, f, f->height, 1);
+}

@@ -195,7 +195,11 @@ void gi_stage_gbuffer_raster(gi_frame *f)
     rs_render(f->raster, &pass, &t, NULL);
 }
 
-void gi_stage_gbuffer_resolve(gi_frame *f) { rs_gbuffer_resolve(&f->gbuf, f->scene, &f->camera, f->jobs); }
+void gi_stage_gbuffer_resolve(gi_frame *f)
+{
+    int simd = f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR;
+    rs_gbuffer_resolve_simd(&f->gbuf, f->scene, &f->camera, f->jobs, simd);
+}
 
 pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err)
 {

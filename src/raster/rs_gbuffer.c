@@ -1,4 +1,5 @@
-/* rs_gbuffer: G-buffer planes (see rs_gbuffer.h). */
+/* rs_gbuffer: G-buffer planes and the deferred attribute resolve (see
+ * rs_gbuffer.h), scalar and 8 pixels at a time with AVX2. */
 #include "rs_gbuffer.h"
 
 #include <math.h>
@@ -62,6 +63,7 @@ typedef struct rs__resolve_ctx {
     const pf_camera *cam;
     float th, aspect; /* tan(yfov/2) and width/height, as pf_camera_ray_dir computes them */
     float *sx, *sy;   /* per column / row: the screen offsets of pixel centres (+1 for the neighbour) */
+    int simd;         /* take rs__resolve8_avx2 for runs of 8 pixels on one untextured triangle */
 } rs__resolve_ctx;
 
 
@@ -153,6 +155,87 @@ static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera 
     }
 }
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define RS__GBUF_X86 1
+/* rs__resolve_row's per-pixel work for 8 pixels x..x+7 of row y that all show
+ * the untextured triangle c: the same operations in the same order lane by
+ * lane (ray direction, rs__bary, clamping and renormalising the
+ * barycentrics, position, the camera-facing interpolated normal, view
+ * depth, the material's base colour), so the bits are the scalar loop's. */
+__attribute__((target("avx2"))) static void rs__resolve8_avx2(const rs__resolve_ctx *rc, const rs__tri_consts *c,
+                                                              uint32_t x, uint32_t y)
+{
+    rs_gbuffer *g = rc->g;
+    const pf_camera *cam = rc->cam;
+    size_t i = (size_t)y * g->width + x;
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 sx = _mm256_loadu_ps(rc->sx + x), sy = _mm256_set1_ps(rc->sy[y]);
+#define RS__DIR(k) _mm256_add_ps(_mm256_set1_ps(cam->forward.k), _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(cam->right.k), sx), \
+                                                                         _mm256_mul_ps(_mm256_set1_ps(cam->up.k), sy)))
+    __m256 dx = RS__DIR(x), dy = RS__DIR(y), dz = RS__DIR(z);
+#undef RS__DIR
+#define RS__DOT(v)                                                                                                     \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_set1_ps((v).x)), _mm256_mul_ps(dy, _mm256_set1_ps((v).y))),   \
+                  _mm256_mul_ps(dz, _mm256_set1_ps((v).z)))
+    /* rs__bary: u = v = 0 where det == 0 */
+    __m256 det = RS__DOT(c->n_det);
+    __m256 inv = _mm256_div_ps(one, det), has = _mm256_cmp_ps(det, zero, _CMP_NEQ_UQ);
+    __m256 u = _mm256_and_ps(has, _mm256_mul_ps(RS__DOT(c->n_u), inv));
+    __m256 v = _mm256_and_ps(has, _mm256_mul_ps(RS__DOT(c->n_v), inv));
+    __m256 facing = _mm256_cmp_ps(RS__DOT(c->ng), zero, _CMP_GT_OQ);
+#undef RS__DOT
+    /* x < 0 ? 0 : (x > 1 ? 1 : x) */
+    u = _mm256_blendv_ps(_mm256_blendv_ps(u, one, _mm256_cmp_ps(u, one, _CMP_GT_OQ)), zero,
+                         _mm256_cmp_ps(u, zero, _CMP_LT_OQ));
+    v = _mm256_blendv_ps(_mm256_blendv_ps(v, one, _mm256_cmp_ps(v, one, _CMP_GT_OQ)), zero,
+                         _mm256_cmp_ps(v, zero, _CMP_LT_OQ));
+    __m256 sum = _mm256_add_ps(u, v), over = _mm256_cmp_ps(sum, one, _CMP_GT_OQ);
+    u = _mm256_blendv_ps(u, _mm256_div_ps(u, sum), over);
+    v = _mm256_blendv_ps(v, _mm256_div_ps(v, sum), over);
+    __m256 w = _mm256_sub_ps(_mm256_sub_ps(one, u), v);
+#define RS__POS(k)                                                                                                     \
+    _mm256_add_ps(_mm256_set1_ps(c->p0.k), _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c->e1.k), u),                    \
+                                                         _mm256_mul_ps(_mm256_set1_ps(c->e2.k), v)))
+    __m256 px = RS__POS(x), py = RS__POS(y), pz = RS__POS(z);
+#undef RS__POS
+    /* ns, times -1 (a multiplication, as pf_v3_scale does) where the
+     * triangle faces away from the camera */
+    __m256 flip = _mm256_blendv_ps(one, _mm256_set1_ps(-1.0f), facing);
+#define RS__NRM(k)                                                                                                     \
+    _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(c->n0.k), w),                               \
+                                              _mm256_mul_ps(_mm256_set1_ps(c->n1.k), u)),                              \
+                                _mm256_mul_ps(_mm256_set1_ps(c->n2.k), v)),                                            \
+                  flip)
+    __m256 nx = RS__NRM(x), ny = RS__NRM(y), nz = RS__NRM(z);
+#undef RS__NRM
+    /* where no flip happens the product is by 1: exact, the same bits */
+    __m256 depth = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(_mm256_sub_ps(px, _mm256_set1_ps(cam->eye.x)), _mm256_set1_ps(cam->forward.x)),
+                      _mm256_mul_ps(_mm256_sub_ps(py, _mm256_set1_ps(cam->eye.y)), _mm256_set1_ps(cam->forward.y))),
+        _mm256_mul_ps(_mm256_sub_ps(pz, _mm256_set1_ps(cam->eye.z)), _mm256_set1_ps(cam->forward.z)));
+    const float *albedo = rc->scene->materials[c->material].base_color;
+    _mm256_storeu_ps(g->depth + i, depth);
+    _mm256_storeu_ps(g->pos_x + i, px);
+    _mm256_storeu_ps(g->pos_y + i, py);
+    _mm256_storeu_ps(g->pos_z + i, pz);
+    _mm256_storeu_ps(g->nrm_x + i, nx);
+    _mm256_storeu_ps(g->nrm_y + i, ny);
+    _mm256_storeu_ps(g->nrm_z + i, nz);
+    _mm256_storeu_ps(g->alb_r + i, _mm256_set1_ps(albedo[0]));
+    _mm256_storeu_ps(g->alb_g + i, _mm256_set1_ps(albedo[1]));
+    _mm256_storeu_ps(g->alb_b + i, _mm256_set1_ps(albedo[2]));
+}
+
+/* Whether pixels i..i+7 all show triangle prim. */
+__attribute__((target("avx2"))) static int rs__run8_avx2(const uint32_t *prim_row, uint32_t prim)
+{
+    __m256i p = _mm256_loadu_si256((const __m256i *)prim_row);
+    __m256i eq = _mm256_cmpeq_epi32(p, _mm256_set1_epi32((int)prim));
+    return _mm256_movemask_epi8(eq) == -1;
+}
+#endif
+
 static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -174,6 +257,13 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
             continue;
         }
         if (prim != c.prim) rs__tri_setup(&c, s, cam->eye, prim);
+#ifdef RS__GBUF_X86
+        if (rc->simd && !c.textured && x + 8 <= g->width && rs__run8_avx2(g->prim + i, prim)) {
+            rs__resolve8_avx2(rc, &c, x, y);
+            x += 7;
+            continue;
+        }
+#endif
         /* pf_camera_ray_dir's expression, its per-column and per-row factors
          * taken from the tables (same formulas, same bits) */
         pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, rc->sx[x]), pf_v3_scale(cam->up, rc->sy[y])));
@@ -230,7 +320,12 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
 
 void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs)
 {
-    rs__resolve_ctx rc = {g, scene, cam, tanf(0.5f * cam->yfov), (float)g->width / (float)g->height, NULL, NULL};
+    rs_gbuffer_resolve_simd(g, scene, cam, jobs, 0);
+}
+
+void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs, int simd)
+{
+    rs__resolve_ctx rc = {g, scene, cam, tanf(0.5f * cam->yfov), (float)g->width / (float)g->height, NULL, NULL, simd};
     /* screen offsets of pixel centres, one more than the image for the
      * neighbour rays; bit-identical to rs__ray_dir's terms */
     rc.sx = g->ray_sx;

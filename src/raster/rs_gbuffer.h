@@ -51,5 +51,10 @@ void rs_gbuffer_clear(rs_gbuffer *g);
  * snapped triangle may lie a hair outside the exact one). Parallel over
  * rows, deterministic. */
 void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs);
+/* The same with 8 pixels at a time where simd is nonzero (an AVX2 path for
+ * runs of 8 pixels on one untextured triangle, the scalar code elsewhere);
+ * bit-identical to rs_gbuffer_resolve (tests/test_raster.c
+ * test_gbuffer_simd_resolve). simd 0 is rs_gbuffer_resolve. */
+void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs, int simd);
 
 #endif

@@ -674,6 +674,30 @@ __attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, 
 }
 #endif
 
+/* The weight of the neighbour at (dx, dy) pixels, squared distance d2 and
+ * normal cosine nd; 0 leaves it out.
+ *   box (Laine 2007 Fig. 5): 1 where |p2 - p| < alpha and n2 . n > beta;
+ *   gaussian (Aranha, SSVP Sec. III-D, "an edge-aware gaussian blur"; the
+ *     paper gives no kernel): the same edge tests, times a Gaussian of
+ *     sigma = max(n, m) / 2 pixels;
+ *   bilateral (Hedman 2017 Sec. 4): a Gaussian of sigma = max(n, m) / 2
+ *     pixels times a Gaussian in position (sigma = alpha / 2) times
+ *     (n2 . n)^8. */
+static float gi__filter_weight(const gi_indirect *ind, int dx, int dy, float d2, float nd)
+{
+    const int n = (int)ind->n, m = (int)ind->m;
+    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
+    if (ind->opt.filter == GI_FILTER_BOX) return d2 < a2 && nd > beta ? 1.0f : 0.0f;
+    if (ind->opt.filter == GI_FILTER_GAUSSIAN) {
+        float sg = 0.5f * (float)(n > m ? n : m);
+        return d2 < a2 && nd > beta ? expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg)) : 0.0f;
+    }
+    if (!(nd > 0.0f)) return 0.0f;
+    float ss = 0.5f * (float)(n > m ? n : m), sp2 = 0.25f * a2;
+    float nd2 = nd * nd, nd4 = nd2 * nd2;
+    return expf(-(float)(dx * dx + dy * dy) / (2.0f * ss * ss)) * expf(-d2 / (2.0f * sp2)) * nd4 * nd4;
+}
+
 static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -681,7 +705,6 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     gi_indirect *ind = &f->ind;
     const rs_gbuffer *g = &f->gbuf;
     const int W = (int)f->width, H = (int)f->height, n = (int)ind->n, m = (int)ind->m;
-    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
     /* SIMD for the interior of the row: windows [x - n/2, x + 7 + n - 1 - n/2] on screen */
     int simd_x0 = W, simd_x1 = W;
 #ifdef GI_HAVE_X86
@@ -707,65 +730,25 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
         pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]);
         pf_vec3 nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
         float acc[3] = {0, 0, 0}, wsum = 0.0f;
-        if (ind->opt.filter == GI_FILTER_BOX) {
-            /* Laine 2007 Fig. 5: the n x m box whose size matches the
-             * interleaving pattern, restricted to similar geometry */
-            for (int dy = 0; dy < m; dy++)
-                for (int dx = 0; dx < n; dx++) {
-                    int tx = x + dx - n / 2, ty = (int)y + dy - m / 2;
-                    if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
-                    size_t j = (size_t)ty * f->width + (size_t)tx;
-                    if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
-                    pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
-                    float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
-                    if (!(pf_v3_dot(d, d) < a2) || !(nd > beta)) continue;
-                    const float *e = ind->combined + 3 * j;
-                    acc[0] += e[0], acc[1] += e[1], acc[2] += e[2];
-                    wsum += 1.0f;
-                }
-        } else if (ind->opt.filter == GI_FILTER_GAUSSIAN) {
-            /* Aranha (SSVP) Sec. III-D: "an edge-aware gaussian blur" of the
-             * irradiance. The paper gives no kernel; softgi uses a Gaussian
-             * of sigma = max(n, m) / 2 pixels over a (2n+1) x (2m+1) window
-             * whose edges are Laine's tests (|p2 - p| < alpha, n2 . n > beta):
-             * pixels across a depth or normal edge get no weight. */
-            float sg = 0.5f * (float)(n > m ? n : m);
-            for (int dy = -m; dy <= m; dy++)
-                for (int dx = -n; dx <= n; dx++) {
-                    int tx = x + dx, ty = (int)y + dy;
-                    if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
-                    size_t j = (size_t)ty * f->width + (size_t)tx;
-                    if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
-                    pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
-                    float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
-                    if (!(pf_v3_dot(d, d) < a2) || !(nd > beta)) continue;
-                    float w = expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg));
-                    const float *e = ind->combined + 3 * j;
-                    acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
-                    wsum += w;
-                }
-        } else {
-            /* cross-bilateral (Hedman 2017 Sec. 4): a Gaussian over 2n x 2m
-             * pixels weighted by position and normal similarity */
-            int rx = n, ry = m;
-            float ss = 0.5f * (float)(n > m ? n : m), sp2 = 0.25f * a2;
-            for (int dy = -ry; dy <= ry; dy++)
-                for (int dx = -rx; dx <= rx; dx++) {
-                    int tx = x + dx, ty = (int)y + dy;
-                    if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
-                    size_t j = (size_t)ty * f->width + (size_t)tx;
-                    if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
-                    pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
-                    float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
-                    if (!(nd > 0.0f)) continue;
-                    float nd2 = nd * nd, nd4 = nd2 * nd2;
-                    float w = expf(-(float)(dx * dx + dy * dy) / (2.0f * ss * ss)) * expf(-pf_v3_dot(d, d) / (2.0f * sp2)) *
-                              nd4 * nd4;
-                    const float *e = ind->combined + 3 * j;
-                    acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
-                    wsum += w;
-                }
-        }
+        /* the window: Laine's n x m box (Fig. 5), or (2n+1) x (2m+1) for the
+         * Gaussian and the cross-bilateral filter */
+        int box = ind->opt.filter == GI_FILTER_BOX;
+        int x0 = box ? -(n / 2) : -n, x1 = box ? n - 1 - n / 2 : n;
+        int y0 = box ? -(m / 2) : -m, y1 = box ? m - 1 - m / 2 : m;
+        for (int dy = y0; dy <= y1; dy++)
+            for (int dx = x0; dx <= x1; dx++) {
+                int tx = x + dx, ty = (int)y + dy;
+                if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
+                size_t j = (size_t)ty * f->width + (size_t)tx;
+                if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
+                pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
+                float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
+                float w = gi__filter_weight(ind, dx, dy, pf_v3_dot(d, d), nd);
+                if (!(w > 0.0f)) continue;
+                const float *e = ind->combined + 3 * j;
+                acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
+                wsum += w;
+            }
         if (wsum > 0.0f) out[0] = acc[0] / wsum, out[1] = acc[1] / wsum, out[2] = acc[2] / wsum;
         else memcpy(out, ind->combined + 3 * i, 3 * sizeof(float));
     }

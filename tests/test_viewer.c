@@ -79,6 +79,17 @@ static void test_screenshot_equals_render(void **state)
     check_screenshot("default", "");
     check_screenshot("settings", "--vpls 64 --tiles 2x2 --filter bilateral --clamp 100 --exposure 1.5 "
                                  "--camera 0,1,3.5:0,1,0:50");
+    /* area-light options reach the viewer's frame as they reach render's */
+    const char *mcguire = SOFTGI_SHARED_SCENES "/cornell_box/CornellBox-Original.gltf";
+    FILE *f = fopen(mcguire, "rb");
+    if (!f) {
+        print_message("SKIP: %s is absent: no area-light screenshot\n", mcguire);
+        return;
+    }
+    fclose(f);
+    char settings[1024];
+    snprintf(settings, sizeof settings, "%s --camera 0,1,3.4:0,1,0:40 --area-points 8 --vpls 32", mcguire);
+    check_screenshot("area", settings);
 }
 
 /* Keys replayed through SOFTGI_VIEW_KEYS: a method that is not implemented

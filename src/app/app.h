@@ -24,6 +24,20 @@ struct gi_indirect_options;
 /* The many-light options given on the command line (--method, --vpls, ...). */
 pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);
 
+struct gi_frame;
+struct rs_context;
+struct pf_rt;
+struct pf_jobs;
+/* The frame the command line describes, on a loaded scene: gi_frame_init
+ * with --shadow-size, then --area-strata/--area-points, then the indirect
+ * stages (app_indirect_options) unless --direct-only or `indirect` is 0
+ * (sequence --reference). render, sequence and view all build their frame
+ * here, so each option means the same in each. On failure nothing is left
+ * to free. */
+pf_result app_frame_init(const pf_options *o, struct gi_frame *f, const pf_scene *scene, const struct pf_rt *rt,
+                         struct rs_context *raster, struct pf_jobs *jobs, const pf_camera *camera, uint32_t width,
+                         uint32_t height, int indirect, pf_error *err);
+
 /* `softgi render`: load, override, build, render, write. Returns the exit status. */
 int app_render(const pf_options *opts);
 

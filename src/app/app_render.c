@@ -53,18 +53,7 @@ int app_render(const pf_options *o)
         r = rs_context_create(&raster, &scene, jobs, rs_simd_for_isa(isa), &err);
         pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
     }
-    if (r == PF_OK) r = gi_frame_init(&frame, &scene, rt, raster, jobs, &camera, width, height, o->shadow_size, &err);
-    if (r == PF_OK && (o->area_strata || o->area_points)) {
-        r = gi_frame_set_area_sampling(&frame, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
-                                       o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS, &err);
-        if (r != PF_OK) gi_frame_free(&frame);
-    }
-    if (r == PF_OK && !o->direct_only) {
-        gi_indirect_options io;
-        r = app_indirect_options(o, &io, &err);
-        if (r == PF_OK) r = gi_frame_enable_indirect(&frame, &io, o->indirect_only, &err);
-        if (r != PF_OK) gi_frame_free(&frame);
-    }
+    if (r == PF_OK) r = app_frame_init(o, &frame, &scene, rt, raster, jobs, &camera, width, height, 1, &err);
     if (r != PF_OK) {
         rs_context_destroy(raster);
         pf_jobs_destroy(jobs);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "gi_frame.h"
 #include "gi_indirect.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
@@ -103,6 +104,24 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
                  : !strcmp(o->filter, "gaussian")        ? GI_FILTER_GAUSSIAN
                                                          : GI_FILTER_NONE;
     return PF_OK;
+}
+
+pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster,
+                         pf_jobs *jobs, const pf_camera *camera, uint32_t width, uint32_t height, int indirect,
+                         pf_error *err)
+{
+    pf_result r = gi_frame_init(f, scene, rt, raster, jobs, camera, width, height, o->shadow_size, err);
+    if (r != PF_OK) return r;
+    if (o->area_strata || o->area_points)
+        r = gi_frame_set_area_sampling(f, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
+                                       o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS, err);
+    if (r == PF_OK && indirect && !o->direct_only) {
+        gi_indirect_options io;
+        r = app_indirect_options(o, &io, err);
+        if (r == PF_OK) r = gi_frame_enable_indirect(f, &io, o->indirect_only, err);
+    }
+    if (r != PF_OK) gi_frame_free(f);
+    return r;
 }
 
 pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,

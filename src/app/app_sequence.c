@@ -297,16 +297,8 @@ int app_sequence(const pf_options *o)
     if (!s.jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
     if (r == PF_OK && !o->raytrace) r = rs_context_create(&s.raster, &s.scene, s.jobs, rs_simd_for_isa(isa), &err);
     if (r == PF_OK) {
-        r = gi_frame_init(&s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, o->shadow_size, &err);
+        r = app_frame_init(o, &s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, !o->reference, &err);
         s.frame_ready = r == PF_OK;
-        if (r == PF_OK && (o->area_strata || o->area_points))
-            r = gi_frame_set_area_sampling(&s.frame, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
-                                           o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS, &err);
-    }
-    if (r == PF_OK && !o->direct_only && !o->reference) {
-        gi_indirect_options io;
-        r = app_indirect_options(o, &io, &err);
-        if (r == PF_OK) r = gi_frame_enable_indirect(&s.frame, &io, o->indirect_only, &err);
     }
     if (r != PF_OK) return app__fail_run(&s, &err);
     t_build = pf_time_now() - t_build;

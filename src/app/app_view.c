@@ -180,14 +180,11 @@ static pf_result view_setup(view_app *a, pf_error *err)
     if (!a->jobs) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
     if (!o->raytrace && (r = rs_context_create(&a->raster, &a->scene, a->jobs, rs_simd_for_isa(isa), err)) != PF_OK)
         return r;
-    r = gi_frame_init(&a->frame, &a->scene, a->rt, a->raster, a->jobs, &a->camera, a->width, a->height,
-                      o->shadow_size, err);
+    r = app_frame_init(o, &a->frame, &a->scene, a->rt, a->raster, a->jobs, &a->camera, a->width, a->height, 1, err);
     if (r != PF_OK) return r;
     a->frame_ready = 1;
-    if (!o->direct_only) {
-        if ((r = app_indirect_options(o, &a->io, err)) != PF_OK) return r;
-        if ((r = gi_frame_enable_indirect(&a->frame, &a->io, o->indirect_only, err)) != PF_OK) return r;
-        a->io = a->frame.ind.opt; /* with the defaults filled in */
+    if (a->frame.indirect) {
+        a->io = a->frame.ind.opt; /* as the command line gave it, with the defaults filled in */
         a->want = a->io;
         a->vis_cursor = a->io.visibility_ism ? 1 : a->io.visibility_raytrace ? 2 : 0;
     }

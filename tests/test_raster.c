@@ -495,11 +495,40 @@ static void test_vs_embree_conference(void **state)
 
 /* ------------------------------------------------------------ SIMD resolve */
 
-/* rs_gbuffer_resolve_simd (AVX2 runs of 8 pixels) against the scalar
- * rs_gbuffer_resolve on the same visibility buffer: every plane bit for
- * bit (Cornell box, Sibenik, conference room; width 1021 leaves partial
- * runs at row ends). */
-static void check_simd_resolve(const char *path)
+/* Gives every third triangle of `s` a new material with a 4x4 checker
+ * baseColor texture (uvs from the positions), so a resolve meets textured
+ * and untextured triangles side by side, in groups of 8 pixels too. */
+static void add_checker_material(pf_scene *s)
+{
+    pf_error err;
+    uint8_t texels[4 * 4 * 4];
+    for (int i = 0; i < 16; i++) {
+        uint8_t v = ((i & 1) ^ (i >> 2 & 1)) ? 230 : 40;
+        texels[4 * i + 0] = v, texels[4 * i + 1] = (uint8_t)(255 - v), texels[4 * i + 2] = 128, texels[4 * i + 3] = 255;
+    }
+    s->images = realloc(s->images, sizeof(pf_image) * (s->image_count + 1));
+    s->textures = realloc(s->textures, sizeof(pf_texture) * (s->texture_count + 1));
+    s->materials = realloc(s->materials, sizeof(pf_material) * (s->material_count + 1));
+    assert_true(s->images && s->textures && s->materials);
+    assert_int_equal(pf_image_build_mips(&s->images[s->image_count], texels, 4, 4, &err), PF_OK);
+    s->textures[s->texture_count] = (pf_texture){s->image_count, PF_WRAP_REPEAT, PF_WRAP_MIRROR, 1, 1, 1, 1};
+    pf_material m = s->materials[0];
+    m.base_color[0] = 0.9f, m.base_color[1] = 0.8f, m.base_color[2] = 0.7f;
+    m.base_color_texture = (int32_t)s->texture_count;
+    s->materials[s->material_count] = m;
+    float scale = 4.0f / pf_v3_max_comp(pf_v3_sub(s->bounds_max, s->bounds_min));
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        s->uvs[v] = (pf_vec2){s->positions[v].x * scale, (s->positions[v].y + s->positions[v].z) * scale};
+    for (uint32_t t = 0; t < s->tri_count; t += 3) s->tri_material[t] = s->material_count;
+    s->image_count++, s->texture_count++, s->material_count++;
+}
+
+/* rs_gbuffer_resolve_simd (the per-triangle table, AVX2 groups of 8 pixels)
+ * against the scalar rs_gbuffer_resolve without the table on the same
+ * visibility buffer: every plane bit for bit (Cornell box, Sibenik,
+ * conference room, and Sibenik with every third triangle textured; width
+ * 1021 leaves partial groups at row ends). */
+static void check_simd_resolve(const char *path, int textured)
 {
     if (pf_isa_detect() < PF_ISA_AVX2) {
         print_message("SKIP: no AVX2\n");
@@ -507,6 +536,7 @@ static void check_simd_resolve(const char *path)
     }
     pf_scene s;
     if (!tu_load_or_skip(&s, path)) return;
+    if (textured) add_checker_material(&s);
     enum { W = 1021, H = 384 };
     pf_error err;
     pf_jobs *jobs = pf_jobs_create(2);
@@ -524,11 +554,16 @@ static void check_simd_resolve(const char *path)
     rs_gbuffer_resolve(g, &s, &cam, jobs);
     for (int k = 0; k < NP; k++) memcpy(ref + (size_t)k * W * H, planes[k], sizeof(float) * W * H);
     for (int k = 0; k < NP; k++) memset(planes[k], 0xff, sizeof(float) * W * H);
-    rs_gbuffer_resolve_simd(g, &s, &cam, jobs, 1);
+    rs_gbuffer_resolve_simd(g, &s, rs_context_resolve_table(ctx), &cam, jobs, 1);
     uint32_t covered = 0;
     for (uint32_t i = 0; i < W * H; i++) covered += g->prim[i] != RS_GBUFFER_EMPTY;
     for (int k = 0; k < NP; k++) assert_memory_equal(ref + (size_t)k * W * H, planes[k], sizeof(float) * W * H);
-    print_message("%s: SIMD resolve == scalar on all planes (%u of %u pixels covered)\n", path, covered, W * H);
+    uint32_t with_texture = 0;
+    for (uint32_t i = 0; i < W * H; i++)
+        with_texture += g->prim[i] != RS_GBUFFER_EMPTY && s.tri_material[g->prim[i]] == s.material_count - 1 && textured;
+    print_message("%s%s: SIMD resolve == scalar on all planes (%u of %u pixels covered, %u textured)\n", path,
+                  textured ? " + checker" : "", covered, W * H, with_texture);
+    if (textured) assert_true(with_texture > W * H / 8);
     assert_true(covered > W * H / 4);
     free(ref);
     gi_frame_free(&f);
@@ -540,9 +575,10 @@ static void check_simd_resolve(const char *path)
 static void test_gbuffer_simd_resolve(void **state)
 {
     (void)state;
-    check_simd_resolve(CORNELL);
-    check_simd_resolve(SIBENIK);
-    check_simd_resolve(CONFERENCE);
+    check_simd_resolve(CORNELL, 0);
+    check_simd_resolve(SIBENIK, 0);
+    check_simd_resolve(CONFERENCE, 0);
+    check_simd_resolve(SIBENIK, 1);
 }
 
 /* ------------------------------------------------------------ golden */

@@ -198,7 +198,8 @@ void gi_stage_gbuffer_raster(gi_frame *f)
 void gi_stage_gbuffer_resolve(gi_frame *f)
 {
     int simd = f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR;
-    rs_gbuffer_resolve_simd(&f->gbuf, f->scene, &f->camera, f->jobs, simd);
+    rs_gbuffer_resolve_simd(&f->gbuf, f->scene, f->raster ? rs_context_resolve_table(f->raster) : NULL, &f->camera,
+                            f->jobs, simd);
 }
 
 pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err)

@@ -51,10 +51,32 @@ void rs_gbuffer_clear(rs_gbuffer *g);
  * snapped triangle may lie a hair outside the exact one). Parallel over
  * rows, deterministic. */
 void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs);
-/* The same with 8 pixels at a time where simd is nonzero (an AVX2 path for
- * runs of 8 pixels on one untextured triangle, the scalar code elsewhere);
- * bit-identical to rs_gbuffer_resolve (tests/test_raster.c
- * test_gbuffer_simd_resolve). simd 0 is rs_gbuffer_resolve. */
-void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs, int simd);
+/* The camera-free per-triangle constants of the resolve, 128 bytes a
+ * triangle (two cache lines): a resolve that starts a new triangle reads one
+ * entry instead of the index, three positions, three normals, three uvs and
+ * the material, spread over the scene's arrays. rs_context keeps one table
+ * per scene (rs_context_resolve_table). Bit-identical to computing them per
+ * setup: the same operations on the same values. */
+typedef struct rs_resolve_tri {
+    pf_vec3 p0, e1, e2;   /* p1 - p0, p2 - p0 */
+    pf_vec3 n_det;        /* e2 x e1 */
+    pf_vec3 ng;           /* unit geometric normal, normalize(e1 x e2) */
+    pf_vec3 n0, n1, n2;   /* vertex normals */
+    pf_vec2 uv0, uv1, uv2;
+    uint32_t material;
+    int32_t textured;     /* the material has a baseColor texture */
+} rs_resolve_tri;
+
+/* NULL when out of memory. */
+rs_resolve_tri *rs_resolve_table_create(const pf_scene *scene);
+void rs_resolve_table_destroy(rs_resolve_tri *table);
+
+/* The same as rs_gbuffer_resolve, bit for bit (tests/test_raster.c
+ * test_gbuffer_simd_resolve), with the table when `table` is not NULL and,
+ * where simd is nonzero, 8 pixels at a time with AVX2: each group of 8
+ * pixels on up to 4 untextured triangles is resolved once per triangle for
+ * all lanes and blended; other groups take the scalar code. */
+void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const rs_resolve_tri *table, const pf_camera *cam,
+                             pf_jobs *jobs, int simd);
 
 #endif

@@ -29,6 +29,7 @@
 #define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
 #define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
 #define RS_SUB 256         /* 1 << RS_SUBPIXEL_BITS */
+#define RS_PREFETCH 4      /* triangles (tile raster) fetched ahead of use */
 
 /* ------------------------------------------------------------------ types */
 
@@ -90,6 +91,7 @@ struct rs_context {
     uint32_t cluster_count, chunk_count;
     rs__cluster *clusters;
     rs_scratch *scratch; /* for rs_render */
+    rs_resolve_tri *resolve_table; /* the G-buffer resolve's per-triangle constants */
 };
 
 /* The state of one pass, shared by the job items. */
@@ -280,7 +282,8 @@ pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jo
         ctx->clusters[c].hi = hi;
     }
     ctx->scratch = rs_scratch_create(ctx);
-    if (!ctx->scratch) goto oom;
+    ctx->resolve_table = rs_resolve_table_create(scene);
+    if (!ctx->scratch || !ctx->resolve_table) goto oom;
     *out = ctx;
     return PF_OK;
 oom:
@@ -295,10 +298,12 @@ void rs_context_destroy(rs_context *ctx)
     free(ctx->clusters);
     free(ctx->weld_pos);
     free(ctx->weld_idx);
+    rs_resolve_table_destroy(ctx->resolve_table);
     free(ctx);
 }
 
 rs_simd rs_context_simd(const rs_context *ctx) { return ctx->simd; }
+const rs_resolve_tri *rs_context_resolve_table(const rs_context *ctx) { return ctx->resolve_table; }
 void rs_context_set_simd(rs_context *ctx, rs_simd simd) { ctx->simd = simd; }
 
 /* ------------------------------------------------------- 1. vertex stage */
@@ -426,20 +431,15 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
 {
     const rs_target *t = st->t;
     float W = (float)t->width, H = (float)t->height;
+    /* snapped positions first: most triangles of a detailed scene are
+     * rejected by the area or pixel-centre tests below, before the depth and
+     * attribute terms are needed */
     int64_t X[3], Y[3];
-    float Z[3], IW[3], U[3], V[3];
-    double DX[3], DY[3]; /* unsnapped screen positions: the depth plane goes through these */
     for (int k = 0; k < 3; k++) {
         float iw = 1.0f / v[k].w;
         float sx = (v[k].x * iw * 0.5f + 0.5f) * W, sy = (0.5f - v[k].y * iw * 0.5f) * H;
-        DX[k] = ((double)v[k].x / v[k].w * 0.5 + 0.5) * W;
-        DY[k] = (0.5 - (double)v[k].y / v[k].w * 0.5) * H;
         X[k] = rs__floor64(sx * (float)RS_SUB + 0.5f);
         Y[k] = rs__floor64(sy * (float)RS_SUB + 0.5f);
-        Z[k] = v[k].z * iw;
-        IW[k] = iw;
-        U[k] = v[k].u * iw;
-        V[k] = v[k].v * iw;
     }
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
     /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
@@ -447,12 +447,12 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         ch->stats.triangles_culled++;
         return;
     }
-    if (area < 0) { /* orient so the interior is on the positive side of every edge */
+    int o[3] = {0, 1, 2}; /* vertex order: the interior on the positive side of every edge */
+    if (area < 0) {
         int64_t tx = X[1], ty = Y[1];
-        float tz = Z[1], ti = IW[1], tu = U[1], tv = V[1];
-        double tdx = DX[1], tdy = DY[1];
-        X[1] = X[2], Y[1] = Y[2], Z[1] = Z[2], IW[1] = IW[2], U[1] = U[2], V[1] = V[2], DX[1] = DX[2], DY[1] = DY[2];
-        X[2] = tx, Y[2] = ty, Z[2] = tz, IW[2] = ti, U[2] = tu, V[2] = tv, DX[2] = tdx, DY[2] = tdy;
+        X[1] = X[2], Y[1] = Y[2];
+        X[2] = tx, Y[2] = ty;
+        o[1] = 2, o[2] = 1;
         area = -area;
     }
     int64_t minx = X[0], maxx = X[0], miny = Y[0], maxy = Y[0];
@@ -470,6 +470,18 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
     if (px0 > px1 || py0 > py1) {
         ch->stats.triangles_culled++; /* falls between pixel centres or off screen */
         return;
+    }
+    float Z[3], IW[3], U[3], V[3];
+    double DX[3], DY[3]; /* unsnapped screen positions: the depth plane goes through these */
+    for (int k = 0; k < 3; k++) {
+        const rs__cv *c = &v[o[k]];
+        float iw = 1.0f / c->w;
+        DX[k] = ((double)c->x / c->w * 0.5 + 0.5) * W;
+        DY[k] = (0.5 - (double)c->y / c->w * 0.5) * H;
+        Z[k] = c->z * iw;
+        IW[k] = iw;
+        U[k] = c->u * iw;
+        V[k] = c->v * iw;
     }
     if (!rs__grow((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri))) abort();
     rs__tri *r = &ch->tris[ch->tri_count];
@@ -553,6 +565,15 @@ static unsigned rs__clip_mask(const rs__pass_state *st, rs__cv v)
     return m;
 }
 
+/* -w <= x, y <= w and 0 <= z <= w with w finite: then w >= 0, so
+ * gx w - x >= w - x >= 0 and the like hold in floating point too (gx, gy >= 1
+ * as RS_MAX_SIZE <= 2 RS_GUARD; rounding is monotonic): rs__clip_mask is 0.
+ * False for NaN. */
+static int rs__inside(rs__cv v)
+{
+    return v.x >= -v.w && v.x <= v.w && v.y >= -v.w && v.y <= v.w && v.z >= 0.0f && v.z <= v.w && v.w < INFINITY;
+}
+
 /* Setup and binning of one fixed chunk of triangles (scene order). */
 static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
 {
@@ -578,7 +599,11 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
             ch->stats.triangles_culled++;
             continue;
         }
-        unsigned need = rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
+        /* vertices inside the frustum (false for NaN) are inside every clip
+         * plane (the guard band is wider than the frustum): no masks needed */
+        unsigned need = rs__inside(v[0]) && rs__inside(v[1]) && rs__inside(v[2])
+                            ? 0u
+                            : rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
         if (!need) {
             rs__setup_tri(st, ch, v, t);
             continue;
@@ -1011,8 +1036,18 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
     for (uint32_t c = 0; c < st->s->chunk_count; c++) {
         const rs__chunk *ch = &st->s->chunks[c];
         if (ch->tri_count == 0) continue;
-        for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++)
+        uint32_t e0 = ch->tile_start[tile], e1 = ch->tile_start[tile + 1];
+        for (uint32_t e = e0; e < e1; e++) {
+            /* the tile's triangles are scattered over the chunk: fetch the
+             * record a few triangles ahead (192 bytes, three lines) */
+            if (e + RS_PREFETCH < e1) {
+                const char *next = (const char *)&ch->tris[ch->sorted[e + RS_PREFETCH]];
+                __builtin_prefetch(next);
+                __builtin_prefetch(next + 64);
+                __builtin_prefetch(next + 128);
+            }
             rs__raster_tri(st, row, block, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
+        }
     }
     out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }

@@ -44,6 +44,7 @@
 #include "pf_isa.h"
 #include "pf_jobs.h"
 #include "pf_scene.h"
+#include "rs_gbuffer.h"
 
 #define RS_NO_PRIM 0xffffffffu
 #define RS_SUBPIXEL_BITS 8
@@ -106,6 +107,8 @@ typedef struct rs_context rs_context;
 pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err);
 void rs_context_destroy(rs_context *ctx);
 rs_simd rs_context_simd(const rs_context *ctx);
+/* The scene's per-triangle constants for rs_gbuffer_resolve_simd. */
+const rs_resolve_tri *rs_context_resolve_table(const rs_context *ctx);
 /* Switches the SIMD path (tests compare paths on one context). */
 void rs_context_set_simd(rs_context *ctx, rs_simd simd);
 

@@ -33,9 +33,14 @@
 
 /* ------------------------------------------------------------------ types */
 
-/* A triangle after setup: what a tile needs to rasterize it. */
+/* A triangle after setup: what a tile needs to rasterize it, in 128 bytes
+ * (two cache lines: the tile raster reads these records scattered over the
+ * chunks, so their size is memory traffic). */
 typedef struct rs__tri {
-    int64_t a[3], b[3], c[3]; /* E_k(px, py) = a px + b py + c (fixed point, fill rule folded into c) */
+    /* E_k(px, py) = a px + b py + c (fixed point, fill rule folded into c);
+     * |a|, |b| < 2^25 (snapped coordinates < 2^24), c up to 2^50 */
+    int32_t a[3], b[3];
+    int64_t c[3];
     /* depth plane, kept in double relative to vertex 0 so that clipped
      * vertices far out in the guard band do not cost precision through
      * cancellation: zs(x, y) = zv + dzdx (x + .5 - xv) + dzdy (y + .5 - yv) */
@@ -44,19 +49,28 @@ typedef struct rs__tri {
     float zmin, zmax;          /* clamp range (vertex zs), zmax also feeds hierarchical Z */
     int32_t x0, y0, x1, y1;    /* pixel bounding box, inclusive */
     uint32_t prim;
-    uint32_t masked; /* alphaMode MASK: per-pixel alpha test (scalar, all paths) */
+    uint32_t masked; /* alphaMode MASK: index into the chunk's rs__tri_masked (per-pixel alpha test,
+                        scalar, all paths), RS__NOT_MASKED otherwise */
     uint32_t small;  /* edge functions vary by < 2^29 over an 8x8 block: 32-bit lanes are exact */
-    /* masked only: 1/w, b1/w, b2/w planes (b = barycentrics of the scene
-     * triangle), so b1 = (b1/w) / (1/w) is perspective-correct */
-    float iw0, diwdx, diwdy, u0, dudx, dudy, v0, dvdx, dvdy;
 } rs__tri;
+_Static_assert(sizeof(rs__tri) == 128, "rs__tri: two cache lines");
+#define RS__NOT_MASKED 0xffffffffu
+
+/* The alpha test's extra planes for a masked triangle: 1/w, b1/w, b2/w
+ * (b = barycentrics of the scene triangle), so b1 = (b1/w) / (1/w) is
+ * perspective-correct. */
+typedef struct rs__tri_masked {
+    float iw0, diwdx, diwdy, u0, dudx, dudy, v0, dvdx, dvdy;
+} rs__tri_masked;
 
 /* One setup chunk's output: triangles and their bins, sorted by tile.
  * Chunks are written by different threads, so each starts on its own cache
  * line (its counters change for every triangle: false sharing otherwise). */
 typedef struct rs__chunk {
-    _Alignas(64) rs__tri *tris;
+    _Alignas(64) rs__tri *tris; /* 64-byte aligned */
     uint32_t tri_count, tri_cap;
+    rs__tri_masked *masked;
+    uint32_t masked_count, masked_cap;
     uint64_t *entries; /* unsorted bin entries: tile << 32 | triangle index in this chunk */
     uint32_t entry_count, entry_cap;
     uint32_t *sorted;     /* tri indices grouped by tile, triangle order kept */
@@ -180,6 +194,7 @@ void rs_mat4_transform(const rs_mat4 *m, pf_vec3 p, float c[4])
 static void rs__chunk_free(rs__chunk *c)
 {
     free(c->tris);
+    free(c->masked);
     free(c->entries);
     free(c->sorted);
     free(c->tile_start);
@@ -418,6 +433,21 @@ static int rs__grow(void **p, uint32_t *cap, uint32_t need, size_t elem)
     return 1;
 }
 
+/* rs__grow for an array of 64-byte-aligned records (realloc keeps 16). */
+static int rs__grow_aligned(void **p, uint32_t *cap, uint32_t need, size_t elem, uint32_t count)
+{
+    if (need <= *cap) return 1;
+    uint32_t nc = *cap ? *cap : 256;
+    while (nc < need) nc *= 2;
+    void *q = aligned_alloc(64, ((size_t)nc * elem + 63) / 64 * 64);
+    if (!q) return 0;
+    if (count) memcpy(q, *p, (size_t)count * elem);
+    free(*p);
+    *p = q;
+    *cap = nc;
+    return 1;
+}
+
 /* floorf without the libm call: exact for |x| < 2^62 (the guard band keeps
  * snapped coordinates below 2^24). */
 static int64_t rs__floor64(float x)
@@ -483,7 +513,7 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         U[k] = c->u * iw;
         V[k] = c->v * iw;
     }
-    if (!rs__grow((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri))) abort();
+    if (!rs__grow_aligned((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri), ch->tri_count)) abort();
     rs__tri *r = &ch->tris[ch->tri_count];
     for (int k = 0; k < 3; k++) {
         int a = k, b = (k + 1) % 3;
@@ -497,8 +527,8 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         int64_t reach = ((A < 0 ? -A : A) + (B < 0 ? -B : B)) * RS_SUB * (RS_BLOCK - 1);
         if (k == 0) r->small = 1;
         if (reach >= ((int64_t)1 << 29)) r->small = 0;
-        r->a[k] = A;
-        r->b[k] = B;
+        r->a[k] = (int32_t)A;
+        r->b[k] = (int32_t)B;
         r->c[k] = C - (top_left ? 0 : 1);
     }
     /* depth plane through the snapped vertices, in pixel units */
@@ -527,11 +557,14 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         r->yv = DY[0];
         r->dzdx = (float)r->dzdx_d;
     }
-    r->masked = st->ctx->scene->materials[st->ctx->scene->tri_material[prim]].alpha_mode == PF_ALPHA_MASK;
-    if (r->masked) {
-        RS__PLANE(IW, r->iw0, r->diwdx, r->diwdy);
-        RS__PLANE(U, r->u0, r->dudx, r->dudy);
-        RS__PLANE(V, r->v0, r->dvdx, r->dvdy);
+    r->masked = RS__NOT_MASKED;
+    if (st->ctx->scene->materials[st->ctx->scene->tri_material[prim]].alpha_mode == PF_ALPHA_MASK) {
+        if (!rs__grow((void **)&ch->masked, &ch->masked_cap, ch->masked_count + 1, sizeof(rs__tri_masked))) abort();
+        rs__tri_masked *m = &ch->masked[ch->masked_count];
+        r->masked = ch->masked_count++;
+        RS__PLANE(IW, m->iw0, m->diwdx, m->diwdy);
+        RS__PLANE(U, m->u0, m->dudx, m->dudy);
+        RS__PLANE(V, m->v0, m->dvdx, m->dvdy);
     }
 #undef RS__PLANE
     r->zmin = fminf(Z[0], fminf(Z[1], Z[2]));
@@ -580,6 +613,7 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     const pf_scene *sc = st->ctx->scene;
     rs__chunk *ch = &st->s->chunks[chunk];
     ch->tri_count = 0;
+    ch->masked_count = 0;
     ch->entry_count = 0;
     memset(&ch->stats, 0, sizeof ch->stats);
     uint32_t t0 = chunk * RS_CHUNK, t1 = t0 + RS_CHUNK < sc->tri_count ? t0 + RS_CHUNK : sc->tri_count;
@@ -689,8 +723,9 @@ static int rs__row_scalar(const rs__tri *t, int32_t x, int32_t y, float zrow, co
  * texel alpha at mip level 0 decides (alpha < cutoff is a hole) — the same
  * test Embree's filter function makes, so raster and ray agree. Every SIMD
  * path uses this one function for masked triangles. */
-static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, int32_t x, int32_t y, float zrow,
-                          const int64_t e[3], const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim)
+static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, const rs__tri_masked *m, int32_t x, int32_t y,
+                          float zrow, const int64_t e[3], const int64_t step[3], unsigned lanes, float *depth,
+                          uint32_t *prim)
 {
     const pf_scene *sc = st->ctx->scene;
     const uint32_t *tri = &sc->indices[3 * t->prim];
@@ -705,8 +740,8 @@ static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, int32_t x,
         float z = zrow + t->dzdx * (float)i;
         z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
         if (!(z > depth[i])) continue;
-        float iw = t->iw0 + t->diwdx * xf + t->diwdy * yf;
-        float b1 = (t->u0 + t->dudx * xf + t->dudy * yf) / iw, b2 = (t->v0 + t->dvdx * xf + t->dvdy * yf) / iw;
+        float iw = m->iw0 + m->diwdx * xf + m->diwdy * yf;
+        float b1 = (m->u0 + m->dudx * xf + m->dudy * yf) / iw, b2 = (m->v0 + m->dvdx * xf + m->dvdy * yf) / iw;
         float b0 = 1.0f - b1 - b2;
         pf_vec2 a = sc->uvs[tri[0]], b = sc->uvs[tri[1]], c = sc->uvs[tri[2]];
         pf_vec2 uv = {b0 * a.x + b1 * b.x + b2 * c.x, b0 * a.y + b1 * b.y + b2 * c.y};
@@ -796,12 +831,12 @@ static int rs__block_rows(rs__row_fn row, const rs__tri *t, int32_t x, int32_t y
                           unsigned lanes, float *depth, uint32_t *prim, size_t stride)
 {
     int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
-    for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+    for (int k = 0; k < 3; k++) step[k] = (int64_t)t->a[k] * RS_SUB;
     int wrote = 0;
     for (int32_t y = y0; y <= y1; y++) {
         size_t o = (size_t)(y - y0) * stride;
         wrote |= row(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
-        for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+        for (int k = 0; k < 3; k++) e[k] += (int64_t)t->b[k] * RS_SUB;
     }
     return wrote;
 }
@@ -825,8 +860,8 @@ __attribute__((target("avx2"))) static int rs__block_avx2(const rs__tri *t, int3
     __m256i ev[3], sy[3];
     for (int k = 0; k < 3; k++) {
         ev[k] = _mm256_add_epi32(_mm256_set1_epi32(rs__clamp32(e_in[k])),
-                                 _mm256_mullo_epi32(lane, _mm256_set1_epi32((int32_t)(t->a[k] * RS_SUB))));
-        sy[k] = _mm256_set1_epi32((int32_t)(t->b[k] * RS_SUB));
+                                 _mm256_mullo_epi32(lane, _mm256_set1_epi32((int32_t)((int64_t)t->a[k] * RS_SUB))));
+        sy[k] = _mm256_set1_epi32((int32_t)((int64_t)t->b[k] * RS_SUB));
     }
     const __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
     const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
@@ -862,7 +897,7 @@ rs__block_avx512(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int6
     const __m512 colf = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
     __m512i ev[3], sy2[3];
     for (int k = 0; k < 3; k++) {
-        int32_t sx = (int32_t)(t->a[k] * RS_SUB), syk = (int32_t)(t->b[k] * RS_SUB);
+        int32_t sx = (int32_t)((int64_t)t->a[k] * RS_SUB), syk = (int32_t)((int64_t)t->b[k] * RS_SUB);
         ev[k] = _mm512_add_epi32(_mm512_set1_epi32(rs__clamp32(e_in[k])),
                                  _mm512_add_epi32(_mm512_mullo_epi32(col, _mm512_set1_epi32(sx)),
                                                   _mm512_mullo_epi32(row, _mm512_set1_epi32(syk))));
@@ -923,14 +958,32 @@ static rs__row_fn rs__row_for(rs_simd simd)
  * block keeps 8 independent minima (one per column) so the loop vectorises
  * instead of waiting on one long dependency chain; the ternary is used, not
  * fminf, which is a libm call. */
-static float rs__block_min(const rs_target *tg, int32_t x, int32_t y, int32_t x1, int32_t y1)
+/* A tile's planes while it is rasterized: RS_TILE x RS_TILE, row stride
+ * RS_TILE, pixel (x, y) of the image at (x - x0, y - y0). Kept on the
+ * rasterizing thread's stack (L1/L2-resident), cleared there and copied to
+ * the target once, instead of clearing and writing the target's rows (which
+ * costs a read for ownership of every line and, with 2 threads, contention
+ * for the shared cache). */
+typedef struct rs__tile_buf {
+    float *depth;
+    uint32_t *prim;     /* NULL when the target has none */
+    uint32_t *coverage; /* NULL when the target has none */
+    int32_t x0, y0;
+} rs__tile_buf;
+
+static size_t rs__tile_at(const rs__tile_buf *tb, int32_t x, int32_t y)
+{
+    return (size_t)(y - tb->y0) * RS_TILE + (size_t)(x - tb->x0);
+}
+
+static float rs__block_min(const rs__tile_buf *tb, int32_t x, int32_t y, int32_t x1, int32_t y1)
 {
     if (x1 - x == RS_BLOCK - 1) {
         float acc[RS_BLOCK];
-        const float *d = tg->depth + (size_t)y * tg->width + (size_t)x;
+        const float *d = tb->depth + rs__tile_at(tb, x, y);
         for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i];
         for (int32_t yy = y + 1; yy <= y1; yy++) {
-            d += tg->width;
+            d += RS_TILE;
             for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i] < acc[i] ? d[i] : acc[i];
         }
         float m = acc[0];
@@ -939,8 +992,8 @@ static float rs__block_min(const rs_target *tg, int32_t x, int32_t y, int32_t x1
     }
     float m = INFINITY;
     for (int32_t yy = y; yy <= y1; yy++) {
-        const float *d = tg->depth + (size_t)yy * tg->width;
-        for (int32_t xx = x; xx <= x1; xx++) m = d[xx] < m ? d[xx] : m;
+        const float *d = tb->depth + rs__tile_at(tb, x, yy);
+        for (int32_t i = 0; i <= x1 - x; i++) m = d[i] < m ? d[i] : m;
     }
     return m;
 }
@@ -950,19 +1003,18 @@ static float rs__block_min(const rs_target *tg, int32_t x, int32_t y, int32_t x1
  * depth in block b, so a triangle whose nearest depth zmax is not greater
  * cannot pass the depth test anywhere in it. */
 static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_fn block, const rs__tri *t,
-                           int32_t tx0, int32_t ty0,
-                           int32_t tx1, int32_t ty1, float block_far[64], uint8_t block_writes[64], rs_stats *stats)
+                           const rs__tri_masked *m, const rs__tile_buf *tb, int32_t tx0, int32_t ty0, int32_t tx1,
+                           int32_t ty1, float block_far[64], uint8_t block_writes[64], rs_stats *stats)
 {
-    const rs_target *tg = st->t;
     int32_t bx0 = t->x0 > tx0 ? t->x0 : tx0, bx1 = t->x1 < tx1 ? t->x1 : tx1;
     int32_t by0 = t->y0 > ty0 ? t->y0 : ty0, by1 = t->y1 < ty1 ? t->y1 : ty1;
     if (bx0 > bx1 || by0 > by1) return;
     int64_t step[3];
-    for (int k = 0; k < 3; k++) step[k] = t->a[k] * RS_SUB;
+    for (int k = 0; k < 3; k++) step[k] = (int64_t)t->a[k] * RS_SUB;
     for (int32_t byy = (by0 - ty0) / RS_BLOCK; byy <= (by1 - ty0) / RS_BLOCK; byy++)
         for (int32_t bxx = (bx0 - tx0) / RS_BLOCK; bxx <= (bx1 - tx0) / RS_BLOCK; bxx++) {
             int b = byy * (RS_TILE / RS_BLOCK) + bxx;
-            if (t->zmax <= block_far[b] && !tg->coverage) {
+            if (t->zmax <= block_far[b] && !tb->coverage) {
                 stats->blocks_early_z_rejected++;
                 continue;
             }
@@ -975,29 +1027,29 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
             int outside = 0;
             int64_t px = (int64_t)x * RS_SUB + RS_SUB / 2, py = (int64_t)ry0 * RS_SUB + RS_SUB / 2;
             for (int k = 0; k < 3; k++) {
-                e[k] = t->a[k] * px + t->b[k] * py + t->c[k];
-                int64_t emax = e[k] + (t->a[k] > 0 ? t->a[k] * (RS_BLOCK - 1) * RS_SUB : 0) +
-                               (t->b[k] > 0 ? t->b[k] * (int64_t)(ry1 - ry0) * RS_SUB : 0);
+                int64_t a = t->a[k], b = t->b[k];
+                e[k] = a * px + b * py + t->c[k];
+                int64_t emax = e[k] + (a > 0 ? a * (RS_BLOCK - 1) * RS_SUB : 0) + (b > 0 ? b * (ry1 - ry0) * RS_SUB : 0);
                 outside |= emax < 0;
             }
             if (outside) continue;
             unsigned lanes = ((1u << (rx1 - x + 1)) - 1u) & ~((1u << (rx0 - x)) - 1u);
             int wrote = 0;
-            if (!t->masked && !tg->coverage) {
-                size_t o = (size_t)ry0 * tg->width + (size_t)x;
-                wrote = block(t, x, ry0, ry1, e, lanes, tg->depth + o, tg->prim ? tg->prim + o : NULL, tg->width);
+            if (!m && !tb->coverage) {
+                size_t o = rs__tile_at(tb, x, ry0);
+                wrote = block(t, x, ry0, ry1, e, lanes, tb->depth + o, tb->prim ? tb->prim + o : NULL, RS_TILE);
             } else
             for (int32_t yy = ry0; yy <= ry1; yy++) {
-                size_t o = (size_t)yy * tg->width + (size_t)x;
+                size_t o = rs__tile_at(tb, x, yy);
                 /* lanes past the image edge are masked, so the row functions
                  * never touch memory beyond the row */
-                if (tg->coverage) rs__row_count(t, e, step, lanes, tg->coverage + o);
-                float *drow = tg->depth + o;
-                uint32_t *prow = tg->prim ? tg->prim + o : NULL;
+                if (tb->coverage) rs__row_count(t, e, step, lanes, tb->coverage + o);
+                float *drow = tb->depth + o;
+                uint32_t *prow = tb->prim ? tb->prim + o : NULL;
                 float zrow = rs__zrow(t, x, yy);
-                wrote |= t->masked ? rs__row_masked(st, t, x, yy, zrow, e, step, lanes, drow, prow)
+                wrote |= m ? rs__row_masked(st, t, m, x, yy, zrow, e, step, lanes, drow, prow)
                                    : row(t, x, yy, zrow, e, step, lanes, drow, prow);
-                for (int k = 0; k < 3; k++) e[k] += t->b[k] * RS_SUB;
+                for (int k = 0; k < 3; k++) e[k] += (int64_t)t->b[k] * RS_SUB;
             }
             /* Depths only grow, so a stale block_far stays a valid (lower)
              * bound: refresh it only every few writes, or when this triangle
@@ -1007,7 +1059,7 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
                 block_writes[b] = 0;
                 int32_t cx1 = x + RS_BLOCK - 1 < tx1 ? x + RS_BLOCK - 1 : tx1;
                 int32_t cy1 = y + RS_BLOCK - 1 < ty1 ? y + RS_BLOCK - 1 : ty1;
-                block_far[b] = rs__block_min(tg, x, y, cx1, cy1);
+                block_far[b] = rs__block_min(tb, x, y, cx1, cy1);
             }
         }
 }
@@ -1021,13 +1073,14 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
     int32_t tx0 = (int32_t)(tile % st->tiles_x) * RS_TILE, ty0 = (int32_t)(tile / st->tiles_x) * RS_TILE;
     int32_t tx1 = tx0 + RS_TILE - 1 < (int32_t)tg->width - 1 ? tx0 + RS_TILE - 1 : (int32_t)tg->width - 1;
     int32_t ty1 = ty0 + RS_TILE - 1 < (int32_t)tg->height - 1 ? ty0 + RS_TILE - 1 : (int32_t)tg->height - 1;
-    for (int32_t y = ty0; y <= ty1; y++) {
-        size_t o = (size_t)y * tg->width + (size_t)tx0;
-        memset(tg->depth + o, 0, sizeof(float) * (size_t)(tx1 - tx0 + 1));
-        if (tg->prim)
-            for (int32_t x = 0; x <= tx1 - tx0; x++) tg->prim[o + (size_t)x] = RS_NO_PRIM;
-        if (tg->coverage) memset(tg->coverage + o, 0, sizeof(uint32_t) * (size_t)(tx1 - tx0 + 1));
-    }
+    _Alignas(64) float depth[RS_TILE * RS_TILE];
+    _Alignas(64) uint32_t prim[RS_TILE * RS_TILE];
+    uint32_t *coverage = NULL;
+    if (tg->coverage && !(coverage = calloc(RS_TILE * RS_TILE, sizeof(uint32_t)))) abort(); /* tests only */
+    rs__tile_buf tb = {depth, tg->prim ? prim : NULL, coverage, tx0, ty0};
+    memset(depth, 0, sizeof depth);
+    if (tg->prim)
+        for (int i = 0; i < RS_TILE * RS_TILE; i++) prim[i] = RS_NO_PRIM;
     float block_far[64];
     uint8_t block_writes[64];
     for (int b = 0; b < 64; b++) block_far[b] = 0.0f, block_writes[b] = 0;
@@ -1039,16 +1092,25 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
         uint32_t e0 = ch->tile_start[tile], e1 = ch->tile_start[tile + 1];
         for (uint32_t e = e0; e < e1; e++) {
             /* the tile's triangles are scattered over the chunk: fetch the
-             * record a few triangles ahead (192 bytes, three lines) */
+             * record a few triangles ahead (two lines) */
             if (e + RS_PREFETCH < e1) {
                 const char *next = (const char *)&ch->tris[ch->sorted[e + RS_PREFETCH]];
                 __builtin_prefetch(next);
                 __builtin_prefetch(next + 64);
-                __builtin_prefetch(next + 128);
             }
-            rs__raster_tri(st, row, block, &ch->tris[ch->sorted[e]], tx0, ty0, tx1, ty1, block_far, block_writes, stats);
+            const rs__tri *t = &ch->tris[ch->sorted[e]];
+            rs__raster_tri(st, row, block, t, t->masked == RS__NOT_MASKED ? NULL : &ch->masked[t->masked], &tb, tx0,
+                           ty0, tx1, ty1, block_far, block_writes, stats);
         }
     }
+    size_t w = (size_t)(tx1 - tx0 + 1);
+    for (int32_t y = ty0; y <= ty1; y++) {
+        size_t o = (size_t)y * tg->width + (size_t)tx0, l = (size_t)(y - ty0) * RS_TILE;
+        memcpy(tg->depth + o, depth + l, sizeof(float) * w);
+        if (tg->prim) memcpy(tg->prim + o, prim + l, sizeof(uint32_t) * w);
+        if (coverage) memcpy(tg->coverage + o, coverage + l, sizeof(uint32_t) * w);
+    }
+    free(coverage);
     out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }
 

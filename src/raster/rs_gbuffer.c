@@ -256,6 +256,7 @@ enum { RS__T_P0 = 0, RS__T_E1 = 3, RS__T_E2 = 6, RS__T_NDET = 9, RS__T_NG = 12, 
  * material's base colour), so the bits are the scalar code's. The
  * constants (T, UV, ALB as above) are one triangle's, broadcast to all
  * lanes. o: depth, position, normal, albedo (10 planes). */
+enum { RS__GROUP_MAX_TRIS = 4 }; /* more triangles in a group of 8: the scalar code (measured as fast) */
 static inline __attribute__((always_inline, target("avx2"))) void
 rs__resolve8_avx2(const rs__resolve_ctx *rc, const float *T, const float *UV, const float *ALB, uint32_t x, uint32_t y,
                   __m256 o[10])
@@ -313,15 +314,15 @@ rs__resolve8_avx2(const rs__resolve_ctx *rc, const float *T, const float *UV, co
 }
 
 /* The 8 pixels x..x+7 of row y with AVX2: each distinct triangle among them
- * is resolved for all 8 lanes and blended into the lanes that show it
- * (measured: as fast as transposing per-lane constants for mixed groups,
- * and faster than the scalar code from two triangles on); empty lanes get
- * rs__resolve_pixel's empty values. Returns 0 (nothing written) when a lane
- * shows a textured triangle; the caller then takes the scalar path. The
- * (scalar, SSE-encoded) triangle setups all run before any 256-bit register
- * is live, so their loads overlap and no AVX/SSE mixing occurs. The cache
- * `c` keeps its triangle if the group shows it, else takes the last lane's,
- * which the next group most likely continues. */
+ * is resolved for all 8 lanes and blended into the lanes that show it;
+ * empty lanes get rs__resolve_pixel's empty values. Returns 0 (nothing
+ * written) when a lane shows a textured triangle or the group shows more
+ * than RS__GROUP_MAX_TRIS triangles; the caller then takes the scalar path
+ * (per-lane constants transposed from 8 setups were measured no faster).
+ * The (scalar, SSE-encoded) triangle setups all run before any 256-bit
+ * register is live, so their loads overlap and no AVX/SSE mixing occurs.
+ * The cache `c` keeps its triangle if the group shows it, else takes the
+ * last lane's, which the next group most likely continues. */
 __attribute__((target("avx2"))) static int rs__resolve_group8_avx2(const rs__resolve_ctx *rc, rs__tri_consts *c,
                                                                    uint32_t x, uint32_t y)
 {
@@ -334,7 +335,10 @@ __attribute__((target("avx2"))) static int rs__resolve_group8_avx2(const rs__res
         uint32_t p = prim[k];
         int seen = p == RS_GBUFFER_EMPTY;
         for (int j = 0; j < n && !seen; j++) seen = tris[j] == p;
-        if (!seen) tris[n++] = p;
+        if (!seen) {
+            if (n == RS__GROUP_MAX_TRIS) return 0;
+            tris[n++] = p;
+        }
     }
     rs__tri_consts other[8];
     const rs__tri_consts *consts[8];

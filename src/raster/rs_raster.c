@@ -79,13 +79,24 @@ typedef struct rs__chunk {
     rs_stats stats;
 } rs__chunk;
 
+/* A vertex after the vertex stage: clip-space position, and for a vertex
+ * inside the frustum (rs__inside) its snapped screen position, which every
+ * triangle using it would otherwise recompute (a division and two
+ * conversions; the conference room's triangles share each vertex ~6 times).
+ * X = RS__NO_SNAP outside the frustum. */
+typedef struct rs__vtx {
+    float x, y, z, w;
+    int32_t X, Y;
+} rs__vtx;
+#define RS__NO_SNAP INT32_MIN
+
 typedef struct rs__cluster {
     pf_vec3 lo, hi;
 } rs__cluster;
 
 struct rs_scratch {
     uint32_t chunk_count;
-    float *clip; /* 4 * vertex_count: x, y, z, w per vertex (AoS, 16-byte rows) */
+    rs__vtx *vtx; /* vertex_count: clip position and, inside the frustum, the snapped screen position */
     uint8_t *cluster_visible;
     rs__chunk *chunks; /* chunk_count */
     rs_stats *tile_stats; /* rs_render: one per tile, grown with the largest target */
@@ -204,13 +215,13 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
 {
     rs_scratch *s = calloc(1, sizeof *s);
     if (!s) return NULL;
-    s->clip = malloc(sizeof(float) * 4 * ((size_t)ctx->weld_count + 1));
+    s->vtx = malloc(sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
     s->chunk_count = ctx->chunk_count;
     size_t chunk_bytes = sizeof(rs__chunk) * (ctx->chunk_count ? ctx->chunk_count : 1);
     s->chunks = aligned_alloc(64, (chunk_bytes + 63) / 64 * 64);
     if (s->chunks) memset(s->chunks, 0, chunk_bytes);
-    if (!s->clip || !s->cluster_visible || !s->chunks) {
+    if (!s->vtx || !s->cluster_visible || !s->chunks) {
         rs_scratch_destroy(s);
         return NULL;
     }
@@ -220,7 +231,7 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
 void rs_scratch_destroy(rs_scratch *s)
 {
     if (!s) return;
-    free(s->clip);
+    free(s->vtx);
     free(s->cluster_visible);
     free(s->tile_stats);
     if (s->chunks)
@@ -323,19 +334,53 @@ void rs_context_set_simd(rs_context *ctx, rs_simd simd) { ctx->simd = simd; }
 
 /* ------------------------------------------------------- 1. vertex stage */
 
+/* floorf without the libm call: exact for |x| < 2^62 (the guard band keeps
+ * snapped coordinates below 2^24). */
+static int64_t rs__floor64(float x)
+{
+    int64_t i = (int64_t)x;
+    return i - ((float)i > x);
+}
+
+/* -w <= x, y <= w and 0 <= z <= w with w finite: then w >= 0, so
+ * gx w - x >= w - x >= 0 and the like hold in floating point too (gx, gy >= 1
+ * as RS_MAX_SIZE <= 2 RS_GUARD; rounding is monotonic): rs__clip_mask is 0.
+ * False for NaN. */
+static int rs__inside(float x, float y, float z, float w)
+{
+    return x >= -w && x <= w && y >= -w && y <= w && z >= 0.0f && z <= w && w < INFINITY;
+}
+
+/* The snapped screen position (1/RS_SUB pixel, y down) of a clip-space
+ * vertex on a W x H target. */
+static void rs__snap(float x, float y, float w, float W, float H, int64_t *X, int64_t *Y)
+{
+    float iw = 1.0f / w;
+    float sx = (x * iw * 0.5f + 0.5f) * W, sy = (0.5f - y * iw * 0.5f) * H;
+    *X = rs__floor64(sx * (float)RS_SUB + 0.5f);
+    *Y = rs__floor64(sy * (float)RS_SUB + 0.5f);
+}
+
 /* Transforms vertices [v0, v1) to clip space. Written as a plain loop over
  * batches the compiler vectorises (SSE2 baseline); with -ffp-contract=off
  * every lane rounds exactly as the scalar expression. */
-static void rs__transform(const rs_mat4 *m, const pf_vec3 *pos, float *clip, uint32_t v0, uint32_t v1)
+static void rs__transform(const rs__pass_state *st, const pf_vec3 *pos, rs__vtx *vtx, uint32_t v0, uint32_t v1)
 {
-    const float *M = m->m;
+    const float *M = st->pass->view_proj.m;
+    float W = (float)st->t->width, H = (float)st->t->height;
     for (uint32_t v = v0; v < v1; v++) {
         float x = pos[v].x, y = pos[v].y, z = pos[v].z;
-        float *c = clip + 4 * (size_t)v;
-        c[0] = M[0] * x + M[4] * y + M[8] * z + M[12];
-        c[1] = M[1] * x + M[5] * y + M[9] * z + M[13];
-        c[2] = M[2] * x + M[6] * y + M[10] * z + M[14];
-        c[3] = M[3] * x + M[7] * y + M[11] * z + M[15];
+        rs__vtx *c = &vtx[v];
+        c->x = M[0] * x + M[4] * y + M[8] * z + M[12];
+        c->y = M[1] * x + M[5] * y + M[9] * z + M[13];
+        c->z = M[2] * x + M[6] * y + M[10] * z + M[14];
+        c->w = M[3] * x + M[7] * y + M[11] * z + M[15];
+        c->X = c->Y = RS__NO_SNAP;
+        if (rs__inside(c->x, c->y, c->z, c->w)) {
+            int64_t X, Y;
+            rs__snap(c->x, c->y, c->w, W, H, &X, &Y); /* |X|, |Y| < 2^23 inside the frustum */
+            c->X = (int32_t)X, c->Y = (int32_t)Y;
+        }
     }
 }
 
@@ -345,7 +390,7 @@ static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
     rs__pass_state *st = p;
     uint32_t n = st->ctx->weld_count;
     uint32_t v0 = item * RS_VCHUNK, v1 = v0 + RS_VCHUNK < n ? v0 + RS_VCHUNK : n;
-    rs__transform(&st->pass->view_proj, st->ctx->weld_pos, st->s->clip, v0, v1);
+    rs__transform(st, st->ctx->weld_pos, st->s->vtx, v0, v1);
 }
 
 /* ------------------------------------------------------- 2. cluster culling */
@@ -448,16 +493,11 @@ static int rs__grow_aligned(void **p, uint32_t *cap, uint32_t need, size_t elem,
     return 1;
 }
 
-/* floorf without the libm call: exact for |x| < 2^62 (the guard band keeps
- * snapped coordinates below 2^24). */
-static int64_t rs__floor64(float x)
-{
-    int64_t i = (int64_t)x;
-    return i - ((float)i > x);
-}
 
-/* Sets up one (clipped) screen triangle and bins it. */
-static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim)
+/* Sets up one (clipped) screen triangle and bins it. `snapped`: the
+ * vertices' snapped positions from the vertex stage (X0, Y0, X1, ...), or
+ * NULL to snap here (clipped vertices). */
+static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim, const int32_t *snapped)
 {
     const rs_target *t = st->t;
     float W = (float)t->width, H = (float)t->height;
@@ -466,10 +506,10 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
      * attribute terms are needed */
     int64_t X[3], Y[3];
     for (int k = 0; k < 3; k++) {
-        float iw = 1.0f / v[k].w;
-        float sx = (v[k].x * iw * 0.5f + 0.5f) * W, sy = (0.5f - v[k].y * iw * 0.5f) * H;
-        X[k] = rs__floor64(sx * (float)RS_SUB + 0.5f);
-        Y[k] = rs__floor64(sy * (float)RS_SUB + 0.5f);
+        if (snapped)
+            X[k] = snapped[2 * k], Y[k] = snapped[2 * k + 1];
+        else
+            rs__snap(v[k].x, v[k].y, v[k].w, W, H, &X[k], &Y[k]);
     }
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
     /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
@@ -598,14 +638,6 @@ static unsigned rs__clip_mask(const rs__pass_state *st, rs__cv v)
     return m;
 }
 
-/* -w <= x, y <= w and 0 <= z <= w with w finite: then w >= 0, so
- * gx w - x >= w - x >= 0 and the like hold in floating point too (gx, gy >= 1
- * as RS_MAX_SIZE <= 2 RS_GUARD; rounding is monotonic): rs__clip_mask is 0.
- * False for NaN. */
-static int rs__inside(rs__cv v)
-{
-    return v.x >= -v.w && v.x <= v.w && v.y >= -v.w && v.y <= v.w && v.z >= 0.0f && v.z <= v.w && v.w < INFINITY;
-}
 
 /* Setup and binning of one fixed chunk of triangles (scene order). */
 static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
@@ -617,29 +649,35 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     ch->entry_count = 0;
     memset(&ch->stats, 0, sizeof ch->stats);
     uint32_t t0 = chunk * RS_CHUNK, t1 = t0 + RS_CHUNK < sc->tri_count ? t0 + RS_CHUNK : sc->tri_count;
-    const float *clip = st->s->clip;
+    const rs__vtx *vtx = st->s->vtx;
     for (uint32_t t = t0; t < t1; t++) {
         if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
         ch->stats.triangles_in++;
         const uint32_t *idx = &st->ctx->weld_idx[3 * t];
         rs__cv v[3];
+        int32_t snapped[6];
+        int inside = 1;
         for (int k = 0; k < 3; k++) {
-            const float *c = clip + 4 * (size_t)idx[k];
-            v[k].x = c[0], v[k].y = c[1], v[k].z = c[2], v[k].w = c[3];
+            const rs__vtx *c = &vtx[idx[k]];
+            v[k].x = c->x, v[k].y = c->y, v[k].z = c->z, v[k].w = c->w;
             v[k].u = k == 1 ? 1.0f : 0.0f;
             v[k].v = k == 2 ? 1.0f : 0.0f;
+            snapped[2 * k] = c->X, snapped[2 * k + 1] = c->Y;
+            inside &= c->X != RS__NO_SNAP;
+        }
+        /* vertices inside the frustum are inside every clip plane (the guard
+         * band is wider than the frustum): no clipping, snapped already */
+        if (inside) {
+            rs__setup_tri(st, ch, v, t, snapped);
+            continue;
         }
         if (rs__outcode(v[0]) & rs__outcode(v[1]) & rs__outcode(v[2])) {
             ch->stats.triangles_culled++;
             continue;
         }
-        /* vertices inside the frustum (false for NaN) are inside every clip
-         * plane (the guard band is wider than the frustum): no masks needed */
-        unsigned need = rs__inside(v[0]) && rs__inside(v[1]) && rs__inside(v[2])
-                            ? 0u
-                            : rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
+        unsigned need = rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
         if (!need) {
-            rs__setup_tri(st, ch, v, t);
+            rs__setup_tri(st, ch, v, t, NULL);
             continue;
         }
         ch->stats.triangles_clipped++;
@@ -647,7 +685,7 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
         int n = rs__clip_polygon(st, need, poly, 3);
         for (int i = 1; i + 1 < n; i++) {
             rs__cv tri[3] = {poly[0], poly[i], poly[i + 1]};
-            rs__setup_tri(st, ch, tri, t);
+            rs__setup_tri(st, ch, tri, t, NULL);
         }
     }
     /* counting sort of the bin entries by tile; stable, so triangle order is
@@ -1200,7 +1238,7 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
 {
     rs__pass_state st;
     if (!rs__begin(&st, ctx, s, pass, t, ctx->simd)) return;
-    rs__transform(&pass->view_proj, ctx->weld_pos, s->clip, 0, ctx->weld_count);
+    rs__transform(&st, ctx->weld_pos, s->vtx, 0, ctx->weld_count);
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
     rs_stats ts;

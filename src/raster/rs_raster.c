@@ -992,10 +992,6 @@ static rs__row_fn rs__row_for(rs_simd simd)
     return rs__row_scalar;
 }
 
-/* The farthest (smallest) depth in block [x, x1] x [y, y1]. A full 8x8
- * block keeps 8 independent minima (one per column) so the loop vectorises
- * instead of waiting on one long dependency chain; the ternary is used, not
- * fminf, which is a libm call. */
 /* A tile's planes while it is rasterized: RS_TILE x RS_TILE, row stride
  * RS_TILE, pixel (x, y) of the image at (x - x0, y - y0). Kept on the
  * rasterizing thread's stack (L1/L2-resident), cleared there and copied to
@@ -1014,11 +1010,29 @@ static size_t rs__tile_at(const rs__tile_buf *tb, int32_t x, int32_t y)
     return (size_t)(y - tb->y0) * RS_TILE + (size_t)(x - tb->x0);
 }
 
+/* The farthest (smallest) depth in block [x, x1] x [y, y1] of the tile. A
+ * full 8x8 block keeps 8 independent minima (one per column), two SSE
+ * registers, instead of one long dependency chain; the ternary, not fminf
+ * (a libm call), elsewhere. */
 static float rs__block_min(const rs__tile_buf *tb, int32_t x, int32_t y, int32_t x1, int32_t y1)
 {
     if (x1 - x == RS_BLOCK - 1) {
-        float acc[RS_BLOCK];
         const float *d = tb->depth + rs__tile_at(tb, x, y);
+#if defined(__SSE2__)
+        /* minps(a, b) is a < b ? a : b, the ternary below: depths are never
+         * NaN, so the order of the minima does not matter */
+        __m128 lo = _mm_loadu_ps(d), hi = _mm_loadu_ps(d + 4);
+        for (int32_t yy = y + 1; yy <= y1; yy++) {
+            d += RS_TILE;
+            lo = _mm_min_ps(_mm_loadu_ps(d), lo);
+            hi = _mm_min_ps(_mm_loadu_ps(d + 4), hi);
+        }
+        lo = _mm_min_ps(lo, hi);
+        lo = _mm_min_ps(lo, _mm_movehl_ps(lo, lo));
+        lo = _mm_min_ss(lo, _mm_shuffle_ps(lo, lo, 1));
+        return _mm_cvtss_f32(lo);
+#else
+        float acc[RS_BLOCK];
         for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i];
         for (int32_t yy = y + 1; yy <= y1; yy++) {
             d += RS_TILE;
@@ -1027,6 +1041,7 @@ static float rs__block_min(const rs__tile_buf *tb, int32_t x, int32_t y, int32_t
         float m = acc[0];
         for (int i = 1; i < RS_BLOCK; i++) m = acc[i] < m ? acc[i] : m;
         return m;
+#endif
     }
     float m = INFINITY;
     for (int32_t yy = y; yy <= y1; yy++) {
@@ -1047,30 +1062,40 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
     int32_t bx0 = t->x0 > tx0 ? t->x0 : tx0, bx1 = t->x1 < tx1 ? t->x1 : tx1;
     int32_t by0 = t->y0 > ty0 ? t->y0 : ty0, by1 = t->y1 < ty1 ? t->y1 : ty1;
     if (bx0 > bx1 || by0 > by1) return;
-    int64_t step[3];
-    for (int k = 0; k < 3; k++) step[k] = (int64_t)t->a[k] * RS_SUB;
-    for (int32_t byy = (by0 - ty0) / RS_BLOCK; byy <= (by1 - ty0) / RS_BLOCK; byy++)
-        for (int32_t bxx = (bx0 - tx0) / RS_BLOCK; bxx <= (bx1 - tx0) / RS_BLOCK; bxx++) {
+    int64_t step[3], block_step[3], amax[3];
+    for (int k = 0; k < 3; k++) {
+        step[k] = (int64_t)t->a[k] * RS_SUB;
+        block_step[k] = step[k] * RS_BLOCK;
+        amax[k] = t->a[k] > 0 ? step[k] * (RS_BLOCK - 1) : 0;
+    }
+    int32_t bxx0 = (bx0 - tx0) / RS_BLOCK, bxx1 = (bx1 - tx0) / RS_BLOCK;
+    for (int32_t byy = (by0 - ty0) / RS_BLOCK; byy <= (by1 - ty0) / RS_BLOCK; byy++) {
+        int32_t y = ty0 + byy * RS_BLOCK;
+        int32_t ry0 = y > by0 ? y : by0, ry1 = y + RS_BLOCK - 1 < by1 ? y + RS_BLOCK - 1 : by1;
+        /* edge functions at pixel (x, ry0) of the row's first block, stepped
+         * by a block (exact integers: the values a px + b py + c the block
+         * would compute itself), and their increase to the block's farthest
+         * corner */
+        int64_t erow[3], emax_off[3];
+        int64_t px0 = (int64_t)(tx0 + bxx0 * RS_BLOCK) * RS_SUB + RS_SUB / 2, py = (int64_t)ry0 * RS_SUB + RS_SUB / 2;
+        for (int k = 0; k < 3; k++) {
+            int64_t b = t->b[k];
+            erow[k] = t->a[k] * px0 + b * py + t->c[k];
+            emax_off[k] = amax[k] + (b > 0 ? b * (ry1 - ry0) * RS_SUB : 0);
+        }
+        for (int32_t bxx = bxx0; bxx <= bxx1; bxx++) {
+            int64_t e[3];
+            for (int k = 0; k < 3; k++) e[k] = erow[k], erow[k] += block_step[k];
             int b = byy * (RS_TILE / RS_BLOCK) + bxx;
             if (t->zmax <= block_far[b] && !tb->coverage) {
                 stats->blocks_early_z_rejected++;
                 continue;
             }
-            int32_t x = tx0 + bxx * RS_BLOCK, y = ty0 + byy * RS_BLOCK;
+            int32_t x = tx0 + bxx * RS_BLOCK;
             int32_t rx0 = x > bx0 ? x : bx0, rx1 = x + RS_BLOCK - 1 < bx1 ? x + RS_BLOCK - 1 : bx1;
-            int32_t ry0 = y > by0 ? y : by0, ry1 = y + RS_BLOCK - 1 < by1 ? y + RS_BLOCK - 1 : by1;
-            /* edge functions at pixel (x, ry0); block rejected if an edge is
-             * negative over the whole block (its maximum over the corners) */
-            int64_t e[3];
-            int outside = 0;
-            int64_t px = (int64_t)x * RS_SUB + RS_SUB / 2, py = (int64_t)ry0 * RS_SUB + RS_SUB / 2;
-            for (int k = 0; k < 3; k++) {
-                int64_t a = t->a[k], b = t->b[k];
-                e[k] = a * px + b * py + t->c[k];
-                int64_t emax = e[k] + (a > 0 ? a * (RS_BLOCK - 1) * RS_SUB : 0) + (b > 0 ? b * (ry1 - ry0) * RS_SUB : 0);
-                outside |= emax < 0;
-            }
-            if (outside) continue;
+            /* rejected if an edge is negative over the whole block (its
+             * maximum over the corners) */
+            if (e[0] + emax_off[0] < 0 || e[1] + emax_off[1] < 0 || e[2] + emax_off[2] < 0) continue;
             unsigned lanes = ((1u << (rx1 - x + 1)) - 1u) & ~((1u << (rx0 - x)) - 1u);
             int wrote = 0;
             if (!m && !tb->coverage) {
@@ -1100,6 +1125,7 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
                 block_far[b] = rs__block_min(tb, x, y, cx1, cy1);
             }
         }
+    }
 }
 
 static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_stats)

@@ -10,7 +10,7 @@
  * - one 1024^2 cube shadow map (6 faces) for a point light at the scene's
  *   centre.
  * Each figure is the median over --frames repetitions (default 15) after one
- * warm-up, in milliseconds. Triangles/s counts the triangles entering the
+ * warm-up, in milliseconds; the thread counts take turns frame by frame. Triangles/s counts the triangles entering the
  * G-buffer pass (after cluster culling); pixels/s the image's pixels.
  * Output: a table on stdout and one JSON line (prefix "json: "). */
 #include <stdlib.h>
@@ -120,124 +120,147 @@ static void bench__rays_row(void *p, uint32_t y, uint32_t worker)
     }
 }
 
-static int bench__one(const pf_scene *scene, const bench_scene *bs, uint32_t threads, pf_isa isa, uint32_t frames,
-                      bench_result *out)
+/* One thread count's state on one scene (contexts, buffers, samples), so
+ * the thread counts can take turns frame by frame: a burst of load on this
+ * shared machine then slows both alike instead of one of them, which keeps
+ * the 2-thread speed-up honest. */
+typedef struct bench_run {
+    uint32_t threads, frames;
+    pf_jobs *jobs;
+    pf_rt *rt;
+    rs_context *rs;
+    rs_para_context *para;
+    pf_camera cam;
+    gi_frame f;
+    int have_frame;
+    pf_hit *hits;
+    rs_stats st;
+    pf_vec3 vp[BENCH_VPLS], vn[BENCH_VPLS];
+    uint16_t *atlas;
+    float range;
+    pf_scene lit; /* the scene with one point light at its centre (shallow copy) */
+    pf_light light;
+    rs_shadow_map map;
+    int have_map;
+    /* samples, frames each */
+    double *vis, *res, *tot, *emb, *rays, *pm, *pe, *cube;
+} bench_run;
+
+static void bench__close(bench_run *r)
+{
+    if (r->have_map) rs_shadow_map_free(&r->map);
+    if (r->have_frame) gi_frame_free(&r->f);
+    free(r->vis), free(r->res), free(r->tot), free(r->emb), free(r->pm), free(r->pe), free(r->cube), free(r->rays);
+    free(r->hits);
+    free(r->atlas);
+    rs_para_context_destroy(r->para);
+    rs_context_destroy(r->rs);
+    pf_rt_destroy(r->rt);
+    if (r->jobs) pf_jobs_destroy(r->jobs);
+    memset(r, 0, sizeof *r);
+}
+
+static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *bs, uint32_t threads, pf_isa isa,
+                       uint32_t frames)
 {
     pf_error err;
-    memset(out, 0, sizeof *out);
-    out->scene = bs->name;
-    out->threads = threads;
-    pf_jobs *jobs = pf_jobs_create(threads);
-    pf_rt *rt = NULL;
-    rs_context *rs = NULL;
-    rs_para_context *para = NULL;
-    if (!jobs || pf_rt_create(&rt, scene, isa, threads, &err) != PF_OK ||
-        rs_context_create(&rs, scene, jobs, rs_simd_for_isa(isa), &err) != PF_OK ||
-        rs_para_context_create(&para, scene, NULL, &err) != PF_OK) {
-        fprintf(stderr, "softgi bench: %s\n", err.message);
-        return 1;
-    }
-    pf_camera cam;
-    pf_camera_look_at(&cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), &err);
-    gi_frame f;
-    if (gi_frame_init(&f, scene, rt, rs, jobs, &cam, BENCH_W, BENCH_H, 0, &err) != PF_OK) {
-        fprintf(stderr, "softgi bench: %s\n", err.message);
-        return 1;
-    }
-    double *vis = calloc(frames, sizeof(double)), *res = calloc(frames, sizeof(double));
-    double *tot = calloc(frames, sizeof(double)), *emb = calloc(frames, sizeof(double));
-    double *rays = calloc(frames, sizeof(double));
-    pf_hit *hits = malloc(sizeof(pf_hit) * BENCH_W * BENCH_H);
-    bench__rays_ctx rc = {rt, &cam, hits};
-    double *pm = calloc(frames, sizeof(double)), *pe = calloc(frames, sizeof(double));
-    double *cube = calloc(frames, sizeof(double));
-
-    /* G-buffer: raster (visibility + resolve) vs Embree */
-    rs_stats st;
-    for (uint32_t i = 0; i <= frames; i++) { /* i == 0: warm-up */
-        double t0 = pf_time_now();
-        rs_target tg = {BENCH_W, BENCH_H, f.gbuf.depth, f.gbuf.prim, NULL};
-        rs_pass pass = {rs_mat4_camera(&cam, BENCH_W, BENCH_H), RS_CULL_NONE};
-        rs_render(rs, &pass, &tg, &st);
-        double t1 = pf_time_now();
-        gi_stage_gbuffer_resolve(&f);
-        double t2 = pf_time_now();
-        gi_stage_gbuffer_raytrace(&f);
-        double t3 = pf_time_now();
-        pf_jobs_parallel_for(jobs, bench__rays_row, &rc, BENCH_H, 1);
-        double t4 = pf_time_now();
-        pf_jobs_wait_all(jobs);
-        if (i == 0) continue;
-        rays[i - 1] = (t4 - t3) * 1e3;
-        vis[i - 1] = (t1 - t0) * 1e3;
-        res[i - 1] = (t2 - t1) * 1e3;
-        tot[i - 1] = (t2 - t0) * 1e3;
-        emb[i - 1] = (t3 - t2) * 1e3;
-    }
-    out->tris = (uint32_t)st.triangles_in;
-
-    /* Paraboloid maps: 64 in one call, per-map mean */
-    pf_vec3 vp[BENCH_VPLS], vn[BENCH_VPLS];
-    bench__sample_vpls(scene, vp, vn, BENCH_VPLS);
-    uint32_t res_para = rs_para_resolution(para);
-    uint16_t *atlas = malloc(rs_para_atlas_bytes(res_para, BENCH_VPLS));
-    float range = rs_para_default_range(scene);
-    for (uint32_t i = 0; i <= frames; i++) {
-        double t0 = pf_time_now();
-        rs_para_render(atlas, para, jobs, vp, vn, BENCH_VPLS, range, NULL);
-        double t1 = pf_time_now();
-        rs_para_render_traced(atlas, res_para, rt, jobs, vp, vn, BENCH_VPLS, range);
-        double t2 = pf_time_now();
-        pf_jobs_wait_all(jobs);
-        if (i == 0) continue;
-        pm[i - 1] = (t1 - t0) * 1e3 / BENCH_VPLS;
-        pe[i - 1] = (t2 - t1) * 1e3 / BENCH_VPLS;
-    }
-    free(atlas);
-
-    /* Cube shadow map, 1024^2 per face, point light at the scene centre */
-    pf_scene lit = *scene; /* shallow copy with one extra light; arrays stay the scene's */
-    pf_light light;
-    memset(&light, 0, sizeof light);
-    light.type = PF_LIGHT_POINT;
-    light.position = pf_v3_scale(pf_v3_add(scene->bounds_min, scene->bounds_max), 0.5f);
-    light.color = pf_v3(1, 1, 1);
-    light.intensity = 1.0f;
-    lit.lights = &light;
-    lit.light_count = 1;
-    rs_shadow_map map;
+    memset(r, 0, sizeof *r);
+    r->threads = threads;
+    r->frames = frames;
+    r->jobs = pf_jobs_create(threads);
+    if (!r->jobs || pf_rt_create(&r->rt, scene, isa, threads, &err) != PF_OK ||
+        rs_context_create(&r->rs, scene, r->jobs, rs_simd_for_isa(isa), &err) != PF_OK ||
+        rs_para_context_create(&r->para, scene, NULL, &err) != PF_OK ||
+        pf_camera_look_at(&r->cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), &err) != PF_OK ||
+        gi_frame_init(&r->f, scene, r->rt, r->rs, r->jobs, &r->cam, BENCH_W, BENCH_H, 0, &err) != PF_OK)
+        goto fail;
+    r->have_frame = 1;
+    double **samples[] = {&r->vis, &r->res, &r->tot, &r->emb, &r->rays, &r->pm, &r->pe, &r->cube};
+    for (size_t k = 0; k < sizeof samples / sizeof samples[0]; k++)
+        if (!(*samples[k] = calloc(frames, sizeof(double)))) goto oom;
+    bench__sample_vpls(scene, r->vp, r->vn, BENCH_VPLS);
+    r->range = rs_para_default_range(scene);
+    if (!(r->hits = malloc(sizeof(pf_hit) * BENCH_W * BENCH_H)) ||
+        !(r->atlas = malloc(rs_para_atlas_bytes(rs_para_resolution(r->para), BENCH_VPLS))))
+        goto oom;
+    /* cube shadow map, 1024^2 per face, point light at the scene centre */
+    r->lit = *scene;
+    r->light.type = PF_LIGHT_POINT;
+    r->light.position = pf_v3_scale(pf_v3_add(scene->bounds_min, scene->bounds_max), 0.5f);
+    r->light.color = pf_v3(1, 1, 1);
+    r->light.intensity = 1.0f;
+    r->lit.lights = &r->light;
+    r->lit.light_count = 1;
     rs_shadow_desc desc;
     memset(&desc, 0, sizeof desc);
-    if (rs_shadow_map_init(&map, &lit, 0, &desc, &err) != PF_OK) {
-        fprintf(stderr, "softgi bench: %s\n", err.message);
-        return 1;
-    }
-    for (uint32_t i = 0; i <= frames; i++) {
-        double t0 = pf_time_now();
-        rs_shadow_render(rs, &map, 1, NULL);
-        double t1 = pf_time_now();
-        pf_jobs_wait_all(jobs);
-        if (i > 0) cube[i - 1] = (t1 - t0) * 1e3;
-    }
-    rs_shadow_map_free(&map);
+    if (rs_shadow_map_init(&r->map, &r->lit, 0, &desc, &err) != PF_OK) goto fail;
+    r->have_map = 1;
+    return 1;
+oom:
+    pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "out of memory for the benchmark");
+fail:
+    fprintf(stderr, "softgi bench: %s\n", err.message);
+    bench__close(r);
+    return 0;
+}
 
-    out->vis_ms = bench__median(vis, frames);
-    out->resolve_ms = bench__median(res, frames);
-    out->gbuf_ms = bench__median(tot, frames);
-    out->embree_gbuf_ms = bench__median(emb, frames);
-    out->embree_rays_ms = bench__median(rays, frames);
-    out->para_ms = bench__median(pm, frames);
-    out->para_embree_ms = bench__median(pe, frames);
-    out->cube_ms = bench__median(cube, frames);
+/* One frame of every measurement; frame 0 is the warm-up (not recorded). */
+static void bench__frame(bench_run *r, uint32_t i)
+{
+    /* G-buffer: raster (visibility + resolve) vs Embree */
+    double t0 = pf_time_now();
+    rs_target tg = {BENCH_W, BENCH_H, r->f.gbuf.depth, r->f.gbuf.prim, NULL};
+    rs_pass pass = {rs_mat4_camera(&r->cam, BENCH_W, BENCH_H), RS_CULL_NONE};
+    rs_render(r->rs, &pass, &tg, &r->st);
+    double t1 = pf_time_now();
+    gi_stage_gbuffer_resolve(&r->f);
+    double t2 = pf_time_now();
+    gi_stage_gbuffer_raytrace(&r->f);
+    double t3 = pf_time_now();
+    bench__rays_ctx rc = {r->rt, &r->cam, r->hits};
+    pf_jobs_parallel_for(r->jobs, bench__rays_row, &rc, BENCH_H, 1);
+    double t4 = pf_time_now();
+    pf_jobs_wait_all(r->jobs);
+    /* paraboloid maps: 64 in one call, per-map mean */
+    uint32_t res_para = rs_para_resolution(r->para);
+    double t5 = pf_time_now();
+    rs_para_render(r->atlas, r->para, r->jobs, r->vp, r->vn, BENCH_VPLS, r->range, NULL);
+    double t6 = pf_time_now();
+    rs_para_render_traced(r->atlas, res_para, r->rt, r->jobs, r->vp, r->vn, BENCH_VPLS, r->range);
+    double t7 = pf_time_now();
+    pf_jobs_wait_all(r->jobs);
+    /* cube shadow map */
+    double t8 = pf_time_now();
+    rs_shadow_render(r->rs, &r->map, 1, NULL);
+    double t9 = pf_time_now();
+    pf_jobs_wait_all(r->jobs);
+    if (i == 0) return;
+    r->vis[i - 1] = (t1 - t0) * 1e3;
+    r->res[i - 1] = (t2 - t1) * 1e3;
+    r->tot[i - 1] = (t2 - t0) * 1e3;
+    r->emb[i - 1] = (t3 - t2) * 1e3;
+    r->rays[i - 1] = (t4 - t3) * 1e3;
+    r->pm[i - 1] = (t6 - t5) * 1e3 / BENCH_VPLS;
+    r->pe[i - 1] = (t7 - t6) * 1e3 / BENCH_VPLS;
+    r->cube[i - 1] = (t9 - t8) * 1e3;
+}
+
+static void bench__result(bench_run *r, const char *scene, bench_result *out)
+{
+    memset(out, 0, sizeof *out);
+    out->scene = scene;
+    out->threads = r->threads;
+    out->tris = (uint32_t)r->st.triangles_in;
+    out->vis_ms = bench__median(r->vis, r->frames);
+    out->resolve_ms = bench__median(r->res, r->frames);
+    out->gbuf_ms = bench__median(r->tot, r->frames);
+    out->embree_gbuf_ms = bench__median(r->emb, r->frames);
+    out->embree_rays_ms = bench__median(r->rays, r->frames);
+    out->para_ms = bench__median(r->pm, r->frames);
+    out->para_embree_ms = bench__median(r->pe, r->frames);
+    out->cube_ms = bench__median(r->cube, r->frames);
     out->tris_per_s = out->tris / (out->vis_ms * 1e-3);
     out->pixels_per_s = (double)BENCH_W * BENCH_H / (out->gbuf_ms * 1e-3);
-    free(vis), free(res), free(tot), free(emb), free(pm), free(pe), free(cube), free(rays), free(hits);
-    gi_frame_free(&f);
-    rs_para_context_destroy(para);
-    rs_context_destroy(rs);
-    pf_rt_destroy(rt);
-    pf_jobs_destroy(jobs);
-    return 0;
 }
 
 int app_bench_raster(const pf_options *o)
@@ -265,8 +288,21 @@ int app_bench_raster(const pf_options *o)
             fprintf(stderr, "softgi bench: %s (give the folder with --scenes)\n", err.message);
             return 1;
         }
-        for (uint32_t t = 0; t < nthreads; t++)
-            if (bench__one(&scene, &k_scenes[k], thread_list[t], isa, frames, &results[nres++]) != 0) return 1;
+        bench_run runs[2];
+        uint32_t opened = 0;
+        for (; opened < nthreads; opened++)
+            if (!bench__open(&runs[opened], &scene, &k_scenes[k], thread_list[opened], isa, frames)) break;
+        if (opened < nthreads) {
+            for (uint32_t t = 0; t < opened; t++) bench__close(&runs[t]);
+            pf_scene_free(&scene);
+            return 1;
+        }
+        for (uint32_t i = 0; i <= frames; i++) /* thread counts take turns */
+            for (uint32_t t = 0; t < nthreads; t++) bench__frame(&runs[t], i);
+        for (uint32_t t = 0; t < nthreads; t++) {
+            bench__result(&runs[t], k_scenes[k].name, &results[nres++]);
+            bench__close(&runs[t]);
+        }
         pf_scene_free(&scene);
     }
     printf("\nG-buffer: raster visibility vs Embree primary rays (visibility only), then the whole G-buffer\n"

@@ -11,6 +11,14 @@
 #include <emmintrin.h>
 #endif
 
+void *rs_plane_alloc(size_t bytes)
+{
+    size_t rounded = (bytes + 63) / 64 * 64;
+    void *p = aligned_alloc(64, rounded ? rounded : 64);
+    if (p) memset(p, 0, rounded ? rounded : 64);
+    return p;
+}
+
 pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_error *err)
 {
     memset(g, 0, sizeof *g);
@@ -20,8 +28,8 @@ pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_err
     float **planes[] = {&g->depth, &g->pos_x, &g->pos_y, &g->pos_z, &g->nrm_x,
                         &g->nrm_y, &g->nrm_z, &g->alb_r, &g->alb_g, &g->alb_b};
     for (size_t i = 0; i < sizeof planes / sizeof planes[0]; i++)
-        if (!(*planes[i] = calloc(n ? n : 1, sizeof(float)))) goto oom;
-    if (!(g->prim = calloc(n ? n : 1, sizeof(uint32_t)))) goto oom;
+        if (!(*planes[i] = rs_plane_alloc(n * sizeof(float)))) goto oom;
+    if (!(g->prim = rs_plane_alloc(n * sizeof(uint32_t)))) goto oom;
     if (!(g->ray_sx = calloc((size_t)width + 1, sizeof(float))) || !(g->ray_sy = calloc((size_t)height + 1, sizeof(float))))
         goto oom;
     rs_gbuffer_clear(g);

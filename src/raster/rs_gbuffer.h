@@ -16,6 +16,7 @@
 #ifndef RS_GBUFFER_H
 #define RS_GBUFFER_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "pf_jobs.h"
@@ -33,6 +34,11 @@ typedef struct rs_gbuffer {
     uint32_t *prim;
     float *ray_sx, *ray_sy; /* resolve scratch: width + 1 and height + 1 screen offsets */
 } rs_gbuffer;
+
+/* Zeroed memory for an image plane, 64-byte aligned (so 64-pixel tiles of a
+ * row whose length is a multiple of 16 share no cache line between the
+ * threads that write them); free with free(). NULL when out of memory. */
+void *rs_plane_alloc(size_t bytes);
 
 /* Allocates all planes (zeroed; depth +inf, prim EMPTY). */
 pf_result rs_gbuffer_init(rs_gbuffer *g, uint32_t width, uint32_t height, pf_error *err);

@@ -128,7 +128,7 @@ pf_result rs_shadow_map_init(rs_shadow_map *m, const pf_scene *scene, uint32_t l
         rs__setup_ortho(m, scene, L);
     else
         rs__setup_perspective(m, scene, L);
-    m->depth = calloc((size_t)m->face_count * size * size, sizeof(float));
+    m->depth = rs_plane_alloc((size_t)m->face_count * size * size * sizeof(float));
     if (!m->depth)
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%ux%u shadow map", size, size,
                             m->face_count);

@@ -361,9 +361,10 @@ static void rs__snap(float x, float y, float w, float W, float H, int64_t *X, in
     *Y = rs__floor64(sy * (float)RS_SUB + 0.5f);
 }
 
-/* Transforms vertices [v0, v1) to clip space. Written as a plain loop over
- * batches the compiler vectorises (SSE2 baseline); with -ffp-contract=off
- * every lane rounds exactly as the scalar expression. */
+/* Transforms vertices [v0, v1) to clip space (-ffp-contract=off: each
+ * product and sum rounded on its own) and snaps those inside the frustum
+ * with the very operations rs__setup_tri would use, so the bits are the
+ * same whichever of the two snaps a vertex. */
 static void rs__transform(const rs__pass_state *st, const pf_vec3 *pos, rs__vtx *vtx, uint32_t v0, uint32_t v1)
 {
     const float *M = st->pass->view_proj.m;
@@ -492,7 +493,6 @@ static int rs__grow_aligned(void **p, uint32_t *cap, uint32_t need, size_t elem,
     *cap = nc;
     return 1;
 }
-
 
 /* Sets up one (clipped) screen triangle and bins it. `snapped`: the
  * vertices' snapped positions from the vertex stage (X0, Y0, X1, ...), or
@@ -637,7 +637,6 @@ static unsigned rs__clip_mask(const rs__pass_state *st, rs__cv v)
         if (!(rs__plane(st, k, v) >= 0.0f)) m |= 1u << k;
     return m;
 }
-
 
 /* Setup and binning of one fixed chunk of triangles (scene order). */
 static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)

@@ -20,14 +20,32 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
 pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
                           uint32_t height, char png[4096], char pfm[4096], pf_error *err);
 
+struct pf_rt;
+struct pf_jobs;
+struct pf_stage_times;
+/* What render and reference both start with: the image size, threads and
+ * ISA the options give, the scene with its camera (app_scene_load), Embree
+ * and the job system. */
+typedef struct app_setup {
+    uint32_t width, height, threads;
+    pf_isa isa;
+    pf_scene scene;
+    pf_camera camera;
+    char stem[256];
+    struct pf_rt *rt;
+    struct pf_jobs *jobs;
+} app_setup;
+/* Fills `s`, timing "load scene" and "embree build" into `t`. On failure
+ * nothing is left to free. */
+pf_result app_setup_begin(const pf_options *o, app_setup *s, struct pf_stage_times *t, pf_error *err);
+void app_setup_end(app_setup *s);
+
 struct gi_indirect_options;
 /* The many-light options given on the command line (--method, --vpls, ...). */
 pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);
 
 struct gi_frame;
 struct rs_context;
-struct pf_rt;
-struct pf_jobs;
 /* The frame the command line describes, on a loaded scene: gi_frame_init
  * with --shadow-size, then --area-strata/--area-points, then the indirect
  * stages (app_indirect_options) unless --direct-only or `indirect` is 0

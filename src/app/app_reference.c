@@ -63,37 +63,19 @@ int app_reference(const pf_options *o)
     pf_error err;
     pf_stage_times t;
     memset(&t, 0, sizeof t);
-    uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
-    uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
-    pf_isa isa;
-    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     if (o->bounces > GI_REFERENCE_MAX_BOUNCES) {
         pf_error_set(&err, PF_ERR_ARGUMENT, "--bounces: %u is too many (at most %u)", o->bounces,
                      GI_REFERENCE_MAX_BOUNCES);
         return app_fail(&err);
     }
 
-    /* Scene (as app_render.c) */
-    double t0 = pf_time_now();
-    pf_scene scene;
-    pf_camera camera;
-    char stem[256];
-    pf_result r = app_scene_load(o, &scene, &camera, stem, sizeof stem, &err);
+    /* Scene, Embree, jobs (as app_render.c), the image */
+    app_setup su;
+    pf_result r = app_setup_begin(o, &su, &t, &err);
     if (r != PF_OK) return app_fail(&err);
-    pf_stage_add(&t, "load scene", (pf_time_now() - t0) * 1e3);
-
-    /* Embree + jobs + the image */
-    t0 = pf_time_now();
-    pf_rt *rt;
-    if ((r = pf_rt_create(&rt, &scene, isa, threads, &err)) != PF_OK) {
-        pf_scene_free(&scene);
-        return app_fail(&err);
-    }
-    pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
-    pf_jobs *jobs = pf_jobs_create(threads);
+    uint32_t width = su.width, height = su.height;
     float *image = malloc((size_t)width * height * 3 * sizeof(float));
-    if (!jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
-    else if (!image) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "no memory for a %ux%u image", width, height);
+    if (!image) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "no memory for a %ux%u image", width, height);
 
     /* Path trace */
     gi_reference_options ro;
@@ -108,18 +90,18 @@ int app_reference(const pf_options *o)
         ro.progress_user = &prog;
     }
     if (r == PF_OK) {
-        t0 = pf_time_now();
+        double t0 = pf_time_now();
         prog.start = t0;
-        r = gi_reference_render(image, &scene, rt, jobs, &camera, width, height, &ro, &err);
+        r = gi_reference_render(image, &su.scene, su.rt, su.jobs, &su.camera, width, height, &ro, &err);
         pf_stage_add(&t, "path trace", (pf_time_now() - t0) * 1e3);
     }
 
     /* Output */
     char png[4096], pfm[4096];
     if (r == PF_OK) {
-        t0 = pf_time_now();
+        double t0 = pf_time_now();
         char def[4096];
-        snprintf(def, sizeof def, "out/%s-reference.png", stem);
+        snprintf(def, sizeof def, "out/%s-reference.png", su.stem);
         r = app_write_image(o, def, image, width, height, png, pfm, &err);
         pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
     }
@@ -129,9 +111,9 @@ int app_reference(const pf_options *o)
         if (!o->quiet) {
             uint32_t b = ro.direct_only ? 0u : ro.bounces;
             printf("softgi reference: %s, %u triangles, %u lights, %ux%u, %u spp, %u bounces%s, %u threads, isa %s\n",
-                   stem, scene.tri_count, scene.light_count, width, height, ro.spp, b,
-                   ro.indirect_only ? " (indirect only)" : (ro.direct_only ? " (direct only)" : ""), threads,
-                   pf_isa_name(isa));
+                   su.stem, su.scene.tri_count, su.scene.light_count, width, height, ro.spp, b,
+                   ro.indirect_only ? " (indirect only)" : (ro.direct_only ? " (direct only)" : ""), su.threads,
+                   pf_isa_name(su.isa));
             pf_stage_print(&t, stdout);
             printf("wrote %s and %s\n", png, pfm);
         }
@@ -139,8 +121,6 @@ int app_reference(const pf_options *o)
             printf("hash %016llx\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3));
     }
     free(image);
-    if (jobs) pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&scene);
+    app_setup_end(&su);
     return status;
 }

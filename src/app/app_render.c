@@ -22,43 +22,24 @@ int app_render(const pf_options *o)
     pf_error err;
     pf_stage_times t;
     memset(&t, 0, sizeof t);
-    uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
-    uint32_t threads = o->threads ? o->threads : pf_jobs_core_count();
-    pf_isa isa;
-    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
 
-    /* Scene */
-    double t0 = pf_time_now();
-    pf_scene scene;
-    pf_camera camera;
-    char stem[256];
-    pf_result r = app_scene_load(o, &scene, &camera, stem, sizeof stem, &err);
+    /* Scene, Embree, jobs */
+    app_setup su;
+    pf_result r = app_setup_begin(o, &su, &t, &err);
     if (r != PF_OK) return app_fail(&err);
-    pf_stage_add(&t, "load scene", (pf_time_now() - t0) * 1e3);
-
-    /* Embree + jobs */
-    t0 = pf_time_now();
-    pf_rt *rt;
-    if ((r = pf_rt_create(&rt, &scene, isa, threads, &err)) != PF_OK) {
-        pf_scene_free(&scene);
-        return app_fail(&err);
-    }
-    pf_stage_add(&t, "embree build", (pf_time_now() - t0) * 1e3);
-    pf_jobs *jobs = pf_jobs_create(threads);
+    const pf_scene *scene = &su.scene;
+    uint32_t width = su.width, height = su.height;
     rs_context *raster = NULL;
     gi_frame frame;
-    if (!jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
-    if (r == PF_OK && !o->raytrace) {
-        t0 = pf_time_now();
-        r = rs_context_create(&raster, &scene, jobs, rs_simd_for_isa(isa), &err);
+    if (!o->raytrace) {
+        double t0 = pf_time_now();
+        r = rs_context_create(&raster, scene, su.jobs, rs_simd_for_isa(su.isa), &err);
         pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
     }
-    if (r == PF_OK) r = app_frame_init(o, &frame, &scene, rt, raster, jobs, &camera, width, height, 1, &err);
+    if (r == PF_OK) r = app_frame_init(o, &frame, scene, su.rt, raster, su.jobs, &su.camera, width, height, 1, &err);
     if (r != PF_OK) {
         rs_context_destroy(raster);
-        pf_jobs_destroy(jobs);
-        pf_rt_destroy(rt);
-        pf_scene_free(&scene);
+        app_setup_end(&su);
         return app_fail(&err);
     }
 
@@ -68,9 +49,9 @@ int app_render(const pf_options *o)
     for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
 
     /* Output */
-    t0 = pf_time_now();
+    double t0 = pf_time_now();
     char png[4096], pfm[4096], def[4096];
-    snprintf(def, sizeof def, "out/%s.png", stem);
+    snprintf(def, sizeof def, "out/%s.png", su.stem);
     r = app_write_image(o, def, frame.final, width, height, png, pfm, &err);
     if (r == PF_OK && o->dump_dir) {
         gi_view_settings vs = {o->exposure, 0}; /* the views `softgi view` shows at this exposure */
@@ -81,8 +62,8 @@ int app_render(const pf_options *o)
     if (r != PF_OK) status = app_fail(&err);
     else {
         if (!o->quiet) {
-            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", stem,
-                   scene.tri_count, scene.light_count, width, height, threads, pf_isa_name(isa),
+            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", su.stem,
+                   scene->tri_count, scene->light_count, width, height, su.threads, pf_isa_name(su.isa),
                    o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
             if (frame.indirect)
                 printf("indirect: %s, %u VPLs (%u maps rendered), %ux%u tiles, clamp b = %g, visibility %s\n",
@@ -100,8 +81,6 @@ int app_render(const pf_options *o)
     }
     gi_frame_free(&frame);
     rs_context_destroy(raster);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&scene);
+    app_setup_end(&su);
     return status;
 }

@@ -1,6 +1,8 @@
-/* app_scene: the scene loading `render` and `reference` share: the file or
- * the embedded default scene, the --camera / --light overrides, validation
- * and the user-facing warnings. */
+/* app_scene: what the commands share before they render: the scene loading
+ * (the file or the embedded default scene, the --camera / --light
+ * overrides, validation and the user-facing warnings), the scene + Embree +
+ * jobs setup of `render` and `reference`, and the frame the options
+ * describe. */
 #include <stdio.h>
 #include <string.h>
 
@@ -9,6 +11,9 @@
 #include "gi_indirect.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
 
 extern const unsigned char softgi_default_scene[];
 extern const unsigned long softgi_default_scene_size;
@@ -138,4 +143,36 @@ pf_result app_write_image(const pf_options *o, const char *default_png, const fl
     pf_result r = pf_imageio_write_png(png, rgb, width, height, o->exposure, err);
     if (r == PF_OK) r = pf_imageio_write_pfm(pfm, rgb, width, height, err);
     return r;
+}
+
+pf_result app_setup_begin(const pf_options *o, app_setup *s, pf_stage_times *t, pf_error *err)
+{
+    memset(s, 0, sizeof *s);
+    s->width = o->width ? o->width : 640;
+    s->height = o->height ? o->height : 480;
+    s->threads = o->threads ? o->threads : pf_jobs_core_count();
+    pf_result r = pf_isa_resolve(o->isa, &s->isa, err);
+    if (r != PF_OK) return r;
+    double t0 = pf_time_now();
+    if ((r = app_scene_load(o, &s->scene, &s->camera, s->stem, sizeof s->stem, err)) != PF_OK) return r;
+    pf_stage_add(t, "load scene", (pf_time_now() - t0) * 1e3);
+    t0 = pf_time_now();
+    if ((r = pf_rt_create(&s->rt, &s->scene, s->isa, s->threads, err)) != PF_OK) {
+        pf_scene_free(&s->scene);
+        return r;
+    }
+    pf_stage_add(t, "embree build", (pf_time_now() - t0) * 1e3);
+    if (!(s->jobs = pf_jobs_create(s->threads))) {
+        app_setup_end(s);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", s->threads);
+    }
+    return PF_OK;
+}
+
+void app_setup_end(app_setup *s)
+{
+    if (s->jobs) pf_jobs_destroy(s->jobs);
+    pf_rt_destroy(s->rt);
+    pf_scene_free(&s->scene);
+    memset(s, 0, sizeof *s);
 }

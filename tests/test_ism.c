@@ -63,16 +63,6 @@ static void sibenik_setup(pf_scene *s, pf_camera *cam)
     assert_int_equal(pf_camera_look_at(cam, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err), PF_OK);
 }
 
-static uint32_t hash32(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
 /* ------------------------------------------------------------------ pull-push */
 
 static void test_pull_push_constant(void **state)
@@ -127,7 +117,7 @@ static void test_pull_push_plane(void **state)
             float t = 1.0f / d.z;
             truth[k] = t * S < (float)RS_PARA_MAX_CODE ? (uint16_t)(t * S) : RS_PARA_MAX_CODE;
             inside++;
-            int drop = hash32(k * 2654435761u + 17u) % 100u < 70u;
+            int drop = pf_hash32(k * 2654435761u + 17u) % 100u < 70u;
             map[k] = drop ? RS_PARA_EMPTY : truth[k];
             removed += (uint32_t)drop;
         }

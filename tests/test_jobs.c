@@ -20,6 +20,7 @@
 
 #include "pf_fpenv.h"
 #include "pf_jobs.h"
+#include "pf_math.h"
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <xmmintrin.h>
@@ -28,13 +29,7 @@
 static const uint32_t thread_counts[] = {1, 2, 7};
 #define THREAD_CONFIGS (sizeof thread_counts / sizeof thread_counts[0])
 
-static uint64_t splitmix64(uint64_t *state)
-{
-    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
+static uint64_t splitmix64(uint64_t *state) { return pf_mix64(*state += 0x9e3779b97f4a7c15ull); }
 
 /* Order-sensitive mix: results differ if inputs are read in another order
  * or before they were written. */

@@ -68,13 +68,7 @@
 
 /* ------------------------------------------------------------------ helpers */
 
-static uint64_t rng_next(uint64_t *s) /* splitmix64 */
-{
-    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
+static uint64_t rng_next(uint64_t *s) { return pf_mix64(*s += 0x9e3779b97f4a7c15ull); } /* splitmix64 */
 static double rng_unit(uint64_t *s) { return (double)(rng_next(s) >> 11) * (1.0 / 9007199254740992.0); }
 
 static pf_light make_spot(pf_vec3 pos, pf_vec3 target, float inner_deg, float outer_deg)

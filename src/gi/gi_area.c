@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-float gi_area_luminance(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 pf_result gi_area_lights_build(gi_area_lights *a, const pf_scene *s, pf_error *err)
 {
@@ -38,7 +37,7 @@ pf_result gi_area_lights_build(gi_area_lights *a, const pf_scene *s, pf_error *e
         L->area = 0.5f * pf_v3_length(pf_v3_cross(L->e1, L->e2));
         L->two_sided = m->double_sided ? 1u : 0u;
         double faces = L->two_sided ? 2.0 : 1.0;
-        double pw = faces * PF_PI * (double)L->area * (double)gi_area_luminance(L->radiance);
+        double pw = faces * PF_PI * (double)L->area * (double)pf_luminance(L->radiance);
         total += pw;
         a->cdf[a->count] = total;
         rgb = pf_v3_add(rgb, pf_v3_scale(L->radiance, (float)(faces * PF_PI * L->area)));

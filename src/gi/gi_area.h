@@ -41,9 +41,6 @@ typedef struct gi_area_lights {
 pf_result gi_area_lights_build(gi_area_lights *a, const pf_scene *scene, pf_error *err);
 void gi_area_lights_free(gi_area_lights *a);
 
-/* Luminance of an RGB triple (Rec. 709 weights), the power measure above. */
-float gi_area_luminance(pf_vec3 c);
-
 typedef struct gi_area_sample {
     uint32_t index;   /* into a->tri */
     pf_vec3 p;        /* point on the emitter */

@@ -172,18 +172,6 @@ static void gi__iir_destroy(void *state)
     free(s);
 }
 
-/* A 32-bit integer hash (lowbias32, Wellons), for stable per-sample values. */
-static uint32_t gi__hash(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
-static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* Integral of the spot's cone factor over its cone, per unit intensity
  * (sr): the midpoint rule of gi_ir.c's gi__light_power. */
@@ -409,7 +397,7 @@ static pf_result gi__iir_create_new(gi__iir_state *s, const gi_vpl_inputs *in, u
             /* the point on the emitters from stable per-sample values (a hash
              * of the VPL id), by power as gi_area_sample_point does */
             uint32_t h[3];
-            for (uint32_t k = 0; k < 3; k++) h[k] = gi__hash(q->id * 3u + k + 0x9e3779b9u);
+            for (uint32_t k = 0; k < 3; k++) h[k] = pf_hash32(q->id * 3u + k + 0x9e3779b9u);
             gi_area_sample as;
             gi_area_sample_point(in->area, (h[0] >> 8) * (1.0 / 16777216.0), (float)((h[1] >> 8) * (1.0 / 16777216.0)),
                                  (float)((h[2] >> 8) * (1.0 / 16777216.0)), &as);
@@ -475,7 +463,7 @@ static void gi__iir_quotas(gi__iir_state *s, const pf_scene *sc, const gi_area_l
 {
     double p[257], total = 0.0;
     for (uint32_t l = 0; l < s->ndom; l++) {
-        p[l] = l < s->nlights ? fmax(0.0, gi__lum(sc->lights[l].color) * gi__light_power1(&sc->lights[l], radius))
+        p[l] = l < s->nlights ? fmax(0.0, pf_luminance(sc->lights[l].color) * gi__light_power1(&sc->lights[l], radius))
                               : area->total_power;
         total += p[l];
     }

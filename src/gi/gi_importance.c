@@ -41,7 +41,6 @@ uint32_t gi_domain_texel(const gi_sample_domain *d, double xi1, double xi2, doub
 
 /* ------------------------------------------------- 1. camera points x_k */
 
-static float gi__lum(float r, float g, float b) { return 0.2126f * r + 0.7152f * g + 0.0722f * b; }
 
 static void gi__importance_camera_points(gi_importance *im, const rs_gbuffer *g)
 {
@@ -55,7 +54,7 @@ static void gi__importance_camera_points(gi_importance *im, const rs_gbuffer *g)
         uint32_t c = im->count++;
         im->x[c] = g->pos_x[i], im->y[c] = g->pos_y[i], im->z[c] = g->pos_z[i];
         im->nx[c] = g->nrm_x[i], im->ny[c] = g->nrm_y[i], im->nz[c] = g->nrm_z[i];
-        im->alb[c] = gi__lum(g->alb_r[i], g->alb_g[i], g->alb_b[i]);
+        im->alb[c] = pf_luminance(pf_v3(g->alb_r[i], g->alb_g[i], g->alb_b[i]));
     }
 }
 
@@ -81,7 +80,7 @@ static void gi__importance_row(void *p, uint32_t row, uint32_t worker)
     const float *X = im->x, *Y = im->y, *Z = im->z, *NX = im->nx, *NY = im->ny, *NZ = im->nz, *A = im->alb;
     const float g_max = c->g_max;
     for (uint32_t t = row * c->row_len, e = t + c->row_len; t < e; t++) {
-        float I = gi__lum(s->flux_r[t], s->flux_g[t], s->flux_b[t]);
+        float I = pf_luminance(pf_v3(s->flux_r[t], s->flux_g[t], s->flux_b[t]));
         if (!s->valid[t] || !(I > 0.0f)) {
             im->f[t] = 0.0f;
             continue;

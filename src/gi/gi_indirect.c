@@ -16,7 +16,6 @@
 /* Paraboloid maps are 2 bytes a texel: 32768 maps of 128^2 = 1 GiB. */
 #define GI__MAX_MAP_BYTES ((size_t)4 << 30)
 
-static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 typedef struct gi__lumkey {
     float lum;
@@ -341,7 +340,7 @@ void gi_stage_assign(gi_frame *f)
     for (uint32_t i = 0; i < N; i++) {
         pf_vec3 c = ind->vpls.v[i].intensity;
         int emits = c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
-        keys[i] = (gi__lumkey){emits ? gi__lum(c) : -1.0f, i};
+        keys[i] = (gi__lumkey){emits ? pf_luminance(c) : -1.0f, i};
         tile_of[i] = UINT32_MAX;
         live += (uint32_t)emits;
     }

@@ -212,16 +212,6 @@ void gi_ism_stage_clear(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, uint32_t coun
 
 /* ------------------------------------------------------------------ 2. splat */
 
-/* splitmix64's finaliser: a seed per (frame, triangle), then per point. */
-static inline uint64_t gi__mix64(uint64_t x)
-{
-    x ^= x >> 30;
-    x *= 0xbf58476d1ce4e5b9ull;
-    x ^= x >> 27;
-    x *= 0x94d049bb133111ebull;
-    x ^= x >> 31;
-    return x;
-}
 static inline float gi__unit24(uint64_t h) { return (float)(h >> 40) * 0x1p-24f; } /* [0, 1) */
 
 /* The depth test of the splat: keep the nearer code (atomic min on 16 bits;
@@ -245,19 +235,19 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
     for (uint32_t t = it->t0; t < it->t1; t++) {
         /* tessellation control shader: this triangle's point count,
          * floor(P A_i / A) plus one with probability of the fraction */
-        uint64_t seed = gi__mix64(((uint64_t)m->frame << 32 | t) ^ 0x5851f42d4c957f2dull);
+        uint64_t seed = pf_mix64(((uint64_t)m->frame << 32 | t) ^ 0x5851f42d4c957f2dull);
         float dens = m->density[t];
         float whole = floorf(dens);
         uint32_t n = (uint32_t)whole + (gi__unit24(seed) < dens - whole ? 1u : 0u);
         if (n == 0) continue;
         const gi__ism_tri *T = &m->tris[t];
-        uint32_t shift = (uint32_t)(gi__mix64(seed + 1) >> 32);
+        uint32_t shift = (uint32_t)(pf_mix64(seed + 1) >> 32);
         float inv_n = 1.0f / (float)n;
         uint32_t k0 = it->k0 < n ? it->k0 : n, k1 = it->k1 < n ? it->k1 : n;
         for (uint32_t k = k0; k < k1; k++) {
             /* tessellation evaluation shader: a stratified position and the
              * point's seed */
-            uint64_t h = gi__mix64(seed + ((uint64_t)k + 2) * 0x9e3779b97f4a7c15ull);
+            uint64_t h = pf_mix64(seed + ((uint64_t)k + 2) * 0x9e3779b97f4a7c15ull);
             float u1 = ((float)k + gi__unit24(h)) * inv_n;
             /* frac(k phi + shift) in 32-bit fixed point: exact for any k */
             float u2 = (float)(((uint32_t)k * 2654435769u + shift) >> 8) * 0x1p-24f;

@@ -18,13 +18,7 @@ float gi_kmeans_distance(const gi_kmeans_options *o, pf_vec3 p, pf_vec3 n, pf_ve
     return o->w1 * pf_v3_length(pf_v3_sub(p, c)) / o->scale + o->w2 * (1.0f - cosp);
 }
 
-static uint64_t gi__splitmix(uint64_t *s)
-{
-    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
+static uint64_t gi__splitmix(uint64_t *s) { return pf_mix64(*s += 0x9e3779b97f4a7c15ull); }
 
 /* "At the beginning of the first iteration, a random VPL is chosen as the
  * centroid seed for each cluster." Deviation (README "ssvp"): the random

@@ -9,7 +9,7 @@
 
 double gi_lightpath_light_power(const pf_light *l, double radius)
 {
-    double c = gi_area_luminance(l->color) * (double)l->intensity;
+    double c = pf_luminance(l->color) * (double)l->intensity;
     switch (l->type) {
     case PF_LIGHT_POINT: return 4.0 * PF_PI * c;
     case PF_LIGHT_SPOT: {

@@ -31,8 +31,7 @@
 
 float gi_metrics_luminance(const float *rgb)
 {
-    /* ITU-R BT.709 primaries (= sRGB), Y row of the RGB -> XYZ matrix. */
-    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+    return pf_luminance(pf_v3(rgb[0], rgb[1], rgb[2]));
 }
 
 float gi_metrics_reinhard(float x)

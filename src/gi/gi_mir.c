@@ -134,7 +134,6 @@ static void gi__mir_destroy(void *state)
     free(s);
 }
 
-static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* ---------------------------------------------------------- 1. camera points */
 
@@ -175,7 +174,7 @@ static void gi__mir_camera_points(gi__mir_state *s, const gi_vpl_inputs *in)
             s->xp[k] = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
             s->xn[k] = n;
             s->xg[k] = ng;
-            s->xa[k] = gi__lum(pf_v3(g->alb_r[p], g->alb_g[p], g->alb_b[p])) * PF_INV_PI;
+            s->xa[k] = pf_luminance(pf_v3(g->alb_r[p], g->alb_g[p], g->alb_b[p])) * PF_INV_PI;
         }
 }
 
@@ -344,7 +343,7 @@ static void gi__mir_resample(gi__mir_state *s, const gi_vpl_inputs *in, gi_vpl_s
     /* g_mean: the lum(I)-weighted mean of g (index order) */
     double sl = 0.0, slg = 0.0;
     for (uint32_t i = 0; i < s->count; i++) {
-        double l = gi__lum(s->cand[i].intensity);
+        double l = pf_luminance(s->cand[i].intensity);
         sl += l;
         slg += l * s->g[i];
     }
@@ -354,7 +353,7 @@ static void gi__mir_resample(gi__mir_state *s, const gi_vpl_inputs *in, gi_vpl_s
     /* p^_c into g (reused), and S */
     double S = 0.0;
     for (uint32_t i = 0; i < s->count; i++) {
-        double p = gi__lum(s->cand[i].intensity) * ((1.0 - d) * (d < 1.0 ? s->g[i] / gmean : 0.0) + d);
+        double p = pf_luminance(s->cand[i].intensity) * ((1.0 - d) * (d < 1.0 ? s->g[i] / gmean : 0.0) + d);
         s->g[i] = (float)p;
         S += s->g[i];
     }

@@ -16,18 +16,11 @@
 
 #include "gi_light.h"
 
-static uint64_t gi__mix64(uint64_t z)
-{
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
-uint64_t gi_radiosity_hash(uint64_t a, uint64_t b) { return gi__mix64(gi__mix64(a + 0x9e3779b97f4a7c15ull) ^ b); }
+uint64_t gi_radiosity_hash(uint64_t a, uint64_t b) { return pf_mix64(pf_mix64(a + 0x9e3779b97f4a7c15ull) ^ b); }
 
 float gi_radiosity_random(uint64_t seed, uint32_t a, uint32_t b, uint32_t c)
 {
-    uint64_t h = gi__mix64(gi__mix64(seed ^ 0x6a09e667f3bcc909ull) ^ (((uint64_t)a << 40) ^ ((uint64_t)b << 20) ^ c));
+    uint64_t h = pf_mix64(pf_mix64(seed ^ 0x6a09e667f3bcc909ull) ^ (((uint64_t)a << 40) ^ ((uint64_t)b << 20) ^ c));
     return (float)(h >> 40) * 0x1p-24f; /* k 2^-24, k < 2^24: exactly in [0, 1) */
 }
 

@@ -20,16 +20,6 @@
 
 /* ---------------------------------------------------------------- random numbers */
 
-/* SplitMix64's finaliser (Steele et al. 2014; constants by D. Stafford,
- * "Mix13"): a bijection on 64-bit words with full avalanche, so distinct
- * counters give unrelated outputs. */
-static uint64_t gi__mix64(uint64_t z)
-{
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
 float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim)
 {
     /* Two rounds: the first makes one word per (pixel, sample) stream (a
@@ -37,8 +27,8 @@ float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint
      * stream 0 does not map to 0), the second mixes in the position within
      * the stream. The top 24 bits give a float in [0, 1) exactly: k * 2^-24
      * with k < 2^24 is representable and never rounds up to 1. */
-    uint64_t stream = gi__mix64((((uint64_t)pixel << 32) | sample) + 0x9e3779b97f4a7c15ull);
-    uint64_t h = gi__mix64(stream ^ (((uint64_t)vertex << 32) | dim));
+    uint64_t stream = pf_mix64((((uint64_t)pixel << 32) | sample) + 0x9e3779b97f4a7c15ull);
+    uint64_t h = pf_mix64(stream ^ (((uint64_t)vertex << 32) | dim));
     return (float)(h >> 40) * 0x1p-24f;
 }
 

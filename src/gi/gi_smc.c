@@ -187,7 +187,6 @@ typedef struct gi__smc_state {
     gi_radiosity_ctx rad;
 } gi__smc_state;
 
-static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return gi_radiosity_random(key, a, b, c); }
 
@@ -628,7 +627,7 @@ static void gi__smc_density_cand_job(void *ctx, uint32_t i, uint32_t worker)
     (void)worker;
     gi__smc_state *s = ctx;
     gi__smc_cand *C = &s->raw[s->cand[i]];
-    float L = gi__lum(C->albedo) > 0.0f ? gi__lum(pf_v3_scale(pf_v3_mul(C->albedo, C->E), PF_INV_PI)) : 0.0f;
+    float L = pf_luminance(C->albedo) > 0.0f ? pf_luminance(pf_v3_scale(pf_v3_mul(C->albedo, C->E), PF_INV_PI)) : 0.0f;
     float p = gi_knn_density(1, s->I, gi_knn_kth_dist2(&s->tree, C->pos, 1, GI_KNN_NONE));
     C->key = p;
     /* Eq. 6 (luminance); no VPL yet (p = 0): the candidate is infinitely
@@ -647,7 +646,7 @@ static void gi__smc_density_vpl_job(void *ctx, uint32_t t, uint32_t worker)
     gi__smc_dens_ctx *c = ctx;
     gi__smc_state *s = c->s;
     gi__smc_vpl *v = &s->y[s->knn_slot[t]];
-    float L = gi__lum(pf_v3_scale(pf_v3_mul(v->albedo, v->E_rank), PF_INV_PI));
+    float L = pf_luminance(pf_v3_scale(pf_v3_mul(v->albedo, v->E_rank), PF_INV_PI));
     v->density = gi_knn_density(c->k, s->I, gi_knn_kth_dist2(&s->tree, v->pos, c->k, t));
     v->intensity = v->density > 0.0f ? L / v->density : 0.0f;
 }

@@ -131,20 +131,19 @@ static void gi__heat(float t, uint8_t c[3])
     c[2] = gi__unit(t < 1.0f / 3.0f ? 0.4f + 0.6f * (1.0f - 3.0f * t) * 0.5f : 3.0f * t - 2.0f);
 }
 
-static float gi__lum(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* VPL k's colour: its luminance relative to the brightest VPL, square-root
  * scaled so that dim VPLs stay visible. */
 static void gi__vpl_colour(const gi_vpl_set *set, float max_lum, uint32_t k, uint8_t c[3])
 {
-    float t = max_lum > 0.0f ? gi__lum(set->v[k].intensity) / max_lum : 0.0f;
+    float t = max_lum > 0.0f ? pf_luminance(set->v[k].intensity) / max_lum : 0.0f;
     gi__heat(sqrtf(pf_clampf(t, 0.0f, 1.0f)), c);
 }
 
 static float gi__max_lum(const gi_vpl_set *set)
 {
     float m = 0.0f;
-    for (uint32_t k = 0; k < set->count; k++) m = fmaxf(m, gi__lum(set->v[k].intensity));
+    for (uint32_t k = 0; k < set->count; k++) m = fmaxf(m, pf_luminance(set->v[k].intensity));
     return m;
 }
 

@@ -48,6 +48,29 @@ static inline float pf_v3_max_comp(pf_vec3 a) { return fmaxf(a.x, fmaxf(a.y, a.z
 static inline int pf_v3_is_finite(pf_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 static inline float pf_clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 static inline float pf_radians(float deg) { return deg * (PF_PI / 180.0f); }
+/* Luminance of linear RGB: ITU-R BT.709 (= sRGB) weights, the Y row of the
+ * RGB -> XYZ matrix. */
+static inline float pf_luminance(pf_vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+/* Stable hashes, for random numbers seeded from ids (frame, VPL, pixel):
+ * SplitMix64's finaliser (Steele et al. 2014; constants by D. Stafford,
+ * "Mix13"), a bijection on 64-bit words with full avalanche, and lowbias32
+ * (C. Wellons) on 32-bit words. */
+static inline uint64_t pf_mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+static inline uint32_t pf_hash32(uint32_t x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
 
 /* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
 static inline void pf_v3_basis(pf_vec3 n, pf_vec3 *t, pf_vec3 *b)

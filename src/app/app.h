@@ -40,6 +40,11 @@ typedef struct app_setup {
 pf_result app_setup_begin(const pf_options *o, app_setup *s, struct pf_stage_times *t, pf_error *err);
 void app_setup_end(app_setup *s);
 
+struct gi_reference_options;
+/* The path tracer's options given on the command line (--spp, --bounces,
+ * --direct-only, --indirect-only), for reference and sequence --reference. */
+void app_reference_options(const pf_options *o, struct gi_reference_options *ro);
+
 struct gi_indirect_options;
 /* The many-light options given on the command line (--method, --vpls, ...). */
 pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);

@@ -79,11 +79,7 @@ int app_reference(const pf_options *o)
 
     /* Path trace */
     gi_reference_options ro;
-    memset(&ro, 0, sizeof ro);
-    ro.spp = o->spp ? o->spp : GI_REFERENCE_DEFAULT_SPP;
-    ro.bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
-    ro.direct_only = o->direct_only;
-    ro.indirect_only = o->indirect_only;
+    app_reference_options(o, &ro);
     app__progress prog = {pf_time_now(), 0.0, 0};
     if (!o->quiet && isatty(STDERR_FILENO)) {
         ro.progress = app__progress_draw;

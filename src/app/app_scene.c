@@ -1,14 +1,15 @@
 /* app_scene: what the commands share before they render: the scene loading
  * (the file or the embedded default scene, the --camera / --light
  * overrides, validation and the user-facing warnings), the scene + Embree +
- * jobs setup of `render` and `reference`, and the frame the options
- * describe. */
+ * jobs setup of `render` and `reference`, and the frame and path-tracer
+ * options the command line describes. */
 #include <stdio.h>
 #include <string.h>
 
 #include "app.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
+#include "gi_reference.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_jobs.h"
@@ -76,6 +77,15 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
             fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
     }
     return PF_OK;
+}
+
+void app_reference_options(const pf_options *o, gi_reference_options *ro)
+{
+    memset(ro, 0, sizeof *ro);
+    ro->spp = o->spp ? o->spp : GI_REFERENCE_DEFAULT_SPP;
+    ro->bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
+    ro->direct_only = o->direct_only;
+    ro->indirect_only = o->indirect_only;
 }
 
 pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)

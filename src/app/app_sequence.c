@@ -143,11 +143,7 @@ static pf_result app__render_reference(app__seq_run *s, const pf_options *o, con
         gi_stage_gbuffer_resolve(fr);
     }
     gi_reference_options ro;
-    memset(&ro, 0, sizeof ro);
-    ro.spp = o->spp ? o->spp : GI_REFERENCE_DEFAULT_SPP;
-    ro.bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
-    ro.direct_only = o->direct_only;
-    ro.indirect_only = o->indirect_only;
+    app_reference_options(o, &ro);
     fr->times.count = 0;
     double t0 = pf_time_now();
     pf_result r = PF_OK;

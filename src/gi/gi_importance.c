@@ -67,6 +67,24 @@ typedef struct gi__imp_ctx {
     uint32_t row_len;
 } gi__imp_ctx;
 
+/* Camera point k's term of Eq. 2 for a texel at p with normal v:
+ * albedo_k G, G clamped to g_max. */
+static inline float gi__importance_term(const gi_importance *im, uint32_t k, float px, float py, float pz, float vx,
+                                        float vy, float vz, float g_max)
+{
+    float dx = px - im->x[k], dy = py - im->y[k], dz = pz - im->z[k];
+    float d2 = dx * dx + dy * dy + dz * dz;
+    float ck = im->nx[k] * dx + im->ny[k] * dy + im->nz[k] * dz;
+    float cv = -(vx * dx + vy * dy + vz * dz);
+    ck = ck > 0.0f ? ck : 0.0f;
+    cv = cv > 0.0f ? cv : 0.0f;
+    float d4 = d2 * d2;
+    d4 = d4 > 1e-30f ? d4 : 1e-30f;
+    float G = ck * cv / d4;
+    G = G < g_max ? G : g_max;
+    return im->alb[k] * G;
+}
+
 /* f for the texels [row * row_len, (row + 1) * row_len): a fixed-order sum
  * over the camera points, written so the compiler can vectorise it (no
  * branches, no sqrt: G = max(0, n_k.d) max(0, -n_v.d) / |d|^4). */
@@ -77,7 +95,6 @@ static void gi__importance_row(void *p, uint32_t row, uint32_t worker)
     const gi_importance *im = c->im;
     const gi_rsm_set *s = c->rsm;
     const uint32_t K = im->count;
-    const float *X = im->x, *Y = im->y, *Z = im->z, *NX = im->nx, *NY = im->ny, *NZ = im->nz, *A = im->alb;
     const float g_max = c->g_max;
     for (uint32_t t = row * c->row_len, e = t + c->row_len; t < e; t++) {
         float I = pf_luminance(pf_v3(s->flux_r[t], s->flux_g[t], s->flux_b[t]));
@@ -94,32 +111,8 @@ static void gi__importance_row(void *p, uint32_t row, uint32_t worker)
         float acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
         uint32_t k = 0;
         for (; k + 8 <= K; k += 8)
-            for (uint32_t l = 0; l < 8; l++) {
-                float dx = px - X[k + l], dy = py - Y[k + l], dz = pz - Z[k + l];
-                float d2 = dx * dx + dy * dy + dz * dz;
-                float ck = NX[k + l] * dx + NY[k + l] * dy + NZ[k + l] * dz;
-                float cv = -(vx * dx + vy * dy + vz * dz);
-                ck = ck > 0.0f ? ck : 0.0f;
-                cv = cv > 0.0f ? cv : 0.0f;
-                float d4 = d2 * d2;
-                d4 = d4 > 1e-30f ? d4 : 1e-30f;
-                float G = ck * cv / d4;
-                G = G < g_max ? G : g_max;
-                acc[l] += A[k + l] * G;
-            }
-        for (uint32_t l = 0; k < K; k++, l++) {
-            float dx = px - X[k], dy = py - Y[k], dz = pz - Z[k];
-            float d2 = dx * dx + dy * dy + dz * dz;
-            float ck = NX[k] * dx + NY[k] * dy + NZ[k] * dz;
-            float cv = -(vx * dx + vy * dy + vz * dz);
-            ck = ck > 0.0f ? ck : 0.0f;
-            cv = cv > 0.0f ? cv : 0.0f;
-            float d4 = d2 * d2;
-            d4 = d4 > 1e-30f ? d4 : 1e-30f;
-            float G = ck * cv / d4;
-            G = G < g_max ? G : g_max;
-            acc[l] += A[k] * G;
-        }
+            for (uint32_t l = 0; l < 8; l++) acc[l] += gi__importance_term(im, k + l, px, py, pz, vx, vy, vz, g_max);
+        for (uint32_t l = 0; k < K; k++, l++) acc[l] += gi__importance_term(im, k, px, py, pz, vx, vy, vz, g_max);
         float sum = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
         im->f[t] = I * sum;
     }

@@ -337,7 +337,7 @@ __attribute__((target("avx2"))) static int rs__resolve_group8_avx2(const rs__res
     rs_gbuffer *g = rc->g;
     size_t i = (size_t)y * g->width + x;
     const uint32_t *prim = g->prim + i;
-    uint32_t tris[8];
+    uint32_t tris[RS__GROUP_MAX_TRIS];
     int n = 0;
     for (int k = 0; k < 8; k++) {
         uint32_t p = prim[k];
@@ -348,8 +348,8 @@ __attribute__((target("avx2"))) static int rs__resolve_group8_avx2(const rs__res
             tris[n++] = p;
         }
     }
-    rs__tri_consts other[8];
-    const rs__tri_consts *consts[8];
+    rs__tri_consts other[RS__GROUP_MAX_TRIS];
+    const rs__tri_consts *consts[RS__GROUP_MAX_TRIS];
     int keep = 0;
     for (int j = 0; j < n; j++) keep |= tris[j] == c->prim;
     for (int j = 0; j < n; j++) {

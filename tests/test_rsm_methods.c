@@ -610,6 +610,27 @@ static int cmp_d(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* The bench's frame: Sibenik with one point light at (0, 0, 0), 50 W/sr, at
+ * 1024 x 768 from the bench camera. 0 when the scene is not there. */
+static int bench_fx_begin(fx *x, uint32_t threads)
+{
+    if (!tu_load_or_skip(&x->scene, SIBENIK)) return 0;
+    pf_light L;
+    memset(&L, 0, sizeof L);
+    L.type = PF_LIGHT_POINT;
+    L.color = pf_v3(1, 1, 1);
+    L.intensity = 50.0f;
+    x->scene.lights = realloc(x->scene.lights, sizeof L);
+    assert_non_null(x->scene.lights);
+    x->scene.lights[0] = L;
+    x->scene.light_count = 1;
+    pf_error err;
+    fx_begin(x, threads, 1024, 768, NULL);
+    assert_int_equal(pf_camera_look_at(&x->f.camera, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err),
+                     PF_OK);
+    return 1;
+}
+
 static void bench_rsm_sibenik(void **state)
 {
     (void)state;
@@ -624,19 +645,8 @@ static void bench_rsm_sibenik(void **state)
         for (int k = 0; k < 3; k++) {
             if (strcmp(which, "1") != 0 && strcmp(which, methods[k]->name) != 0) continue;
             fx x;
-            if (!tu_load_or_skip(&x.scene, SIBENIK)) return;
-            pf_light L;
-            memset(&L, 0, sizeof L);
-            L.type = PF_LIGHT_POINT;
-            L.color = pf_v3(1, 1, 1);
-            L.intensity = 50.0f;
-            x.scene.lights = realloc(x.scene.lights, sizeof L);
-            x.scene.lights[0] = L;
-            x.scene.light_count = 1;
+            if (!bench_fx_begin(&x, threads)) return;
             pf_error err;
-            fx_begin(&x, threads, 1024, 768, NULL);
-            assert_int_equal(pf_camera_look_at(&x.f.camera, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err),
-                             PF_OK);
             gi_params p;
             memset(&p, 0, sizeof p);
             if (params[k]) assert_int_equal(gi_params_add(&p, params[k], &err), PF_OK);
@@ -674,19 +684,8 @@ static void bench_rsm_sibenik(void **state)
      * G-buffer; median of 15 repetitions. */
     for (uint32_t threads = 1; threads <= 2; threads++) {
         fx x;
-        if (!tu_load_or_skip(&x.scene, SIBENIK)) return;
-        pf_light L;
-        memset(&L, 0, sizeof L);
-        L.type = PF_LIGHT_POINT;
-        L.color = pf_v3(1, 1, 1);
-        L.intensity = 50.0f;
-        x.scene.lights = realloc(x.scene.lights, sizeof L);
-        x.scene.lights[0] = L;
-        x.scene.light_count = 1;
+        if (!bench_fx_begin(&x, threads)) return;
         pf_error err;
-        fx_begin(&x, threads, 1024, 768, NULL);
-        assert_int_equal(pf_camera_look_at(&x.f.camera, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err),
-                         PF_OK);
         gi_stage_gbuffer_raster(&x.f);
         gi_stage_gbuffer_resolve(&x.f);
         gi_rsm_set rsm;

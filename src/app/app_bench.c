@@ -135,7 +135,7 @@ typedef struct bench_run {
     int have_frame;
     pf_hit *hits;
     rs_stats st;
-    pf_vec3 vp[BENCH_VPLS], vn[BENCH_VPLS];
+    const pf_vec3 *vp, *vn; /* BENCH_VPLS paraboloid-map origins and normals, the scene's */
     uint16_t *atlas;
     float range;
     pf_scene lit; /* the scene with one point light at its centre (shallow copy) */
@@ -160,15 +160,20 @@ static void bench__close(bench_run *r)
     memset(r, 0, sizeof *r);
 }
 
-static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *bs, uint32_t threads, pf_isa isa,
-                       uint32_t frames)
+static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *bs, const pf_vec3 *vp,
+                       const pf_vec3 *vn, uint32_t threads, pf_isa isa, uint32_t frames)
 {
     pf_error err;
     memset(r, 0, sizeof *r);
     r->threads = threads;
     r->frames = frames;
-    r->jobs = pf_jobs_create(threads);
-    if (!r->jobs || pf_rt_create(&r->rt, scene, isa, threads, &err) != PF_OK ||
+    r->vp = vp;
+    r->vn = vn;
+    if (!(r->jobs = pf_jobs_create(threads))) {
+        pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
+        goto fail;
+    }
+    if (pf_rt_create(&r->rt, scene, isa, threads, &err) != PF_OK ||
         rs_context_create(&r->rs, scene, r->jobs, rs_simd_for_isa(isa), &err) != PF_OK ||
         rs_para_context_create(&r->para, scene, NULL, &err) != PF_OK ||
         pf_camera_look_at(&r->cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), &err) != PF_OK ||
@@ -178,7 +183,6 @@ static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *b
     double **samples[] = {&r->vis, &r->res, &r->tot, &r->emb, &r->rays, &r->pm, &r->pe, &r->cube};
     for (size_t k = 0; k < sizeof samples / sizeof samples[0]; k++)
         if (!(*samples[k] = calloc(frames, sizeof(double)))) goto oom;
-    bench__sample_vpls(scene, r->vp, r->vn, BENCH_VPLS);
     r->range = rs_para_default_range(scene);
     if (!(r->hits = malloc(sizeof(pf_hit) * BENCH_W * BENCH_H)) ||
         !(r->atlas = malloc(rs_para_atlas_bytes(rs_para_resolution(r->para), BENCH_VPLS))))
@@ -288,10 +292,12 @@ int app_bench_raster(const pf_options *o)
             fprintf(stderr, "softgi bench: %s (give the folder with --scenes)\n", err.message);
             return 1;
         }
+        pf_vec3 vp[BENCH_VPLS], vn[BENCH_VPLS];
+        bench__sample_vpls(&scene, vp, vn, BENCH_VPLS);
         bench_run runs[2];
         uint32_t opened = 0;
         for (; opened < nthreads; opened++)
-            if (!bench__open(&runs[opened], &scene, &k_scenes[k], thread_list[opened], isa, frames)) break;
+            if (!bench__open(&runs[opened], &scene, &k_scenes[k], vp, vn, thread_list[opened], isa, frames)) break;
         if (opened < nthreads) {
             for (uint32_t t = 0; t < opened; t++) bench__close(&runs[t]);
             pf_scene_free(&scene);

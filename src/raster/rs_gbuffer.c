@@ -141,8 +141,20 @@ static int rs__bary(const rs__tri_consts *c, pf_vec3 d, float *u, float *v)
  * sqrtps/divps round exactly like the scalar sqrtss/divss, so the bits are
  * the scalar function's; taken out of the per-pixel loop because its
  * sqrt -> divide latency chain dominated the resolve. A covered pixel whose
- * interpolated normal vanishes gets the camera-facing geometric normal, as
- * pf_scene_surface does. */
+ * normal comes out zero (the interpolated normal vanished) gets the
+ * camera-facing geometric normal, as pf_scene_surface does: the SIMD loop
+ * flags such lanes itself, so the row is read once. */
+static void rs__normal_fallback(rs_gbuffer *g, const pf_scene *s, const pf_camera *cam, const float *sx, float sy,
+                                uint32_t x, uint32_t y)
+{
+    size_t i = (size_t)y * g->width + x;
+    if (g->prim[i] == RS_GBUFFER_EMPTY || g->nrm_x[i] != 0.0f || g->nrm_y[i] != 0.0f || g->nrm_z[i] != 0.0f) return;
+    pf_vec3 ng = pf_scene_face_normal(s, g->prim[i]);
+    pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx[x]), pf_v3_scale(cam->up, sy)));
+    if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
+    g->nrm_x[i] = ng.x, g->nrm_y[i] = ng.y, g->nrm_z[i] = ng.z;
+}
+
 static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera *cam, const float *sx, float sy,
                               uint32_t y)
 {
@@ -155,22 +167,20 @@ static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera 
         __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(a, a), _mm_mul_ps(b, b)), _mm_mul_ps(c, c)));
         __m128 pos = _mm_cmpgt_ps(l, _mm_setzero_ps());
         __m128 inv = _mm_and_ps(pos, _mm_div_ps(_mm_set1_ps(1.0f), l));
-        _mm_storeu_ps(nx + x, _mm_mul_ps(a, inv));
-        _mm_storeu_ps(ny + x, _mm_mul_ps(b, inv));
-        _mm_storeu_ps(nz + x, _mm_mul_ps(c, inv));
+        a = _mm_mul_ps(a, inv), b = _mm_mul_ps(b, inv), c = _mm_mul_ps(c, inv);
+        _mm_storeu_ps(nx + x, a);
+        _mm_storeu_ps(ny + x, b);
+        _mm_storeu_ps(nz + x, c);
+        const __m128 zero = _mm_setzero_ps();
+        __m128 vanished = _mm_and_ps(_mm_and_ps(_mm_cmpeq_ps(a, zero), _mm_cmpeq_ps(b, zero)), _mm_cmpeq_ps(c, zero));
+        for (unsigned m = (unsigned)_mm_movemask_ps(vanished); m; m &= m - 1)
+            rs__normal_fallback(g, s, cam, sx, sy, x + (uint32_t)__builtin_ctz(m), y);
     }
 #endif
     for (; x < g->width; x++) {
         pf_vec3 n = pf_v3_normalize(pf_v3(nx[x], ny[x], nz[x]));
         nx[x] = n.x, ny[x] = n.y, nz[x] = n.z;
-    }
-    for (x = 0; x < g->width; x++) {
-        size_t i = (size_t)y * g->width + x;
-        if (g->prim[i] == RS_GBUFFER_EMPTY || nx[x] != 0.0f || ny[x] != 0.0f || nz[x] != 0.0f) continue;
-        pf_vec3 ng = pf_scene_face_normal(s, g->prim[i]);
-        pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx[x]), pf_v3_scale(cam->up, sy)));
-        if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
-        nx[x] = ng.x, ny[x] = ng.y, nz[x] = ng.z;
+        rs__normal_fallback(g, s, cam, sx, sy, x, y);
     }
 }
 

@@ -297,11 +297,11 @@ rs__resolve8_avx2(const rs__resolve_ctx *rc, const float *T, const float *UV, co
     __m256 v = _mm256_and_ps(has, _mm256_mul_ps(RS__DOT(UV, RS__UV_NV), inv));
     __m256 facing = _mm256_cmp_ps(RS__DOT(T, RS__T_NG), zero, _CMP_GT_OQ);
 #undef RS__DOT
-    /* x < 0 ? 0 : (x > 1 ? 1 : x) */
-    u = _mm256_blendv_ps(_mm256_blendv_ps(u, one, _mm256_cmp_ps(u, one, _CMP_GT_OQ)), zero,
-                         _mm256_cmp_ps(u, zero, _CMP_LT_OQ));
-    v = _mm256_blendv_ps(_mm256_blendv_ps(v, one, _mm256_cmp_ps(v, one, _CMP_GT_OQ)), zero,
-                         _mm256_cmp_ps(v, zero, _CMP_LT_OQ));
+    /* x < 0 ? 0 : (x > 1 ? 1 : x) as max(0, min(1, x)): minps(a, b) is
+     * a < b ? a : b and maxps(a, b) is a > b ? a : b, so with the constant
+     * first a NaN or -0 passes through exactly as in the ternaries */
+    u = _mm256_max_ps(zero, _mm256_min_ps(one, u));
+    v = _mm256_max_ps(zero, _mm256_min_ps(one, v));
     __m256 sum = _mm256_add_ps(u, v), over = _mm256_cmp_ps(sum, one, _CMP_GT_OQ);
     u = _mm256_blendv_ps(u, _mm256_div_ps(u, sum), over);
     v = _mm256_blendv_ps(v, _mm256_div_ps(v, sum), over);

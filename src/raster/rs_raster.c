@@ -1127,6 +1127,26 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
     }
 }
 
+/* Copies n 32-bit values of a finished tile row to the target. Rows that
+ * are 16-byte aligned with n a multiple of 4 (every full tile of a target
+ * whose width is a multiple of 4) go with non-temporal stores: the target's
+ * lines are not read for ownership first and the tile does not evict the
+ * cache. Measured with the scratch A/B harness (docs/perf.md): the cube
+ * shadow maps 5-9% faster with 1 and 2 threads, the G-buffer's visibility
+ * followed by its resolve 0-3% faster. */
+static void rs__copy_out(void *dst, const void *src, size_t n)
+{
+#if defined(__SSE2__)
+    if (n % 4 == 0 && ((uintptr_t)dst & 15) == 0) {
+        __m128i *d = dst;
+        const __m128i *s = src; /* tile rows: 64-byte aligned */
+        for (size_t i = 0; i < n / 4; i++) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+        return;
+    }
+#endif
+    memcpy(dst, src, n * 4);
+}
+
 static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_stats)
 {
     rs_stats local; /* written back once: per-tile stats of neighbouring tiles share cache lines */
@@ -1169,10 +1189,13 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
     size_t w = (size_t)(tx1 - tx0 + 1);
     for (int32_t y = ty0; y <= ty1; y++) {
         size_t o = (size_t)y * tg->width + (size_t)tx0, l = (size_t)(y - ty0) * RS_TILE;
-        memcpy(tg->depth + o, depth + l, sizeof(float) * w);
-        if (tg->prim) memcpy(tg->prim + o, prim + l, sizeof(uint32_t) * w);
+        rs__copy_out(tg->depth + o, depth + l, w);
+        if (tg->prim) rs__copy_out(tg->prim + o, prim + l, w);
         if (coverage) memcpy(tg->coverage + o, coverage + l, sizeof(uint32_t) * w);
     }
+#if defined(__SSE2__)
+    _mm_sfence(); /* the streamed rows are visible before the job reports the tile done */
+#endif
     free(coverage);
     out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }

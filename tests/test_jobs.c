@@ -21,6 +21,7 @@
 #include "pf_fpenv.h"
 #include "pf_jobs.h"
 #include "pf_math.h"
+#include "pf_timer.h"
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <xmmintrin.h>
@@ -775,6 +776,28 @@ static void test_core_count(void **state)
     assert_true(n >= 1 && n <= PF_JOBS_MAX_THREADS);
 }
 
+/* pf_timer's CPU tick counters, which `bench` uses (like the core count) to
+ * describe the machine: the share arithmetic, the invalid cases, and on
+ * Linux a real sample that only grows. */
+static void test_cpu_steal_share(void **state)
+{
+    (void)state;
+    pf_cpu_ticks a = {1, 1000, 10}, b = {1, 3000, 210}, bad = {0, 5000, 500};
+    assert_true(pf_cpu_steal_share(a, b) == 0.1);
+    assert_true(pf_cpu_steal_share(a, a) == -1.0);   /* no time passed */
+    assert_true(pf_cpu_steal_share(b, a) == -1.0);   /* backwards */
+    assert_true(pf_cpu_steal_share(a, bad) == -1.0); /* unreadable */
+    assert_true(pf_cpu_steal_share(bad, b) == -1.0);
+#ifdef __linux__
+    pf_cpu_ticks t0 = pf_cpu_ticks_now();
+    assert_true(t0.valid && t0.total > 0 && t0.steal <= t0.total);
+    volatile double x = 0.0;
+    for (int i = 0; i < 20000000; i++) x += 1e-9 * i; /* let a few clock ticks pass */
+    pf_cpu_ticks t1 = pf_cpu_ticks_now();
+    assert_true(t1.valid && t1.total >= t0.total && t1.steal >= t0.steal);
+#endif
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -790,6 +813,7 @@ int main(void)
         cmocka_unit_test(test_wait_all_then_reuse),
         cmocka_unit_test(test_workers_set_fpenv),
         cmocka_unit_test(test_core_count),
+        cmocka_unit_test(test_cpu_steal_share),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -23,4 +23,17 @@ void pf_stage_add(pf_stage_times *t, const char *name, double ms);
 /* Prints "stage  ms" lines and a total. */
 void pf_stage_print(const pf_stage_times *t, FILE *out);
 
+/* The machine's CPU time counters (Linux /proc/stat, all CPUs, in clock
+ * ticks), for benchmarks to report how much of a run the hypervisor took
+ * away ("steal": time a virtual CPU wanted to run but the host ran something
+ * else). valid = 0 where they cannot be read. */
+typedef struct pf_cpu_ticks {
+    int valid;
+    uint64_t total, steal;
+} pf_cpu_ticks;
+pf_cpu_ticks pf_cpu_ticks_now(void);
+/* Steal as a share of all CPU time between a and b (0..1), or -1 when
+ * either sample is invalid or no time passed. */
+double pf_cpu_steal_share(pf_cpu_ticks a, pf_cpu_ticks b);
+
 #endif

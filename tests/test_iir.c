@@ -41,6 +41,7 @@
 #include "gi_vpl.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -476,40 +477,29 @@ static void test_static_light_converges(void **state)
  * threads. */
 static uint64_t frames_hash(uint32_t threads)
 {
-    pf_scene s;
+    tu_fx x;
     pf_error err;
-    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(threads);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &s.cameras[0], 64, 48, 64, &err), PF_OK);
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = &gi_method_iir;
     io.vpls = 96;
-    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
+    tu_fx_begin(&x, threads, RS_SIMD_SCALAR, 64, 48, &x.scene.cameras[0], &io, 0);
+    gi_frame *f = &x.f;
     uint64_t h = 0;
-    pf_vec3 p0 = s.lights[0].position;
+    pf_vec3 p0 = x.scene.lights[0].position;
     uint32_t maps = 0;
     for (uint32_t k = 0; k < 30; k++) {
-        s.lights[0].position = pf_v3(p0.x + 0.15f * sinf(0.2f * k), p0.y - 0.1f, p0.z + 0.1f * cosf(0.3f * k));
-        gi_frame_render_raster(&f);
-        h = h * 31 + pf_imageio_hash((const float *)f.ind.vpls.v, f.ind.vpls.count * (sizeof(gi_vpl) / 4));
-        h = h * 31 + pf_imageio_hash(f.final, 3 * 64 * 48);
-        if (k > 0) maps += f.ind.maps_rendered;
+        x.scene.lights[0].position = pf_v3(p0.x + 0.15f * sinf(0.2f * k), p0.y - 0.1f, p0.z + 0.1f * cosf(0.3f * k));
+        gi_frame_render_raster(f);
+        h = h * 31 + pf_imageio_hash((const float *)f->ind.vpls.v, f->ind.vpls.count * (sizeof(gi_vpl) / 4));
+        h = h * 31 + pf_imageio_hash(f->final, 3 * 64 * 48);
+        if (k > 0) maps += f->ind.maps_rendered;
     }
     print_message("%u threads: hash %016llx, %.1f maps rendered per frame after the first\n", threads,
                   (unsigned long long)h, maps / 29.0);
     assert_true(maps <= 29u * 8u); /* never more than recalcMax new VPLs a frame */
-    gi_frame_free(&f);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&x);
     return h;
 }
 
@@ -526,19 +516,11 @@ static void test_deterministic_threads(void **state)
  * (under the ceiling the VPLs next to the light make both noisy). */
 static void render_indirect(const gi_vpl_method *m, float *out, uint32_t W, uint32_t H, uint32_t vpls, uint32_t frames)
 {
-    pf_scene s;
+    tu_fx x;
     pf_error err;
-    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
-    s.lights[0].position = pf_v3(0.278f, 0.35f, 0.28f);
-    s.lights[0].intensity = 0.3f;
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &s.cameras[0], W, H, 64, &err), PF_OK);
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+    x.scene.lights[0].position = pf_v3(0.278f, 0.35f, 0.28f);
+    x.scene.lights[0].intensity = 0.3f;
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = m;
@@ -548,15 +530,11 @@ static void render_indirect(const gi_vpl_method *m, float *out, uint32_t W, uint
     io.bounces = 1;
     io.clamp = 0.0f;
     io.filter = GI_FILTER_NONE;
-    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
-    f.show_direct = 0;
-    for (uint32_t k = 0; k < frames; k++) gi_frame_render_raster(&f);
-    memcpy(out, f.final, sizeof(float) * 3 * W * H);
-    gi_frame_free(&f);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_begin(&x, 2, RS_SIMD_SCALAR, W, H, &x.scene.cameras[0], &io, 0);
+    x.f.show_direct = 0;
+    for (uint32_t k = 0; k < frames; k++) gi_frame_render_raster(&x.f);
+    memcpy(out, x.f.final, sizeof(float) * 3 * W * H);
+    tu_fx_end(&x);
 }
 
 static void test_converges_to_ir(void **state)

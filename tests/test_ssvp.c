@@ -30,6 +30,7 @@
 #include "gi_kmeans.h"
 #include "pf_gltf.h"
 #include "pf_timer.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -437,57 +438,50 @@ static void test_second_bounce_adds_light(void **state)
 static void test_gaussian_filter(void **state)
 {
     (void)state;
-    pf_scene s;
+    tu_fx fx;
     tu_quad q[2] = {
         {{-1, 0, -3}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
         {{1, 0, -4}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
     };
-    tu_make_scene(&s, q, 2);
+    tu_make_scene(&fx.scene, q, 2);
     pf_error err;
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    gi_frame f;
     enum { W = 96, H = 64 };
-    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &cam, W, H, 64, &err), PF_OK);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.visibility_raytrace = 1;
     io.filter = GI_FILTER_GAUSSIAN;
     io.alpha_rel = 0.05f;
-    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
-    gi_stage_gbuffer_raster(&f);
-    gi_stage_gbuffer_resolve(&f);
+    tu_fx_begin(&fx, 2, RS_SIMD_SCALAR, W, H, &cam, &io, 0);
+    gi_frame *f = &fx.f;
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
     /* near wall 1.0, far wall 3.0, each with a +-0.5 checkerboard of pixels */
     double var_in = 0.0, var_out = 0.0;
     for (uint32_t y = 0; y < H; y++)
         for (uint32_t x = 0; x < W; x++) {
             size_t i = (size_t)y * W + x;
-            float base = f.gbuf.prim[i] < 2 ? 1.0f : 3.0f, p = ((x + y) & 1) ? 0.5f : -0.5f;
-            for (int ch = 0; ch < 3; ch++) f.ind.combined[3 * i + ch] = base + p;
+            float base = f->gbuf.prim[i] < 2 ? 1.0f : 3.0f, p = ((x + y) & 1) ? 0.5f : -0.5f;
+            for (int ch = 0; ch < 3; ch++) f->ind.combined[3 * i + ch] = base + p;
         }
-    gi_stage_filter(&f);
+    gi_stage_filter(f);
     int interior = 0;
     for (uint32_t y = 4; y + 4 < H; y++)
         for (uint32_t x = 4; x + 4 < W; x++) {
             size_t i = (size_t)y * W + x;
-            if (f.gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
-            float want = f.gbuf.prim[i] < 2 ? 1.0f : 3.0f, got = f.ind.filtered[3 * i];
+            if (f->gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+            float want = f->gbuf.prim[i] < 2 ? 1.0f : 3.0f, got = f->ind.filtered[3 * i];
             /* never takes the other wall: the result stays within this wall's range */
             assert_true(got >= want - 0.5f && got <= want + 0.5f);
             int mixed = 0;
             for (int dy = -4; dy <= 4; dy++)
                 for (int dx = -4; dx <= 4; dx++) {
-                    uint32_t pj = f.gbuf.prim[i + dy * W + dx];
-                    mixed |= pj == RS_GBUFFER_EMPTY || (pj < 2) != (f.gbuf.prim[i] < 2);
+                    uint32_t pj = f->gbuf.prim[i + dy * W + dx];
+                    mixed |= pj == RS_GBUFFER_EMPTY || (pj < 2) != (f->gbuf.prim[i] < 2);
                 }
             if (!mixed) {
-                double din = f.ind.combined[3 * i] - want, dout = got - want;
+                double din = f->ind.combined[3 * i] - want, dout = got - want;
                 var_in += din * din, var_out += dout * dout;
                 interior++;
             }
@@ -495,11 +489,7 @@ static void test_gaussian_filter(void **state)
     assert_true(interior > 1000);
     /* a 9 x 9 Gaussian of sigma 2 shrinks a checkerboard's variance > 100x */
     assert_true(var_out < var_in / 100.0);
-    gi_frame_free(&f);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&fx);
 }
 
 /* ------------------------------------------------------------- errors */

@@ -12,7 +12,10 @@ pkgs=(build-essential cmake pkg-config
       libstb-dev         # stb_image_write: PNG output
       libmeshoptimizer-dev   # meshoptimizer: simplified shadow geometry
       libcjson-dev      # cJSON: sequence files
-      libcmocka-dev)     # cmocka: the test framework
+      libcmocka-dev      # cmocka: the test framework
+      libspng-dev        # libspng: PNG textures (untrusted input; maintained and fuzzed for it)
+      libturbojpeg0-dev  # libjpeg-turbo (TurboJPEG API): JPEG textures (likewise)
+      clang libclang-rt-14-dev nlohmann-json3-dev)  # the fuzz build (libFuzzer; tinygltf's JSON parser instrumented)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -24,8 +24,10 @@
 #define W 160
 #define H 120
 
-/* Golden: softgi render --isa sse2 --size 160x120 --hash (embedded Cornell box). */
-#define GOLDEN_CORNELL_SSE2 0x5ecbfcad9c774f2eull
+/* Golden: softgi render --isa sse2 --size 160x120 --hash (embedded Cornell box).
+ * The same for every --isa and every processor: the rasterizer's SIMD paths
+ * give the scalar bits, and pf_rt recomputes Embree's hits exactly. */
+#define GOLDEN_CORNELL_SSE2 0xd27a2abb3d83b029ull
 
 static uint64_t frame_hash(const gi_frame *f)
 {
@@ -72,7 +74,7 @@ static void test_threads_identical(void **state)
     uint64_t hb = render(&s, pf_isa_detect(), 2, 2, &fb, NULL);
     assert_true(h1 == h2);
     assert_true(h1 == h7);
-    (void)hb;
+    assert_true(h1 == hb); /* Embree at the machine's best ISA: same bits (pf_rt's exact hits) */
     pf_scene_free(&s);
 }
 

@@ -2,6 +2,7 @@
 #include "pf_rt.h"
 
 #include <embree3/rtcore.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,8 +38,67 @@ static uint32_t pf__hitn_prim(const struct RTCHitN *h, unsigned n, unsigned i)
     return ((const uint32_t *)h)[5 * n + i];
 }
 
+/* The hit, recomputed from the triangle Embree found.
+ *
+ * Embree's triangle intersectors divide through rcp(), which is the
+ * processor's reciprocal approximation (rcpps / vrcpps) refined by one Newton
+ * step. The approximation is not specified bit for bit: AMD and Intel
+ * processors return different last bits, so Embree's t, u and v differ
+ * between machines even with its ISA pinned, and every golden image that
+ * depends on a ray (VPL positions, the path tracer) would too. softgi takes
+ * only the triangle from Embree and recomputes t, u, v here with the
+ * Moller-Trumbore formulas in double precision: IEEE operations that every
+ * machine rounds alike (-ffp-contract=off keeps them unfused). u and v are
+ * clamped onto the triangle (Embree's watertight test can accept a hit a
+ * rounding error outside it). Returns 0 where the ray is parallel to the
+ * triangle's plane (the caller keeps Embree's values; Embree reports no such
+ * hits in practice). */
+static int pf__exact_hit(const pf_scene *s, uint32_t prim, const double org[3], const double dir[3], float *t,
+                         float *u, float *v)
+{
+    const uint32_t *tri = &s->indices[3 * (size_t)prim];
+    pf_vec3 a = s->positions[tri[0]], b = s->positions[tri[1]], c = s->positions[tri[2]];
+    double e1[3] = {(double)b.x - a.x, (double)b.y - a.y, (double)b.z - a.z};
+    double e2[3] = {(double)c.x - a.x, (double)c.y - a.y, (double)c.z - a.z};
+    double p[3] = {dir[1] * e2[2] - dir[2] * e2[1], dir[2] * e2[0] - dir[0] * e2[2], dir[0] * e2[1] - dir[1] * e2[0]};
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    if (det == 0.0 || !isfinite(det)) return 0;
+    double tv[3] = {org[0] - a.x, org[1] - a.y, org[2] - a.z};
+    double q[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2], tv[0] * e1[1] - tv[1] * e1[0]};
+    double uu = (tv[0] * p[0] + tv[1] * p[1] + tv[2] * p[2]) / det;
+    double vv = (dir[0] * q[0] + dir[1] * q[1] + dir[2] * q[2]) / det;
+    double tt = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
+    if (!isfinite(uu) || !isfinite(vv) || !isfinite(tt)) return 0;
+    uu = uu < 0.0 ? 0.0 : uu > 1.0 ? 1.0 : uu;
+    vv = vv < 0.0 ? 0.0 : vv > 1.0 ? 1.0 : vv;
+    if (uu + vv > 1.0) {
+        double sum = uu + vv;
+        uu /= sum;
+        vv /= sum;
+    }
+    *t = (float)tt;
+    *u = (float)uu;
+    *v = (float)vv;
+    return 1;
+}
+
+/* Embree's RTCRayN layout (rtcore_ray.h): org_x, org_y, org_z, tnear, dir_x,
+ * dir_y, dir_z, time, tfar, ... each N entries wide. */
+static void pf__rayn(const struct RTCRayN *r, unsigned n, unsigned i, double org[3], double dir[3])
+{
+    const float *f = (const float *)r;
+    org[0] = f[0 * n + i];
+    org[1] = f[1 * n + i];
+    org[2] = f[2 * n + i];
+    dir[0] = f[4 * n + i];
+    dir[1] = f[5 * n + i];
+    dir[2] = f[6 * n + i];
+}
+
 /* Alpha-mask filter (Embree calls it for every candidate hit on the
- * geometry): rejects hits where the material's alpha is below its cutoff. */
+ * geometry): rejects hits where the material's alpha is below its cutoff.
+ * The texture is looked up at the recomputed u, v (pf__exact_hit), so the
+ * decision does not depend on the processor either. */
 static void pf__alpha_filter(const struct RTCFilterFunctionNArguments *args)
 {
     const pf_rt *rt = args->geometryUserPtr;
@@ -48,7 +108,10 @@ static void pf__alpha_filter(const struct RTCFilterFunctionNArguments *args)
         uint32_t prim = pf__hitn_prim(args->hit, args->N, i);
         const pf_material *m = &s->materials[s->tri_material[prim]];
         if (m->alpha_mode != PF_ALPHA_MASK) continue;
-        float u = pf__hitn_u(args->hit, args->N, i), v = pf__hitn_v(args->hit, args->N, i);
+        float u = pf__hitn_u(args->hit, args->N, i), v = pf__hitn_v(args->hit, args->N, i), t;
+        double org[3], dir[3];
+        pf__rayn(args->ray, args->N, i, org, dir);
+        pf__exact_hit(s, prim, org, dir, &t, &u, &v);
         const uint32_t *tri = &s->indices[3 * prim];
         float w = 1.0f - u - v;
         pf_vec2 a = s->uvs[tri[0]], b = s->uvs[tri[1]], c = s->uvs[tri[2]];
@@ -175,6 +238,9 @@ void pf_rt_intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t
                 h->prim = rh.hit.primID[i];
                 h->u = rh.hit.u[i];
                 h->v = rh.hit.v[i];
+                const pf_ray *src = &rays[base + i];
+                double org[3] = {src->org.x, src->org.y, src->org.z}, dir[3] = {src->dir.x, src->dir.y, src->dir.z};
+                pf__exact_hit(rt->src, h->prim, org, dir, &h->t, &h->u, &h->v);
             }
         }
     }

@@ -426,6 +426,57 @@ static const uint64_t k_golden[8] = {
     0x1acf1a29373735bbull, 0xc1f6dd366b5d0a29ull, 0x780c259c74ba52c4ull, 0xa0e3d67b6d868c71ull,
 };
 
+/* A pixel exactly behind a VPL on its axis (here background pixels, which
+ * the split buffers hold at the origin, below VPLs at (0, y, 0) facing +y):
+ * the pixel's paraboloid coordinates are 0/0 = NaN. The AVX2 accumulation gathers a texel for every lane before
+ * masking, and a NaN index once read ~4 GiB before the atlas (SIGSEGV). Every
+ * path must render it, give a finite image and the scalar path's bits. */
+static pf_result origin_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+{
+    pf_result r = gi_method_ir.update(state, in, out, err);
+    if (r != PF_OK) return r;
+    /* VPLs above the origin facing up: background pixels (at the origin) lie
+     * on their axis behind them; the ceiling above is lit by them */
+    for (uint32_t i = 0; i < out->count && i < 4; i++) {
+        out->v[i].pos = pf_v3(0, 0.1f + 0.1f * (float)i, 0);
+        out->v[i].nrm = pf_v3(0, 1, 0);
+    }
+    return PF_OK;
+}
+
+static void test_vpl_at_pixel_position(void **state)
+{
+    (void)state;
+    static const gi_vpl_method origin = {"origin", "test", bad_create, origin_update, bad_destroy};
+    const rs_simd simds[3] = {RS_SIMD_SCALAR, RS_SIMD_AVX2, RS_SIMD_AVX512};
+    uint64_t h0 = 0;
+    for (int k = 0; k < 3; k++) {
+        if (k && pf_isa_detect() < (k == 1 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+        fx x;
+        memset(&x, 0, sizeof x);
+        pf_error err;
+        assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+        pf_camera cam; /* from outside the box, so that background (origin) pixels exist */
+        assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.1f, 0.35f, -0.9f), pf_v3(0.3f, 0.3f, 0.3f), pf_radians(70), &err),
+                         PF_OK);
+        gi_indirect_options io;
+        memset(&io, 0, sizeof io);
+        io.method = &origin;
+        io.vpls = 64;
+        io.no_interleave = 1; /* every pixel sees every VPL */
+        tu_fx_begin(&x, 2, simds[k], 40, 30, &cam, &io, 1);
+        gi_frame_render_raster(&x.f);
+        uint32_t background = 0;
+        for (uint32_t i = 0; i < 40 * 30; i++) background += x.f.gbuf.prim[i] == RS_GBUFFER_EMPTY;
+        assert_true(background > 0);
+        for (size_t i = 0; i < (size_t)40 * 30 * 3; i++) assert_true(isfinite(x.f.final[i]) && x.f.final[i] >= 0.0f);
+        uint64_t h = pf_imageio_hash(x.f.final, 40 * 30 * 3);
+        if (k == 0) h0 = h;
+        else assert_true(h == h0);
+        fx_end(&x);
+    }
+}
+
 static void test_frame_threads_and_golden(void **state)
 {
     (void)state;
@@ -524,6 +575,7 @@ int main(void)
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
         cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
         cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_bad_vpls_are_inert),
+        cmocka_unit_test(test_vpl_at_pixel_position),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

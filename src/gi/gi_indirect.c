@@ -463,11 +463,13 @@ __attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indire
             for (int pass = 0; pass < 2; pass++) {
                 __m256 fi = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pu, one), h));
                 __m256 fj = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pv, one), h));
-                /* pf_clampf(x, 0, R-1): x < 0 ? 0 : (x > R-1 ? R-1 : x) */
-                fi = _mm256_blendv_ps(_mm256_blendv_ps(fi, rmax, _mm256_cmp_ps(fi, rmax, _CMP_GT_OQ)), zero,
-                                      _mm256_cmp_ps(fi, zero, _CMP_LT_OQ));
-                fj = _mm256_blendv_ps(_mm256_blendv_ps(fj, rmax, _mm256_cmp_ps(fj, rmax, _CMP_GT_OQ)), zero,
-                                      _mm256_cmp_ps(fj, zero, _CMP_LT_OQ));
+                /* rs__texel_of_uv's clamp to [0, R-1] with a NaN going to 0: the
+                 * gather below reads every lane, masked or not, so its index
+                 * must be inside the map even where u, v are NaN (a pixel on
+                 * the VPL's axis behind it, 0/0; such lanes are not `front`
+                 * and contribute nothing). max_ps(x, 0) returns 0 for a NaN x. */
+                fi = _mm256_min_ps(_mm256_max_ps(fi, zero), rmax);
+                fj = _mm256_min_ps(_mm256_max_ps(fj, zero), rmax);
                 __m256i ii = _mm256_cvttps_epi32(fi), jj = _mm256_cvttps_epi32(fj);
                 __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(jj, iR), ii);
                 __m256i ai = _mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(ii, ii), _mm256_set1_epi32(1)), iR);

@@ -14,6 +14,10 @@
  *   rtcOccluded8) with inactive lanes masked off, so a ray gives the same
  *   bits whether it is traced alone or with others (tested).
  * - FTZ/DAZ are set on every thread that queries (pf_fpenv.h).
+ * - Closest hits return t, u, v recomputed in double precision from the
+ *   triangle Embree found, never Embree's own (its rcp() approximation
+ *   differs between processors), so results are the same on every machine
+ *   and every Embree ISA (README "Determinism").
  *
  * Alpha-masked materials (alphaMode MASK) are honoured by Embree filter
  * functions: a hit whose texture alpha is below the cutoff is ignored. */

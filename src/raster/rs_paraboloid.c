@@ -261,6 +261,11 @@ static uint32_t rs__texel_of_uv(uint32_t resolution, float u, float v)
     float h = 0.5f * (float)resolution;
     for (int pass = 0; pass < 2; pass++) {
         float fi = floorf((u + 1.0f) * h), fj = floorf((v + 1.0f) * h);
+        /* clamped to [0, R-1], a NaN (0/0 on the axis behind the VPL) to 0:
+         * converting a NaN to an integer is undefined, and the SIMD paths
+         * gather with this index before masking */
+        fi = fi >= 0.0f ? fi : 0.0f;
+        fj = fj >= 0.0f ? fj : 0.0f;
         uint32_t i = (uint32_t)pf_clampf(fi, 0.0f, (float)resolution - 1.0f);
         uint32_t j = (uint32_t)pf_clampf(fj, 0.0f, (float)resolution - 1.0f);
         if (rs_para_texel_inside(resolution, i, j) || pass == 1) return j * resolution + i;

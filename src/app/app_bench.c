@@ -317,7 +317,7 @@ int app_bench_raster(const pf_options *o)
         char path[4096];
         snprintf(path, sizeof path, "%s/%s", dir, k_scenes[k].file);
         pf_scene scene;
-        pf_gltf_options go = {1};
+        pf_gltf_options go = {.ignore_textures = 1};
         if (pf_gltf_load(&scene, path, &go, &err) != PF_OK) {
             fprintf(stderr, "softgi bench: %s (give the folder with --scenes)\n", err.message);
             return 1;

@@ -422,7 +422,7 @@ int app_bench_frame(const pf_options *o)
         char path[4096];
         snprintf(path, sizeof path, "%s/%s", dir, k_scenes[k].file);
         pf_scene scene;
-        pf_gltf_options go = {1}; /* textures ignored: albedo = material factor */
+        pf_gltf_options go = {.ignore_textures = 1}; /* textures ignored: albedo = material factor */
         if (pf_gltf_load(&scene, path, &go, &err) != PF_OK) {
             fprintf(stderr, "softgi: bench frame: %s (give the folder with --scenes)\n", err.message);
             return 1;

@@ -2,6 +2,8 @@
  * outline (see gi_frame.h). */
 #include "gi_frame.h"
 
+#include "pf_budget.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -77,6 +79,25 @@ pf_result gi_frame_set_area_sampling(gi_frame *f, uint32_t strata, uint32_t poin
         return pf_error_set(err, PF_ERR_ARGUMENT, "area-light points %u: expected 1..%u", points, GI_AREA_MAX_POINTS);
     f->area_strata = strata;
     return gi__area_maps_init(f, points, err);
+}
+
+uint64_t gi_frame_memory_estimate(const pf_scene *scene, uint32_t width, uint32_t height, uint32_t shadow_size,
+                                  uint32_t vpls, uint32_t para_res, uint32_t area_points)
+{
+    uint64_t bytes = pf_budget_mul((uint64_t)width * height, GI_FRAME_BYTES_PER_PIXEL);
+    uint64_t side = shadow_size ? shadow_size : RS_SHADOW_DEFAULT_SIZE;
+    for (uint32_t l = 0; l < scene->light_count; l++) {
+        const pf_light *L = &scene->lights[l];
+        uint64_t faces = L->type == PF_LIGHT_POINT || (L->type == PF_LIGHT_SPOT && L->outer_cone > RS_SHADOW_SPOT_MAX_CONE)
+                             ? 6
+                             : 1;
+        bytes += pf_budget_mul(faces * side * side, sizeof(float));
+    }
+    uint64_t R = para_res ? para_res : RS_PARA_DEFAULT_RES;
+    /* per VPL: its map (2 bytes a texel), its frame and bookkeeping */
+    bytes += pf_budget_mul(vpls, R * R * 2 + 512);
+    if (area_points) bytes += pf_budget_mul(area_points, (uint64_t)RS_PARA_DEFAULT_RES * RS_PARA_DEFAULT_RES * 2 + 512);
+    return bytes;
 }
 
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,

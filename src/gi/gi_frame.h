@@ -139,6 +139,15 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
                         const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err);
 void gi_frame_free(gi_frame *f);
 
+/* Bytes a frame will allocate, estimated before anything is (pf_budget.h):
+ * the per-pixel planes (G-buffer, split, accumulation, filter, direct,
+ * final; GI_FRAME_BYTES_PER_PIXEL each pixel), every light's shadow map
+ * (6 faces for point lights and wide spots), the VPLs' paraboloid maps
+ * (vpls 0: no indirect light) and the area lights' K emitter maps. */
+#define GI_FRAME_BYTES_PER_PIXEL 256u
+uint64_t gi_frame_memory_estimate(const pf_scene *scene, uint32_t width, uint32_t height, uint32_t shadow_size,
+                                  uint32_t vpls, uint32_t para_res, uint32_t area_points);
+
 /* Turns on the many-light stages (steps 3-9); `indirect_only` drops emission
  * and direct light from the composed image. */
 pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err);

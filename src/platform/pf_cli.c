@@ -1,5 +1,6 @@
 /* pf_cli: strict command-line parsing (see pf_cli.h). */
 #include "pf_cli.h"
+#include "pf_budget.h"
 
 #include <errno.h>
 #include <math.h>
@@ -35,6 +36,8 @@ void pf_cli_usage(FILE *out)
           "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
           "                          lights given replace the scene's lights\n"
           "  --shadow-size N         direct-light shadow map resolution (default 1024)\n"
+          "  --max-memory SIZE       memory budget, e.g. 8G or 512M (default: half of this\n"
+          "                          machine's memory); larger scenes and frames are refused\n"
           "  --area-strata N         area lights, ray-traced direct light: N x N stratified\n"
           "                          samples per pixel (1..16, default 4)\n"
           "  --area-points K         area lights, rasterized direct light: K emitter points,\n"
@@ -227,7 +230,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                                                  "--vpls",     "--tiles",  "--clamp",  "--method",
                                                  "--bounces",  "--filter", "--visibility", "--dump-stages",
                                                  "--spp",      "--param",  "--screenshot", "--pipeline", "--track-spp",
-                                                 "--ism-res",  "--ism-points", "--ism-bias"};
+                                                 "--ism-res",  "--ism-points", "--ism-bias", "--max-memory"};
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             if (strcmp(a, with_value[k]) == 0) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
@@ -246,6 +249,7 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
         else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
         else if (!strcmp(a, "--shadow-size")) r = pf__uint(a, val, 16, 8192, &o->shadow_size, err);
+        else if (!strcmp(a, "--max-memory")) r = pf_budget_parse(val, &o->max_memory, err);
         else if (!strcmp(a, "--area-strata")) r = pf__uint(a, val, 1, 16, &o->area_strata, err);
         else if (!strcmp(a, "--area-points")) r = pf__uint(a, val, 1, 1024, &o->area_points, err);
         else if (!strcmp(a, "--indirect-only")) o->indirect_only = 1;

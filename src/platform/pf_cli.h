@@ -59,6 +59,7 @@ typedef struct pf_options {
     const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */
     uint32_t width, height; /* 0: default 640x480 */
     uint32_t threads;       /* 0: number of cores */
+    uint64_t max_memory;    /* --max-memory: memory budget in bytes (0: half the machine's; pf_budget.h) */
     pf_isa isa;
     float exposure; /* stops; PNG scale 2^exposure */
     int has_camera;

@@ -12,8 +12,14 @@
  * flat normals where NORMAL is missing. Then materials, the textures they
  * use (mips built here), cameras and KHR_lights_punctual lights. */
 #include "pf_gltf.h"
+#include "pf_budget.h"
+#include "pf_decode.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include <cmath>
 #include <cstdarg>
@@ -25,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include <stb_image.h>
+#include <cjson/cJSON.h>
 #include <tiny_gltf.h>
 
 namespace {
@@ -59,50 +65,253 @@ std::string fmt(const char *f, ...)
     return buf;
 }
 
+/* ---------------------------------------------------------------- checks before tinygltf
+ * tinygltf 2.7 accepts several things silently that a careful loader must
+ * not: it converts extras and extensions recursively (a 30 KB file nested
+ * 15,000 deep overflows the stack), drops a baseColorFactor of the wrong
+ * length, reads "indices": -3 as "not indexed", and loads glTF 1.0 and GLB
+ * version 1 headers as if they were 2.0. These checks run on the raw JSON
+ * first: a non-recursive nesting scan, the GLB header, then a cJSON pass
+ * (cJSON bounds its own nesting at 1000; ours is far lower) over the fields
+ * tinygltf would lose. */
+
+const int kMaxJsonDepth = 64;
+
+/* Deepest nesting of [ and { outside strings; no recursion. */
+int json_depth(const char *p, size_t n)
+{
+    int depth = 0, deepest = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < n; i++) {
+        char c = p[i];
+        if (in_string) {
+            if (c == '\\') i++;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') in_string = true;
+        else if (c == '[' || c == '{') deepest = ++depth > deepest ? depth : deepest;
+        else if ((c == ']' || c == '}') && depth > 0) depth--;
+    }
+    return deepest;
+}
+
+/* The JSON text of a .gltf or of a GLB's first chunk (glTF 2.0 spec,
+ * Sec. 4.4 "Binary glTF Layout"). */
+void json_of(const unsigned char *data, size_t size, bool is_glb, const char **json, size_t *json_size)
+{
+    if (!is_glb) {
+        *json = reinterpret_cast<const char *>(data);
+        *json_size = size;
+        return;
+    }
+    uint32_t version, chunk_len, chunk_type;
+    if (size < 20) fail(PF_ERR_PARSE, "binary glTF: the file is shorter than its 20-byte header");
+    memcpy(&version, data + 4, 4);
+    memcpy(&chunk_len, data + 12, 4);
+    memcpy(&chunk_type, data + 16, 4);
+    if (version != 2)
+        fail(PF_ERR_UNSUPPORTED, fmt("binary glTF version %u (softgi reads glTF 2.0, version 2)", version));
+    if (chunk_type != 0x4E4F534Au) fail(PF_ERR_PARSE, "binary glTF: the first chunk is not JSON");
+    if (chunk_len > size - 20) fail(PF_ERR_PARSE, "binary glTF: the JSON chunk runs past the end of the file");
+    *json = reinterpret_cast<const char *>(data + 20);
+    *json_size = chunk_len;
+}
+
+/* A glTF object reference or count: a non-negative integer. */
+void check_index(const cJSON *v, const std::string &where)
+{
+    if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0.0) || v->valuedouble != std::floor(v->valuedouble) ||
+        v->valuedouble > 2147483647.0)
+        fail(PF_ERR_INDEX_RANGE, cJSON_IsNumber(v) ? fmt("%s is %g; it must be a non-negative integer index",
+                                                         where.c_str(), v->valuedouble)
+                                                   : fmt("%s must be a non-negative integer index", where.c_str()));
+}
+
+void check_number_array(const cJSON *v, int n, const std::string &where)
+{
+    if (!v) return;
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != n)
+        fail(PF_ERR_PARSE, fmt("%s must be an array of %d numbers", where.c_str(), n));
+    for (const cJSON *e = v->child; e; e = e->next)
+        if (!cJSON_IsNumber(e)) fail(PF_ERR_PARSE, fmt("%s must be an array of %d numbers", where.c_str(), n));
+}
+
+/* Every object reference the glTF 2.0 schema defines, by property name. A
+ * property inside "extras" is application data and is not looked at. */
+bool is_reference_key(const char *k)
+{
+    static const char *const keys[] = {"indices", "material", "mesh",  "camera", "skin",  "source",
+                                       "sampler", "bufferView", "buffer", "index", "scene", "node",
+                                       "light", "input",   "output", "texCoord", "skeleton"};
+    for (const char *r : keys)
+        if (strcmp(k, r) == 0) return true;
+    return false;
+}
+bool is_reference_list_key(const char *k)
+{
+    return strcmp(k, "children") == 0 || strcmp(k, "nodes") == 0 || strcmp(k, "joints") == 0;
+}
+
+void check_references(const cJSON *obj, const std::string &where, int depth)
+{
+    if (depth > kMaxJsonDepth) return; /* unreachable: json_depth ran first */
+    for (const cJSON *c = obj->child; c; c = c->next) {
+        const char *k = c->string;
+        std::string at = k ? where + "." + k : where;
+        if (k && strcmp(k, "extras") == 0) continue;
+        if (k && strcmp(k, "extensions") == 0 && cJSON_IsObject(c)) {
+            /* only the extensions softgi reads; others are the extension's own business */
+            const cJSON *lp = cJSON_GetObjectItemCaseSensitive(c, "KHR_lights_punctual");
+            if (cJSON_IsObject(lp)) check_references(lp, at + ".KHR_lights_punctual", depth + 1);
+            continue;
+        }
+        if (k && cJSON_IsNumber(c) && is_reference_key(k)) check_index(c, at);
+        else if (k && depth > 0 && is_reference_list_key(k) && cJSON_IsArray(c)) {
+            int i = 0;
+            for (const cJSON *e = c->child; e; e = e->next, i++) check_index(e, fmt("%s[%d]", at.c_str(), i));
+        } else if (k && (strcmp(k, "attributes") == 0) && cJSON_IsObject(c)) {
+            for (const cJSON *e = c->child; e; e = e->next) check_index(e, at + "." + e->string);
+        } else if (cJSON_IsArray(c)) {
+            int i = 0;
+            for (const cJSON *e = c->child; e; e = e->next, i++)
+                if (cJSON_IsObject(e) || cJSON_IsArray(e)) check_references(e, fmt("%s[%d]", at.c_str(), i), depth + 1);
+        } else if (cJSON_IsObject(c))
+            check_references(c, at, depth + 1);
+    }
+}
+
+void check_json(const char *json, size_t n)
+{
+    int depth = json_depth(json, n);
+    if (depth > kMaxJsonDepth)
+        fail(PF_ERR_PARSE, fmt("the JSON is nested %d levels deep; softgi allows %d", depth, kMaxJsonDepth));
+    const char *end = nullptr;
+    cJSON *root = cJSON_ParseWithLengthOpts(json, n, &end, 0);
+    if (!root)
+        fail(PF_ERR_PARSE, fmt("not a loadable glTF 2.0 file: invalid JSON at byte %zu",
+                               end && end >= json ? size_t(end - json) : size_t(0)));
+    struct Free {
+        cJSON *r;
+        ~Free() { cJSON_Delete(r); }
+    } guard{root};
+    if (!cJSON_IsObject(root)) fail(PF_ERR_PARSE, "the JSON is not an object");
+    const cJSON *asset = cJSON_GetObjectItemCaseSensitive(root, "asset");
+    const cJSON *version = asset ? cJSON_GetObjectItemCaseSensitive(asset, "version") : nullptr;
+    if (!cJSON_IsString(version))
+        fail(PF_ERR_PARSE, "asset.version is missing (glTF 2.0 requires it)");
+    if (strncmp(version->valuestring, "2.", 2) != 0)
+        fail(PF_ERR_UNSUPPORTED, fmt("glTF version '%.20s' (softgi reads glTF 2.0)", version->valuestring));
+    const cJSON *minv = cJSON_GetObjectItemCaseSensitive(asset, "minVersion");
+    if (cJSON_IsString(minv) && strcmp(minv->valuestring, "2.0") != 0)
+        fail(PF_ERR_UNSUPPORTED, fmt("the file needs glTF %.20s (softgi reads glTF 2.0)", minv->valuestring));
+    const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
+    if (cJSON_IsArray(mats)) {
+        int i = 0;
+        for (const cJSON *m = mats->child; m; m = m->next, i++) {
+            const cJSON *pbr = cJSON_GetObjectItemCaseSensitive(m, "pbrMetallicRoughness");
+            if (pbr)
+                check_number_array(cJSON_GetObjectItemCaseSensitive(pbr, "baseColorFactor"), 4,
+                                   fmt("material %d: baseColorFactor", i));
+            check_number_array(cJSON_GetObjectItemCaseSensitive(m, "emissiveFactor"), 3,
+                               fmt("material %d: emissiveFactor", i));
+        }
+    }
+    check_references(root, "glTF", 0);
+}
+
 /* ---------------------------------------------------------------- file system
  * Our own callbacks: tinygltf's default ExpandFilePath runs wordexp(), which
- * we do not want anywhere near file names from untrusted files. */
-/* External files are looked up only beside the glTF file: tinygltf also
- * searches the working directory, which would make a scene's meaning depend
- * on where softgi runs. user = the base directory (NULL: no files at all). */
-bool fs_allowed(const std::string &path, void *user)
+ * we do not want anywhere near file names from untrusted files.
+ *
+ * The trust boundary: a scene may read files in its own folder (and below)
+ * and nothing else. tinygltf percent-decodes a uri ("%2e%2e/" is "../") and
+ * joins it to the folder (and, second, to the working directory), so the
+ * joined string proves nothing: "<dir>/../../etc/passwd" starts with
+ * "<dir>/". Every candidate is therefore resolved with realpath() (which
+ * removes "." and ".." and follows every symbolic link) and must lie strictly
+ * inside the realpath of the scene's folder. A file outside it is treated
+ * exactly like a missing one, so the messages reveal nothing about files
+ * outside the folder. Only regular files are read (a FIFO would block, a
+ * device would never end), and their size counts against the memory budget
+ * before a byte is read. */
+struct FsContext {
+    std::string base_real; /* realpath of the scene's folder, with a trailing '/' */
+    pf_budget *budget;     /* external files are read whole: they count */
+};
+
+/* The resolved path if `path` exists inside the scene's folder, else "". */
+std::string fs_resolve_inside(const std::string &path, const FsContext *ctx)
 {
-    if (!user) return false;
-    std::string base = static_cast<const char *>(user);
-    if (!base.empty() && base.back() != '/') base += '/';
-    return path.compare(0, base.size(), base) == 0;
+    if (!ctx || ctx->base_real.empty()) return std::string();
+    char *rp = realpath(path.c_str(), nullptr);
+    if (!rp) return std::string();
+    std::string r(rp);
+    free(rp);
+    if (r.size() <= ctx->base_real.size() || r.compare(0, ctx->base_real.size(), ctx->base_real) != 0)
+        return std::string();
+    return r;
 }
 bool fs_exists(const std::string &path, void *user)
 {
     struct stat st;
-    return fs_allowed(path, user) && stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+    std::string r = fs_resolve_inside(path, static_cast<const FsContext *>(user));
+    return !r.empty() && stat(r.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 std::string fs_expand(const std::string &path, void *) { return path; }
-bool read_file(std::vector<unsigned char> *out, std::string *err, const std::string &path)
+/* Reads a whole regular file. O_NONBLOCK: opening a FIFO must not wait for a
+ * writer; fstat then refuses anything but a regular file. With a budget, the
+ * size is taken from it before the buffer is allocated. */
+bool read_file(std::vector<unsigned char> *out, std::string *err, const std::string &path, pf_budget *budget)
 {
-    FILE *f = fopen(path.c_str(), "rb");
-    if (!f) {
+    int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
         if (err) *err += "cannot open '" + path + "'\n";
         return false;
     }
-    bool ok = fseek(f, 0, SEEK_END) == 0;
-    long size = ok ? ftell(f) : -1;
-    ok = ok && size >= 0 && size_t(size) <= kMaxFileBytes && fseek(f, 0, SEEK_SET) == 0;
-    if (ok) {
-        out->resize(size_t(size));
-        ok = size == 0 || fread(out->data(), 1, size_t(size), f) == size_t(size);
+    struct stat st;
+    bool ok = fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+    if (!ok) {
+        close(fd);
+        if (err) *err += "'" + path + "' is not a regular file\n";
+        return false;
     }
-    fclose(f);
-    if (!ok && err) *err += "cannot read '" + path + "'\n";
-    return ok;
+    size_t size = size_t(st.st_size);
+    if (st.st_size < 0 || size > kMaxFileBytes) {
+        close(fd);
+        if (err) *err += "'" + path + "' is larger than 4 GiB\n";
+        return false;
+    }
+    if (budget) {
+        pf_error e;
+        if (pf_budget_take(budget, size, ("file '" + path + "'").c_str(), &e) != PF_OK) {
+            close(fd);
+            if (err) *err += std::string(e.message) + "\n";
+            return false;
+        }
+    }
+    out->resize(size);
+    size_t got = 0;
+    while (got < size) {
+        ssize_t n = read(fd, out->data() + got, size - got);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        got += size_t(n);
+    }
+    close(fd);
+    if (got != size) {
+        if (err) *err += "cannot read '" + path + "'\n";
+        return false;
+    }
+    return true;
 }
 bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user)
 {
-    if (!fs_allowed(path, user)) {
-        if (err) *err += "external file '" + path + "' is not beside the glTF file (or loading from memory)\n";
+    const FsContext *ctx = static_cast<const FsContext *>(user);
+    std::string r = fs_resolve_inside(path, ctx);
+    if (r.empty()) {
+        if (err) *err += "file not found (or outside the scene's folder)\n";
         return false;
     }
-    return read_file(out, err, path);
+    return read_file(out, err, r, ctx->budget);
 }
 bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
 {
@@ -402,6 +611,7 @@ struct Builder {
     uint32_t dropped = 0;
     int default_material = -1; /* index of the glTF default material, made on demand */
     size_t skipped_prims = 0;
+    const pf_budget *budget = nullptr; /* triangles are checked against it as they are added */
 
     void warn(const std::string &w)
     {
@@ -485,6 +695,15 @@ struct Builder {
         }
         if (idx.size() / 3 + L.size() / 3 > kMaxSceneTriangles)
             fail(PF_ERR_UNSUPPORTED, fmt("the scene instances more than %zu triangles", kMaxSceneTriangles));
+        if (budget) { /* checked as the instances add up, before the arrays grow */
+            pf_budget trial = *budget;
+            uint64_t tris = idx.size() / 3 + L.size() / 3;
+            pf_error e;
+            if (pf_budget_take(&trial, pf_budget_mul(tris, PF_BUDGET_BYTES_PER_TRIANGLE),
+                               fmt("the scene's %llu triangles (after instancing)", (unsigned long long)tris).c_str(),
+                               &e) != PF_OK)
+                fail(e.code, e.message);
+        }
 
         bool mirror = pf_mat4_det3(&world) < 0.0;
         /* World-space positions of this primitive. */
@@ -621,6 +840,20 @@ struct Builder {
             out.inner_cone = float(L.spot.innerConeAngle);
             out.outer_cone = float(L.spot.outerConeAngle);
         }
+        /* KHR_lights_punctual: colour in [0, 1] (clamped, with a warning),
+         * intensity >= 0; their product must stay far from float overflow
+         * (PF_MAX_RADIANCE), or shading turns it into inf and NaN. */
+        bool clamped = false;
+        float *rgb[3] = {&out.color.x, &out.color.y, &out.color.z};
+        for (float *c : rgb) {
+            float cc = *c < 0.0f ? 0.0f : *c > 1.0f ? 1.0f : *c;
+            clamped |= cc != *c && std::isfinite(*c);
+            if (std::isfinite(*c)) *c = cc;
+        }
+        if (clamped) warn(fmt("light %d: color outside [0, 1] clamped", li));
+        if (!(L.intensity >= 0.0) || L.intensity > double(PF_MAX_RADIANCE))
+            fail(PF_ERR_NONFINITE, fmt("light %d: intensity %g is outside [0, %g]", li, L.intensity,
+                                       double(PF_MAX_RADIANCE)));
         if (out.range > 0.0f) warn(fmt("light %d: range is ignored (softgi uses pure 1/r^2 falloff)", li));
         lights.push_back(out);
     }
@@ -683,41 +916,58 @@ pf_wrap wrap_mode(int gl)
     return PF_WRAP_REPEAT;
 }
 
-/* Decodes image `index` (PNG/JPEG/... through stb_image) to RGBA8. */
-std::vector<uint8_t> decode_image(const tinygltf::Model &m, int index, uint32_t *w, uint32_t *h)
+/* The encoded bytes of image `index` (a checked bufferView, or the uri's
+ * file or data read by tinygltf). */
+void image_bytes(const tinygltf::Model &m, int index, const unsigned char **bytes, size_t *size)
 {
     const tinygltf::Image &img = m.images[size_t(index)];
     const char *label = img.uri.empty() ? img.name.c_str() : img.uri.c_str();
-    const unsigned char *bytes;
-    size_t size;
     if (img.bufferView >= 0) {
         if (size_t(img.bufferView) >= m.bufferViews.size())
             fail(PF_ERR_INDEX_RANGE, fmt("image %d refers to bufferView %d, but the file has %zu", index,
                                          img.bufferView, m.bufferViews.size()));
-        size = m.bufferViews[size_t(img.bufferView)].byteLength;
-        if (size == 0) fail(PF_ERR_TEXTURE, fmt("image %d: bufferView %d is empty", index, img.bufferView));
-        bytes = checked_view(m, img.bufferView, 0, 1, size, fmt("image %d", index)).base;
+        *size = m.bufferViews[size_t(img.bufferView)].byteLength;
+        if (*size == 0) fail(PF_ERR_TEXTURE, fmt("image %d: bufferView %d is empty", index, img.bufferView));
+        *bytes = checked_view(m, img.bufferView, 0, 1, *size, fmt("image %d", index)).base;
     } else {
         if (img.image.empty())
-            fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be loaded: file missing or empty", index, label));
-        bytes = img.image.data();
-        size = img.image.size();
+            fail(PF_ERR_TEXTURE, fmt("image %d ('%.200s') could not be loaded: file missing or empty", index, label));
+        *bytes = img.image.data();
+        *size = img.image.size();
     }
-    if (size > size_t(INT32_MAX)) fail(PF_ERR_TEXTURE, fmt("image %d is larger than 2 GiB", index));
-    int iw = 0, ih = 0, comp = 0;
-    if (!stbi_info_from_memory(bytes, int(size), &iw, &ih, &comp))
-        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be decoded: %s", index, label, stbi_failure_reason()));
-    if (iw <= 0 || ih <= 0 || iw > 32768 || ih > 32768 || size_t(iw) * size_t(ih) > (size_t(1) << 26))
-        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') is %dx%d, larger than softgi's limit (32768 a side, 64 Mpixels)",
-                                 index, label, iw, ih));
-    unsigned char *px = stbi_load_from_memory(bytes, int(size), &iw, &ih, &comp, 4);
-    if (!px)
-        fail(PF_ERR_TEXTURE, fmt("image %d ('%s') could not be decoded: %s", index, label, stbi_failure_reason()));
-    std::vector<uint8_t> out(px, px + size_t(iw) * size_t(ih) * 4);
-    stbi_image_free(px);
-    *w = uint32_t(iw);
-    *h = uint32_t(ih);
-    return out;
+}
+
+/* Header only: the decoded size of image `index`, before anything is
+ * decoded (pf_decode_probe applies softgi's per-image limits). */
+void probe_image(const tinygltf::Model &m, int index, uint32_t *w, uint32_t *h)
+{
+    const unsigned char *bytes;
+    size_t size;
+    image_bytes(m, index, &bytes, &size);
+    pf_image_format f;
+    pf_error e;
+    if (pf_decode_probe(bytes, size, nullptr, &f, w, h, &e) != PF_OK) {
+        const tinygltf::Image &img = m.images[size_t(index)];
+        fail(e.code, fmt("image %d ('%.200s'): %s", index, img.uri.empty() ? img.name.c_str() : img.uri.c_str(),
+                         e.message));
+    }
+}
+
+/* Decodes image `index` to RGBA8 (PNG through libspng, JPEG through
+ * libjpeg-turbo: pf_decode.h). The caller frees the result. */
+uint8_t *decode_image(const tinygltf::Model &m, int index, uint32_t *w, uint32_t *h)
+{
+    const unsigned char *bytes;
+    size_t size;
+    image_bytes(m, index, &bytes, &size);
+    uint8_t *rgba = nullptr;
+    pf_error e;
+    if (pf_decode_rgba8(bytes, size, nullptr, &rgba, w, h, &e) != PF_OK) {
+        const tinygltf::Image &img = m.images[size_t(index)];
+        fail(e.code, fmt("image %d ('%.200s'): %s", index, img.uri.empty() ? img.name.c_str() : img.uri.c_str(),
+                         e.message));
+    }
+    return rgba;
 }
 
 template <typename T> T *copy_out(const std::vector<T> &v, size_t extra = 0)
@@ -729,8 +979,40 @@ template <typename T> T *copy_out(const std::vector<T> &v, size_t extra = 0)
     return p;
 }
 
+/* A camera whose near plane lies beyond every triangle, or whose far plane
+ * lies before them all, renders an empty image: refused with the distances
+ * rather than rendered black without a word. */
+void check_camera_ranges(const std::vector<pf_camera> &cams, const std::vector<pf_vec3> &pos)
+{
+    if (pos.empty()) return;
+    pf_vec3 lo = pos[0], hi = pos[0];
+    for (const pf_vec3 &p : pos) {
+        lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+        hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+    }
+    for (size_t c = 0; c < cams.size(); c++) {
+        const pf_camera &cam = cams[c];
+        double far2 = 0.0, near2 = 0.0;
+        const float e[3] = {cam.eye.x, cam.eye.y, cam.eye.z}, l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+        for (int k = 0; k < 3; k++) {
+            double a = fabs(double(e[k]) - l[k]), bb = fabs(double(e[k]) - h[k]);
+            far2 += (a > bb ? a : bb) * (a > bb ? a : bb);
+            double d = e[k] < l[k] ? double(l[k]) - e[k] : e[k] > h[k] ? double(e[k]) - h[k] : 0.0;
+            near2 += d * d;
+        }
+        if (double(cam.znear) >= sqrt(far2))
+            fail(PF_ERR_PARSE, fmt("camera %zu: znear %g lies beyond the whole scene (its farthest point is %g away): "
+                                   "the image would be empty",
+                                   c, double(cam.znear), sqrt(far2)));
+        if (cam.zfar > 0.0f && double(cam.zfar) <= sqrt(near2))
+            fail(PF_ERR_PARSE, fmt("camera %zu: zfar %g lies before the whole scene (its nearest point is %g away): "
+                                   "the image would be empty",
+                                   c, double(cam.zfar), sqrt(near2)));
+    }
+}
+
 void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options &opts, const std::string &name,
-                 std::string warnings_in, size_t input_bytes)
+                 std::string warnings_in, size_t input_bytes, pf_budget *budget)
 {
     size_t limit = input_bytes > (SIZE_MAX / kImplicitPerByte) ? SIZE_MAX : input_bytes * kImplicitPerByte;
     Builder b{m, opts, name, limit > kImplicitFloor ? limit : kImplicitFloor, {}, {}, {}, {}, {}, {}, {}, {}, 0, -1, 0};
@@ -750,7 +1032,16 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
         for (size_t i = 0; i < m.nodes.size(); i++)
             if (!is_child[i]) roots.push_back(int(i));
     }
+    b.budget = budget;
     b.walk(roots);
+    check_camera_ranges(b.cameras, b.pos);
+    {
+        pf_error e;
+        uint64_t tris = b.idx.size() / 3;
+        if (pf_budget_take(budget, pf_budget_mul(tris, PF_BUDGET_BYTES_PER_TRIANGLE),
+                           fmt("the scene's %llu triangles", (unsigned long long)tris).c_str(), &e) != PF_OK)
+            fail(e.code, e.message);
+    }
 
     /* Materials: the file's, plus the glTF default material if used. */
     size_t nmat = m.materials.size() + (b.default_material >= 0 ? 1 : 0);
@@ -771,18 +1062,39 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
         }
         const tinygltf::Material &gm = m.materials[i];
         snprintf(pm.name, sizeof pm.name, "%s", gm.name.c_str());
+        /* glTF 2.0 puts every baseColorFactor and emissiveFactor component in
+         * [0, 1]: outside it a material reflects more light than it
+         * receives (energy grows with every bounce) or a negative amount.
+         * Clamped, with a warning. */
         const std::vector<double> &bc = gm.pbrMetallicRoughness.baseColorFactor;
-        if (bc.size() == 4)
-            for (int k = 0; k < 4; k++) pm.base_color[k] = float(bc[size_t(k)]);
-        else if (!bc.empty())
+        if (bc.size() == 4) {
+            bool clamped = false;
+            for (int k = 0; k < 4; k++) {
+                double c = bc[size_t(k)];
+                double cc = c < 0.0 ? 0.0 : c > 1.0 ? 1.0 : c;
+                clamped |= cc != c;
+                pm.base_color[k] = float(cc);
+            }
+            if (clamped) b.warn(fmt("material %zu: baseColorFactor outside [0, 1] clamped", i));
+        } else if (!bc.empty())
             fail(PF_ERR_PARSE, fmt("material %zu: baseColorFactor must have 4 numbers", i));
         if (gm.emissiveFactor.size() == 3) {
-            float strength = 1.0f;
+            double strength = 1.0;
             auto ext = gm.extensions.find("KHR_materials_emissive_strength");
             if (ext != gm.extensions.end() && ext->second.Has("emissiveStrength") &&
                 ext->second.Get("emissiveStrength").IsNumber())
-                strength = float(ext->second.Get("emissiveStrength").GetNumberAsDouble());
-            for (int k = 0; k < 3; k++) pm.emission[k] = float(gm.emissiveFactor[size_t(k)]) * strength;
+                strength = ext->second.Get("emissiveStrength").GetNumberAsDouble();
+            if (!(strength >= 0.0) || strength > double(PF_MAX_RADIANCE))
+                fail(PF_ERR_NONFINITE, fmt("material %zu: emissiveStrength %g is outside [0, %g]", i, strength,
+                                           double(PF_MAX_RADIANCE)));
+            bool clamped = false;
+            for (int k = 0; k < 3; k++) {
+                double c = gm.emissiveFactor[size_t(k)];
+                double cc = c < 0.0 ? 0.0 : c > 1.0 ? 1.0 : c;
+                clamped |= cc != c;
+                pm.emission[k] = float(cc * strength);
+            }
+            if (clamped) b.warn(fmt("material %zu: emissiveFactor outside [0, 1] clamped", i));
         }
         if (gm.alphaMode == "MASK") pm.alpha_mode = PF_ALPHA_MASK;
         else if (gm.alphaMode == "BLEND") {
@@ -851,12 +1163,35 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
                 for (pf_image &im : v) free(im.texels);
         }
     } guard{images};
+    /* Memory first, from the headers alone: every image's texels and mips
+     * (4/3 of level 0) stay; one decode at a time is transient: its level 0
+     * (4 bytes a texel) and, for a progressive JPEG, libjpeg's whole-image
+     * coefficient buffer (up to 6 bytes a texel at 4:4:4), so 3x level 0. */
+    uint64_t largest = 0, texel_bytes = 0;
     for (size_t i = 0; i < img_order.size(); i++) {
         uint32_t w, h;
-        std::vector<uint8_t> rgba = decode_image(m, img_order[i], &w, &h);
+        probe_image(m, img_order[i], &w, &h);
+        uint64_t level0 = uint64_t(w) * h * 4;
+        largest = level0 > largest ? level0 : largest;
+        texel_bytes += level0 + level0 / 3 + 64;
         pf_error e;
-        if (pf_image_build_mips(&images[i], rgba.data(), w, h, &e) != PF_OK)
+        if (pf_budget_take(budget, level0 + level0 / 3 + 64,
+                           fmt("image %d (%ux%u texels and mips)", img_order[i], w, h).c_str(), &e) != PF_OK)
             fail(e.code, e.message);
+    }
+    {
+        pf_error e;
+        if (pf_budget_take(budget, pf_budget_mul(largest, 3), "decoding the largest image", &e) != PF_OK)
+            fail(e.code, e.message);
+        budget->used -= pf_budget_mul(largest, 3); /* transient: given back once decoding is over */
+    }
+    for (size_t i = 0; i < img_order.size(); i++) {
+        uint32_t w, h;
+        uint8_t *rgba = decode_image(m, img_order[i], &w, &h);
+        pf_error e;
+        pf_result r = pf_image_build_mips(&images[i], rgba, w, h, &e);
+        free(rgba);
+        if (r != PF_OK) fail(e.code, e.message);
     }
 
     if (b.idx.empty()) {
@@ -893,6 +1228,7 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
     }
     guard.keep = true;
     s.dropped_degenerate = b.dropped;
+    s.memory_bytes = pf_budget_mul(s.tri_count, PF_BUDGET_BYTES_PER_TRIANGLE) + texel_bytes;
     if (b.dropped) b.warn(fmt("%u zero-area triangles dropped", b.dropped));
     snprintf(s.warnings, sizeof s.warnings, "%s", b.warnings.c_str());
     pf_error e;
@@ -920,18 +1256,37 @@ pf_result load(pf_scene *out, const unsigned char *data, size_t size, const char
     if (size > 0xffffffffu) return pf_error_set(err, PF_ERR_UNSUPPORTED, "%s: files over 4 GiB are not supported", nm);
     if (size == 0) return pf_error_set(err, PF_ERR_PARSE, "%s: the file is empty", nm);
     try {
+        pf_budget budget;
+        pf_budget_init(&budget, opts.max_memory);
+        pf_error be;
+        if (pf_budget_take(&budget, size, "the scene file", &be) != PF_OK) fail(be.code, be.message);
+        bool is_glb = size >= 4 && memcmp(data, "glTF", 4) == 0;
+        const char *json;
+        size_t json_size;
+        json_of(data, size, is_glb, &json, &json_size);
+        check_json(json, json_size);
+
+        FsContext fsc;
+        fsc.budget = &budget;
+        if (base_dir) {
+            char *rp = realpath(base_dir, nullptr);
+            if (rp) {
+                fsc.base_real = rp;
+                free(rp);
+                if (fsc.base_real.back() != '/') fsc.base_real += '/';
+            }
+        }
         tinygltf::TinyGLTF loader;
         tinygltf::FsCallbacks fs;
         fs.FileExists = fs_exists;
         fs.ExpandFilePath = fs_expand;
         fs.ReadWholeFile = fs_read;
         fs.WriteWholeFile = fs_write;
-        fs.user_data = base_dir ? const_cast<char *>(base_dir) : nullptr;
+        fs.user_data = &fsc;
         loader.SetFsCallbacks(fs);
         loader.SetImageLoader(opts.ignore_textures ? skip_image : defer_image, nullptr);
         tinygltf::Model model;
         std::string terr, twarn;
-        bool is_glb = size >= 4 && memcmp(data, "glTF", 4) == 0;
         bool ok;
         std::string dir = base_dir ? base_dir : "";
         if (is_glb)
@@ -952,7 +1307,7 @@ pf_result load(pf_scene *out, const unsigned char *data, size_t size, const char
         }
         size_t input_bytes = size;
         for (const tinygltf::Buffer &buf : model.buffers) input_bytes += buf.data.size();
-        build_scene(out, model, opts, nm, twarn, input_bytes);
+        build_scene(out, model, opts, nm, twarn, input_bytes, &budget);
         return PF_OK;
     } catch (const LoadError &e) {
         return pf_error_set(err, e.code, "%s: %s", nm, e.message.c_str());
@@ -979,7 +1334,7 @@ extern "C" pf_result pf_gltf_load(pf_scene *out, const char *path, const pf_gltf
     if (!S_ISREG(st.st_mode)) return pf_error_set(err, PF_ERR_IO, "%s: not a regular file", path);
     std::vector<unsigned char> bytes;
     std::string ferr;
-    if (!read_file(&bytes, &ferr, path))
+    if (!read_file(&bytes, &ferr, path, nullptr))
         return pf_error_set(err, PF_ERR_IO, "%s: %s", path, first_line(ferr).c_str());
     std::string p(path);
     size_t slash = p.find_last_of('/');

@@ -22,6 +22,7 @@
 #define PF_GLTF_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "pf_scene.h"
 
@@ -32,6 +33,7 @@ extern "C" {
 typedef struct pf_gltf_options {
     /* Zero-initialised means defaults. */
     int ignore_textures; /* skip images entirely (albedo = factor) */
+    uint64_t max_memory; /* memory budget in bytes (pf_budget.h); 0: the default */
 } pf_gltf_options;
 
 /* Loads `path` (.gltf or .glb, decided by content) into *out (zeroed first).

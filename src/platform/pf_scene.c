@@ -64,9 +64,13 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
         for (int k = 0; k < 4; k++)
             if (!isfinite(mat->base_color[k]))
                 return pf_error_set(err, PF_ERR_NONFINITE, "material %u has a non-finite baseColorFactor", m);
+        for (int k = 0; k < 4; k++)
+            if (!(mat->base_color[k] >= 0.0f && mat->base_color[k] <= 1.0f))
+                return pf_error_set(err, PF_ERR_PARSE, "material %u has a baseColorFactor outside [0, 1]", m);
         for (int k = 0; k < 3; k++)
-            if (!isfinite(mat->emission[k]) || mat->emission[k] < 0.0f)
-                return pf_error_set(err, PF_ERR_NONFINITE, "material %u has a negative or non-finite emission", m);
+            if (!(mat->emission[k] >= 0.0f && mat->emission[k] <= PF_MAX_RADIANCE))
+                return pf_error_set(err, PF_ERR_NONFINITE, "material %u has an emission outside [0, %g]", m,
+                                    (double)PF_MAX_RADIANCE);
         if (mat->base_color_texture >= (int32_t)s->texture_count)
             return pf_error_set(err, PF_ERR_INDEX_RANGE, "material %u uses texture %d of %u", m,
                                 mat->base_color_texture, s->texture_count);
@@ -91,6 +95,11 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
         if (li->intensity < 0.0f || li->color.x < 0.0f || li->color.y < 0.0f || li->color.z < 0.0f)
             return pf_error_set(err, PF_ERR_PARSE, "light %u ('%s') has a negative intensity or colour", l,
                                 li->name);
+        float cmax = fmaxf(li->color.x, fmaxf(li->color.y, li->color.z));
+        if ((double)li->intensity * cmax > PF_MAX_RADIANCE)
+            return pf_error_set(err, PF_ERR_NONFINITE,
+                                "light %u ('%s'): intensity x colour %g exceeds softgi's limit %g (W/sr or W/m^2)", l,
+                                li->name, (double)li->intensity * cmax, (double)PF_MAX_RADIANCE);
         if (li->type == PF_LIGHT_SPOT &&
             !(li->inner_cone >= 0.0f && li->inner_cone < li->outer_cone && li->outer_cone <= 0.5f * PF_PI))
             return pf_error_set(err, PF_ERR_PARSE,

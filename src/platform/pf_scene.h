@@ -85,6 +85,13 @@ typedef struct pf_camera {
 
 typedef enum pf_light_type { PF_LIGHT_POINT = 0, PF_LIGHT_SPOT, PF_LIGHT_DIRECTIONAL } pf_light_type;
 
+/* The largest light intensity x colour (W/sr, W/m^2) and emitted radiance
+ * softgi accepts. Far below float's 3.4e38 so that shading (intensity x
+ * albedo x geometry term / distance^2, summed over thousands of VPLs) stays
+ * finite; far above any physical light in these units (the sun is about
+ * 1e3 W/m^2). */
+#define PF_MAX_RADIANCE 1e10f
+
 typedef struct pf_light {
     char name[64];
     pf_light_type type;
@@ -122,6 +129,8 @@ typedef struct pf_scene {
     pf_vec3 bounds_min, bounds_max;
     uint32_t dropped_degenerate; /* zero-area triangles removed at load */
     char warnings[1024];         /* load warnings, newline separated */
+    uint64_t memory_bytes;       /* the loader's estimate of what the scene costs (pf_budget.h): triangles
+                                    through the pipeline and texels with mips; 0 for scenes built in memory */
 } pf_scene;
 
 /* The surface at a point of a triangle, interpolated from the scene. */

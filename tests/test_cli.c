@@ -35,7 +35,9 @@ static void test_usage_errors(void **state)
     tu_softgi_expect("render --param nosuch=1", 2, "method ir has no such parameter");
     tu_softgi_expect("render --vpls 0", 2, "--vpls");
     tu_softgi_expect("render --bounces 0", 2, "--bounces");
-    tu_softgi_expect("render --vpls 1000000 -q -o /dev/null/x.png", 2, "use fewer VPLs or --visibility raytrace");
+    /* 1,000,000 paraboloid maps (31 GiB) exceed the memory budget: refused before allocating, with the hint */
+    tu_softgi_expect("render --vpls 1000000 --max-memory 8G -q -o /dev/null/x.png", 1,
+                     "use fewer VPLs or --visibility raytrace");
     tu_softgi_expect("render --frob", 2, "unknown option '--frob'");
     tu_softgi_expect("render a.gltf b.gltf", 2, "unexpected argument");
     tu_softgi_expect("render --size", 2, "--size needs a value");

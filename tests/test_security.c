@@ -31,7 +31,7 @@
 #include "pf_scene.h"
 #include "test_util.h"
 
-static char g_dir[4096]; /* the group's temporary folder */
+static char g_dir[512]; /* the group's temporary folder */
 
 static void write_file(const char *path, const void *data, size_t size)
 {
@@ -448,6 +448,80 @@ static void test_budget_parse(void **state)
     assert_true(pf_budget_mul(UINT64_MAX / 2, 3) == UINT64_MAX);
 }
 
+/* The frame's memory, end to end through the program: a sequence asking
+ * for a 16384^2 frame, a scene with 2,000 point lights (a cube shadow map
+ * each), and --max-memory itself. Each is refused in well under a second,
+ * before anything big is allocated. */
+static void test_budget_frames(void **state)
+{
+    (void)state;
+    char path[1024], args[4096];
+    /* 2,000 point lights in a small scene */
+    size_t cap = 2000 * 160 + 8192;
+    char *json = malloc(cap), *lights = malloc(cap), *nodes = malloc(cap);
+    assert_true(json && lights && nodes);
+    size_t nl = 0, nn = 0;
+    for (int i = 0; i < 2000; i++) {
+        nl += (size_t)snprintf(lights + nl, cap - nl, "%s{\"type\":\"point\",\"intensity\":0.01}", i ? "," : "");
+        nn += (size_t)snprintf(nodes + nn, cap - nn,
+                               ",{\"translation\":[0.2,0.2,%g],\"extensions\":{\"KHR_lights_punctual\":{\"light\":%d}}}",
+                               0.1 + 0.0001 * i, i);
+    }
+    char *top = malloc(cap);
+    assert_non_null(top);
+    snprintf(top, cap, "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[%s]}},", lights);
+    snprintf(json, cap,
+             "{\"asset\":{\"version\":\"2.0\"},%s"
+             "\"buffers\":[{\"uri\":\"inside.bin\",\"byteLength\":36}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+             "\"min\":[0,0,0],\"max\":[1,1,0]}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+             "\"nodes\":[{\"mesh\":0}%s],\"scenes\":[{\"nodes\":[0]}],\"scene\":0}",
+             top, nodes);
+    /* the scene lists only node 0; make every light node a root too */
+    char *sc = strstr(json, "\"scenes\":[{\"nodes\":[0]}]");
+    assert_non_null(sc);
+    size_t head = (size_t)(sc - json);
+    char *fixed = malloc(cap + 16384);
+    assert_non_null(fixed);
+    size_t n = (size_t)snprintf(fixed, cap + 16384, "%.*s\"scenes\":[{\"nodes\":[0", (int)head, json);
+    for (int i = 1; i <= 2000; i++) n += (size_t)snprintf(fixed + n, cap + 16384 - n, ",%d", i);
+    snprintf(fixed + n, cap + 16384 - n, "]}],\"scene\":0}");
+    snprintf(path, sizeof path, "%s/scene/lights.gltf", g_dir);
+    write_file(path, fixed, strlen(fixed));
+    snprintf(args, sizeof args, "render %s --camera 0.5,0.5,3:0.5,0.5,0:40 --size 64x48 -o %s/lights.png", path, g_dir);
+    tu_softgi_expect(args, 1, "2000 lights with shadow maps");
+    snprintf(path, sizeof path, "%s/lights.png", g_dir);
+    assert_false(tu_file_exists(path));
+    /* the same scene fits with smaller shadow maps */
+    snprintf(path, sizeof path, "%s/scene/lights.gltf", g_dir);
+    snprintf(args, sizeof args,
+             "render %s --camera 0.5,0.5,3:0.5,0.5,0:40 --size 64x48 --shadow-size 16 --direct-only -q -o %s/lights.png",
+             path, g_dir);
+    tu_softgi_expect(args, 0, NULL);
+    free(json), free(lights), free(nodes), free(top), free(fixed);
+
+    /* a sequence asking for a 16384^2 frame */
+    snprintf(path, sizeof path, "%s/big.seq.json", g_dir);
+    char tri[8192];
+    gltf_with_buffer(tri, sizeof tri, "inside.bin", NULL);
+    char scene_path[1024];
+    snprintf(scene_path, sizeof scene_path, "%s/scene/tri.gltf", g_dir);
+    write_file(scene_path, tri, strlen(tri));
+    const char *seq = "{\"name\":\"big\",\"scene\":\"scene/tri.gltf\",\"frames\":2,\"size\":[16384,16384],"
+                      "\"camera\":[{\"frame\":0,\"eye\":[0.3,0.3,2],\"target\":[0.3,0.3,0],\"fovy_deg\":40}],"
+                      "\"lights\":[{\"type\":\"point\",\"color\":[1,1,1],\"intensity\":1,"
+                      "\"position\":[0.3,0.3,1],\"keys\":[{\"frame\":0,\"position\":[0.3,0.3,1]}]}]}";
+    write_file(path, seq, strlen(seq));
+    snprintf(args, sizeof args, "sequence %s -o %s/bigseq", path, g_dir);
+    tu_softgi_expect(args, 1, "exceeds the memory budget");
+    /* --max-memory: parsed strictly, and honoured */
+    tu_softgi_expect("render --max-memory lots", 2, "--max-memory");
+    snprintf(args, sizeof args, "render --size 4096x4096 --max-memory 1G -o %s/m.png", g_dir);
+    tu_softgi_expect(args, 1, "budget of 1024 MiB");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -461,6 +535,7 @@ int main(void)
         cmocka_unit_test(test_budget_triangles),
         cmocka_unit_test(test_budget_images),
         cmocka_unit_test(test_budget_parse),
+        cmocka_unit_test(test_budget_frames),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -137,12 +137,17 @@ static void test_parse_fields(void **state)
                  " \"output\": \"renders/walk\", \"track\": [[0, 0], [63, 47]]}");
     assert_string_equal(s.scene_path, "/abs/s.glb");
     assert_string_equal(s.name, "walk");
-    assert_string_equal(s.output, "dir/renders/walk");
+    assert_string_equal(s.output, "out/renders/walk"); /* under out/, not beside the file */
     assert_int_equal(s.width, 64);
     assert_int_equal(s.height, 48);
     assert_int_equal(s.track_count, 2);
     assert_int_equal(s.track[1][0], 63);
     assert_int_equal(s.track[1][1], 47);
+    pf_sequence_free(&s);
+
+    /* a huge direction is normalised in double (its float squares would overflow to a zero vector) */
+    parse_ok(&s, HEAD "\"lights\": [{\"type\": \"dir\", \"direction\": [1e30, 1e30, 1e30], \"intensity\": 1}]}");
+    assert_float_equal(s.lights[0].spec.direction.x, 0.57735027f, 1e-6f);
     pf_sequence_free(&s);
 
     parse_ok(&s, HEAD "\"lights\": [{\"type\": \"spot\", \"position\": [0,1,0], \"direction\": [0,-2,0],"
@@ -209,6 +214,32 @@ static void test_bad_inputs(void **state)
         {HEAD "\"size\": {\"w\": 1}}", PF_ERR_PARSE, "size: expected [width, height]"},
         {HEAD "\"output\": []}", PF_ERR_PARSE, "output: expected a string, got an array"},
         {HEAD "\"name\": \"a/b\"}", PF_ERR_PARSE, "name: expected 1 to"},
+        {HEAD "\"name\": \"..\"}", PF_ERR_PARSE, "name: expected 1 to"},
+        /* output: a relative folder under out/, never absolute or with '..' */
+        {HEAD "\"output\": \"/tmp/x\"}", PF_ERR_PARSE, "output: '/tmp/x': must be a relative folder"},
+        {HEAD "\"output\": \"../x\"}", PF_ERR_PARSE, "output: '../x': must not contain '..'"},
+        {HEAD "\"output\": \"a/../../x\"}", PF_ERR_PARSE, "must not contain '..'"},
+        {HEAD "\"output\": \"a/..\"}", PF_ERR_PARSE, "must not contain '..'"},
+        {HEAD "\"output\": \"\"}", PF_ERR_PARSE, "output: must not be empty"},
+        {HEAD "\"output\": \"a\\nb\"}", PF_ERR_PARSE, "output: must not contain control characters"},
+        /* found by fuzz_sequence: a field of view > 0 that is 0 in radians; eye and target too close to
+           give a direction (the renderer's pf_camera_look_at decides both) */
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1], \"fovy_deg\": 1e-45}]}",
+         PF_ERR_PARSE, "camera: frame 0: camera field of view must be in (0, 180) degrees"},
+        {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1e-30], \"fovy_deg\": 40}]}",
+         PF_ERR_PARSE, "camera: frame 0: camera eye and target must be finite and distinct"},
+        /* light emission: each factor and their product bounded (1e12) */
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e38}]}", PF_ERR_NONFINITE,
+         "lights[0].intensity: |1e+38| exceeds 1e+12"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e30,"
+              " \"color\": [1e30, 1, 1]}]}", PF_ERR_NONFINITE, "exceeds 1e+12"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e7,"
+              " \"color\": [1e7, 1, 1]}]}", PF_ERR_PARSE, "intensity 1e+07 x colour 1e+07 is not in [0, 1e+12]"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1,"
+              " \"keys\": [{\"frame\": 0, \"intensity\": 1e7}, {\"frame\": 1, \"color\": [1, 1e6, 1]}]}]}",
+         PF_ERR_PARSE, "x colour 1e+06 is not in"},
+        {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": -1}]}", PF_ERR_PARSE,
+         "intensity must be >= 0"},
         {HEAD "\"name\": 5}", PF_ERR_PARSE, "name: expected a string"},
         /* camera */
         {HEAD "\"camera\": {}}", PF_ERR_PARSE, "camera: expected an array of keys, got an object"},
@@ -319,9 +350,16 @@ static void test_bad_inputs(void **state)
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) expect_bad(bad[i].json, bad[i].code, bad[i].needle);
 
-    /* a NUL byte inside the text, and deep nesting (cJSON's limit, no stack overflow) */
+    /* found by fuzz_sequence: a raw newline in a string the message echoes; messages stay one line */
+    static const char raw[] = "{\"scene\": \"embedded:cornel\xff\xff&\np/x\", \"frames\": 1}";
     pf_sequence s;
     pf_error err;
+    assert_int_equal(pf_sequence_parse(&s, raw, sizeof raw - 1, "t.seq.json", &err), PF_ERR_PARSE);
+    assert_null(strchr(err.message, '\n'));
+    assert_non_null(strstr(err.message, "scene: 'embedded:cornel"));
+    pf_sequence_free(&s);
+
+    /* a NUL byte inside the text, and deep nesting (cJSON's limit, no stack overflow) */
     const char nul[] = "{\"scene\": \"a\"\0, \"frames\": 1}";
     assert_int_equal(pf_sequence_parse(&s, nul, sizeof nul - 1, "t.seq.json", &err), PF_ERR_PARSE);
     assert_non_null(strstr(err.message, "NUL byte"));
@@ -533,21 +571,37 @@ static void test_end_to_end(void **state)
     st = tu_softgi_run(args, out, sizeof out);
     if (st != 0 || !strstr(out, "| light | 6 |")) fail_msg("softgi %s: exit %d\n%s", args, st, out);
 
-    /* a shorter run into the same folder removes the extra frames */
+    /* a shorter run into the same folder deletes nothing: the older frames
+     * stay, frames.txt lists this run's 2, track.txt is replaced by an empty
+     * list (no "track" in this file), and compare reads only the 2 frames */
     char shortseq[512];
     snprintf(shortseq, sizeof shortseq, "%s/short.seq.json", g_tmp);
-    write_file(shortseq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [32, 24]}");
+    write_file(shortseq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [64, 48]}");
     snprintf(args, sizeof args, "sequence '%s' -o '%s' -q --direct-only --shadow-size 64", shortseq, d2);
     st = tu_softgi_run(args, out, sizeof out);
     if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
     snprintf(path, sizeof path, "%s/frame_0001.view", d2);
     assert_true(tu_file_exists(path));
     snprintf(path, sizeof path, "%s/frame_0002.pfm", d2);
-    assert_false(tu_file_exists(path));
+    assert_true(tu_file_exists(path));
     snprintf(path, sizeof path, "%s/frame_0005.depth.pfm", d2);
-    assert_false(tu_file_exists(path));
+    assert_true(tu_file_exists(path));
     snprintf(path, sizeof path, "%s/track.txt", d2);
-    assert_false(tu_file_exists(path));
+    tf = fopen(path, "r");
+    assert_non_null(tf);
+    assert_null(fgets(line, sizeof line, tf));
+    fclose(tf);
+    snprintf(path, sizeof path, "%s/frames.txt", d2);
+    tf = fopen(path, "r");
+    assert_non_null(tf);
+    char manifest[128] = "";
+    assert_true(fread(manifest, 1, sizeof manifest - 1, tf) > 0);
+    fclose(tf);
+    assert_string_equal(manifest, "softgi-frames 1\nframes 2\nstate complete\n");
+    snprintf(args, sizeof args, "compare --reference '%s' --name short:'%s'", d1, d2);
+    st = tu_softgi_run(args, out, sizeof out);
+    if (st != 0 || !strstr(out, "| short | 2 |") || !strstr(out, "has 6 frames; comparing the first 2"))
+        fail_msg("softgi %s: exit %d\n%s", args, st, out);
 }
 
 static void test_cli_errors(void **state)

@@ -15,8 +15,12 @@ int app_fail(const pf_error *err);
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
 
-/* Writes the PNG (--output, or `default_png`) and the linear PFM (--hdr, or
- * the PNG's path with .pfm) of an image; the paths written go to png/pfm. */
+/* Writes an image by the output's extension (pf_imageio_output_paths):
+ * -o NAME.png (or `default_png`) writes the PNG and the linear PFM (--hdr,
+ * or NAME.pfm); -o NAME.pfm writes only that PFM; any other extension is
+ * refused. Both files are written to temporary files and renamed only once
+ * both are complete: both are written or neither. The paths written go to
+ * png/pfm (png empty when none). */
 pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
                           uint32_t height, char png[4096], char pfm[4096], pf_error *err);
 
@@ -48,6 +52,14 @@ void app_reference_options(const pf_options *o, struct gi_reference_options *ro)
 struct gi_indirect_options;
 /* The many-light options given on the command line (--method, --vpls, ...). */
 pf_result app_indirect_options(const pf_options *o, struct gi_indirect_options *io, pf_error *err);
+
+/* The memory budget (--max-memory, pf_budget.h) against the scene as
+ * loaded plus what the command will allocate: with `frame`, a frame of
+ * width x height (gi_frame_memory_estimate: planes, shadow maps, VPL maps,
+ * with `indirect` the VPLs --vpls asks for); without, the path tracer's
+ * image. Refused with one line before anything is allocated. */
+pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t width, uint32_t height, int frame,
+                           int indirect, pf_error *err);
 
 struct gi_frame;
 struct rs_context;

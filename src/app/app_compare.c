@@ -11,8 +11,16 @@
  * A sequence folder holds frame_NNNN.pfm from 0000 on, and for TID
  * frame_NNNN.view and frame_NNNN.depth.pfm (format in gi_metrics.h); a
  * method folder without views borrows the reference folder's (same camera
- * path). Errors are one line on stderr: exit 2 for bad usage, 1 for missing
- * or mismatched files. */
+ * path). When the folder has the manifest frames.txt (pf_sequence.h) that
+ * `softgi sequence` writes, exactly its frames are read (frame files of an
+ * older, longer run beside them are ignored) and a folder whose run has not
+ * finished is refused; without one, frames are read up to the first
+ * missing frame_NNNN.pfm. Images must be finite and >= 0 (pf_imageio
+ * refuses others, naming the file and the first bad pixel), so no metric is
+ * ever NaN; depth files may hold +inf (no surface). --table and --plot are
+ * written atomically (pf_imageio.h) and must name different files. Errors
+ * are one line on stderr: exit 2 for bad usage, 1 for missing, mismatched
+ * or bad files. */
 #include <errno.h>
 #include <stdarg.h>
 #include <math.h>
@@ -24,6 +32,7 @@
 #include "app.h"
 #include "gi_metrics.h"
 #include "pf_imageio.h"
+#include "pf_sequence.h"
 
 #define CMP_MAX_SERIES 16
 #define CMP_MAX_TRACK 64
@@ -208,6 +217,8 @@ static int cmp__parse(cmp__args *a, int argc, char **argv, int *help)
     } else if (a->plot || a->table || a->track_given) {
         return cmp__fail(2, "--plot, --table and --track apply to sequences (--reference/--name)");
     }
+    if (a->plot && a->table && pf_imageio_same_output(a->plot, a->table))
+        return cmp__fail(2, "--table '%s' and --plot '%s' name the same file", a->table, a->plot);
     return 0;
 }
 
@@ -255,13 +266,31 @@ static int cmp__exists(const char *path)
     return stat(path, &st) == 0;
 }
 
-/* Counts frame_0000.pfm, frame_0001.pfm, ... (stops at the first gap). */
+/* The folder's frames: those its manifest lists (all must exist), else
+ * frame_0000.pfm, frame_0001.pfm, ... up to the first gap. */
 static int cmp__count_frames(const char *dir, uint32_t *frames)
 {
     struct stat st;
     if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
         return cmp__fail(1, "%s: no such directory", dir);
     char path[4096];
+    pf_sequence_manifest m;
+    int present = 0;
+    pf_error err;
+    if (pf_sequence_manifest_read(dir, &m, &present, &err) != PF_OK) return cmp__fail(1, "%s", err.message);
+    if (present) {
+        if (!m.complete)
+            return cmp__fail(1, "%s: %s says the run writing it has not finished (or failed); run softgi sequence "
+                                "again",
+                             dir, PF_SEQUENCE_MANIFEST);
+        for (uint32_t t = 0; t < m.frames; t++) {
+            cmp__frame_path(path, sizeof path, dir, t, ".pfm");
+            if (!cmp__exists(path))
+                return cmp__fail(1, "%s: missing (%s/%s lists %u frames)", path, dir, PF_SEQUENCE_MANIFEST, m.frames);
+        }
+        *frames = m.frames;
+        return 0;
+    }
     uint32_t n = 0;
     for (;; n++) {
         cmp__frame_path(path, sizeof path, dir, n, ".pfm");
@@ -416,18 +445,32 @@ static void cmp__xml_escaped(FILE *f, const char *s)
         }
 }
 
+/* What the table and the plot are printed from. */
+typedef struct cmp__print {
+    const cmp__args *a;
+    uint32_t frames, w, h;
+    const gi_metrics_pixel *track;
+    uint32_t track_count;
+} cmp__print;
+
+static int cmp__print_table(FILE *f, void *user)
+{
+    const cmp__print *p = user;
+    cmp__write_table(f, p->a, p->frames, p->w, p->h, p->track, p->track_count);
+    return 0;
+}
+
 /* Hedman 2017 Fig. 7 as small multiples: one panel per tracked pixel, the
  * reference in black and one coloured polyline per method. */
-static int cmp__write_plot(const char *path, const cmp__args *a, uint32_t frames, const gi_metrics_pixel *track,
-                           uint32_t track_count)
+static int cmp__print_plot(FILE *f, void *user)
 {
+    const cmp__print *p = user;
+    const cmp__args *a = p->a;
+    const uint32_t frames = p->frames, track_count = p->track_count;
+    const gi_metrics_pixel *track = p->track;
     static const char *const colors[] = {"#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd",
                                          "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
     const int ncolors = (int)(sizeof colors / sizeof colors[0]);
-    pf_error err;
-    if (pf_imageio_make_parent_dirs(path, &err) != PF_OK) return cmp__fail(1, "%s", err.message);
-    FILE *f = fopen(path, "w");
-    if (!f) return cmp__fail(1, "%s: cannot open for writing: %s", path, strerror(errno));
     const uint32_t cols = track_count < 2 ? 1 : 2, rows = (track_count + cols - 1) / cols;
     const double pw = 300, ph = 170;           /* plot area of a panel */
     const double ml = 60, mr = 20, mt = 30, mb = 40; /* panel margins */
@@ -488,7 +531,6 @@ static int cmp__write_plot(const char *path, const cmp__args *a, uint32_t frames
         fputs("</g>\n", f);
     }
     fputs("</svg>\n", f);
-    if (fclose(f) != 0) return cmp__fail(1, "%s: write failed", path);
     return 0;
 }
 
@@ -555,23 +597,15 @@ static int cmp__sequences(cmp__args *a)
 
     cmp__write_table(stdout, a, frames, w, h, track, track_count);
     status = 1;
-    if (a->table) {
-        if (pf_imageio_make_parent_dirs(a->table, &err) != PF_OK) {
-            fprintf(stderr, "softgi compare: %s\n", err.message);
-            goto done;
-        }
-        FILE *f = fopen(a->table, "w");
-        if (!f) {
-            fprintf(stderr, "softgi compare: %s: cannot open for writing: %s\n", a->table, strerror(errno));
-            goto done;
-        }
-        cmp__write_table(f, a, frames, w, h, track, track_count);
-        if (fclose(f) != 0) {
-            fprintf(stderr, "softgi compare: %s: write failed\n", a->table);
-            goto done;
-        }
+    cmp__print pr = {a, frames, w, h, track, track_count};
+    if (a->table && pf_imageio_write_text(a->table, cmp__print_table, &pr, &err) != PF_OK) {
+        fprintf(stderr, "softgi compare: %s\n", err.message);
+        goto done;
     }
-    if (a->plot && cmp__write_plot(a->plot, a, frames, track, track_count)) goto done;
+    if (a->plot && pf_imageio_write_text(a->plot, cmp__print_plot, &pr, &err) != PF_OK) {
+        fprintf(stderr, "softgi compare: %s\n", err.message);
+        goto done;
+    }
     status = 0;
 done:
     for (uint32_t i = 0; i < a->series_count; i++) {

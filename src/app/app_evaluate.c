@@ -12,7 +12,8 @@
  *      (the tracked pixels, where |E| and |E'| are measured, with T samples, so
  *      the reference's own noise stays out of |E'|) into
  *      OUT/NAME/reference (kept and reused while OUT/NAME/reference/stamp
- *      records the same size, spp and image kind; --rerun-reference forces it);
+ *      records the same size, spp and image kind and its frames.txt says the
+ *      run finished; --rerun-reference forces it);
  *   2. every method: `softgi sequence FILE --method M --vpls N` into
  *      OUT/NAME/M (the method keeps its state over the frames, as in an
  *      interactive session); a method that fails (e.g. one not implemented)
@@ -21,6 +22,10 @@
  *      --track (the sequence's tracked pixels) --table OUT/NAME/table.md
  *      --plot OUT/NAME/plot.svg`: |E|, |E'| (Eq. 10), TID and RMSE.
  * The tables of all sequences are gathered in OUT/table.md.
+ * Every file is written to a temporary file and renamed into place when
+ * complete (pf_imageio.h): OUT/table.md is built in memory and written at
+ * the end (a probe at the start checks that OUT accepts new files), the
+ * reference stamp only after its frames are all written.
  *
  * By default only the indirect light is rendered and compared (--indirect-only
  * for references and methods): the direct light is the same shadow-mapped
@@ -41,6 +46,7 @@
 #include "app.h"
 #include "gi_vpl.h"
 #include "pf_imageio.h"
+#include "pf_sequence.h"
 #include "pf_timer.h"
 
 #define EV_MAX_ITEMS 32
@@ -258,15 +264,6 @@ static int ev__read_text(const char *path, char *buf, size_t size)
     return 1;
 }
 
-static int ev__write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f) return 0;
-    int ok = fputs(text, f) >= 0;
-    if (fclose(f) != 0) ok = 0;
-    return ok;
-}
-
 /* Step 1: the sequence's per-frame references (reused when the stamp says
  * they were made with the same settings). */
 static int ev__reference(const ev__args *a, const char *file, const char *dir)
@@ -279,7 +276,12 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     snprintf(base, sizeof base, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
     snprintf(want, sizeof want, "%strack-spp=%s\n", base, a->track_spp);
     int reuse = 0;
-    if (!a->rerun_reference && ev__read_text(stamp_path, have, sizeof have)) {
+    /* a run that did not finish (its manifest says "running") is redone */
+    pf_sequence_manifest man;
+    int has_manifest = 0;
+    pf_error merr;
+    int finished = pf_sequence_manifest_read(dir, &man, &has_manifest, &merr) == PF_OK && (!has_manifest || man.complete);
+    if (!a->rerun_reference && finished && ev__read_text(stamp_path, have, sizeof have)) {
         if (!strcmp(have, want)) {
             if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
             return 0;
@@ -298,7 +300,8 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     double t0 = pf_time_now();
     int rc = ev__run_sequence(&v);
     if (rc) return rc;
-    if (!ev__write_text(stamp_path, want)) return ev__fail(1, "%s: cannot write: %s", stamp_path, strerror(errno));
+    pf_error err;
+    if (pf_imageio_write_file(stamp_path, want, strlen(want), &err) != PF_OK) return app_fail(&err);
     if (!a->quiet)
         printf("  reference: %s spp (tracked pixels %s)%s in %.1f s\n", a->spp, a->track_spp,
                reuse ? ", images reused" : "", pf_time_now() - t0);
@@ -382,10 +385,15 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
     const ev__args *a = ap;
     char all_table[4300];
     snprintf(all_table, sizeof all_table, "%s/table.md", a->out);
+    /* a failure to write the summary is found now, not after hours of rendering */
     pf_error err;
-    if (pf_imageio_make_parent_dirs(all_table, &err) != PF_OK) return app_fail(&err);
-    FILE *summary = fopen(all_table, "w");
-    if (!summary) return ev__fail(1, "%s: cannot write: %s", all_table, strerror(errno));
+    pf_file probe;
+    if (pf_file_begin(&probe, all_table, &err) != PF_OK) return app_fail(&err);
+    pf_file_abort(&probe);
+    char *summary_text = NULL;
+    size_t summary_len = 0;
+    FILE *summary = open_memstream(&summary_text, &summary_len);
+    if (!summary) return ev__fail(1, "%s: out of memory%s", all_table, "");
     fprintf(summary, "# softgi evaluate\n\nSettings: size %s, reference %s spp, %s VPLs, %s.\n", a->size, a->spp, a->vpls,
             a->full ? "whole images" : "indirect light only");
     int worst = 0;
@@ -430,7 +438,12 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
         ev__append_file(summary, table);
         fprintf(summary, "\nPlot: `%s/plot.svg`.\n", seq_dir);
     }
-    if (fclose(summary) != 0) return ev__fail(1, "%s: cannot write: %s", all_table, strerror(errno));
+    int bad = ferror(summary) != 0;
+    bad |= fclose(summary) != 0;
+    pf_result r = bad ? pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "%s: out of memory", all_table)
+                      : pf_imageio_write_file(all_table, summary_text, summary_len, &err);
+    free(summary_text);
+    if (r != PF_OK) return app_fail(&err);
     if (!a->quiet) printf("evaluate: wrote %s\n", all_table);
     return worst;
 }

@@ -5,7 +5,9 @@
  * app_render.c) -> build the Embree scene -> path trace (--spp, --bounces,
  * --indirect-only, --direct-only) with a progress bar -> write PNG + PFM
  * (default out/<scene>-reference.png and .pfm), printing the time of every
- * step and, with --hash, the hash of the linear image.
+ * step and, with --hash, the hash of the linear image. -o and --hdr follow
+ * render's rules (app_render.c, pf_imageio_output_paths): checked before
+ * the path tracing starts, both files complete or neither replaced.
  *
  * The progress bar goes to stderr, only when stderr is a terminal and not
  * --quiet; gi_reference calls it on this thread only (after every row this
@@ -69,13 +71,20 @@ int app_reference(const pf_options *o)
         return app_fail(&err);
     }
 
+    /* -o / --hdr: usage errors before any work */
+    char png[4096], pfm[4096];
+    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, "out/scene-reference.png", png, pfm, &err);
+    if (r != PF_OK) return app_fail(&err);
+
     /* Scene, Embree, jobs (as app_render.c), the image */
     app_setup su;
-    pf_result r = app_setup_begin(o, &su, &t, &err);
+    r = app_setup_begin(o, &su, &t, &err);
     if (r != PF_OK) return app_fail(&err);
     uint32_t width = su.width, height = su.height;
-    float *image = malloc((size_t)width * height * 3 * sizeof(float));
-    if (!image) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "no memory for a %ux%u image", width, height);
+    float *image = NULL;
+    r = app_budget_check(o, &su.scene, width, height, 0, 0, &err);
+    if (r == PF_OK && !(image = malloc((size_t)width * height * 3 * sizeof(float))))
+        r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "no memory for a %ux%u image", width, height);
 
     /* Path trace */
     gi_reference_options ro;
@@ -93,7 +102,6 @@ int app_reference(const pf_options *o)
     }
 
     /* Output */
-    char png[4096], pfm[4096];
     if (r == PF_OK) {
         double t0 = pf_time_now();
         char def[4096];
@@ -111,7 +119,8 @@ int app_reference(const pf_options *o)
                    ro.indirect_only ? " (indirect only)" : (ro.direct_only ? " (direct only)" : ""), su.threads,
                    pf_isa_name(su.isa));
             pf_stage_print(&t, stdout);
-            printf("wrote %s and %s\n", png, pfm);
+            if (png[0]) printf("wrote %s and %s\n", png, pfm);
+            else printf("wrote %s\n", pfm);
         }
         if (o->print_hash)
             printf("hash %016llx\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3));

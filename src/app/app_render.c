@@ -2,7 +2,17 @@
  *
  * load scene -> apply --camera/--light overrides -> build the Embree scene ->
  * render the frame (gi_frame_render_raytraced) -> write PNG + PFM, printing
- * the time of every step. --pipeline on|off (default off) is accepted: it
+ * the time of every step.
+ *
+ * Outputs (pf_imageio.h): -o NAME.png writes the PNG and NAME.pfm (or
+ * --hdr FILE.pfm); -o NAME.pfm writes only the PFM, at exactly that name;
+ * any other extension, and two outputs naming the same file (with
+ * --dump-stages too), are refused before anything is rendered (exit 2).
+ * Every file is written to a temporary file and renamed over its target
+ * when complete; an image with a NaN, infinite or negative value is not
+ * written (exit 1).
+ *
+ * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
  * way, since frame 0 runs the VPL update in place; gi_indirect.h). */
 #include <stdlib.h>
@@ -17,16 +27,44 @@
 #include "pf_rt.h"
 #include "pf_timer.h"
 
+/* The files this render will write, checked before anything is rendered:
+ * supported extensions, and no two outputs naming the same file. */
+static pf_result app__check_outputs(const pf_options *o, const char *default_png, pf_error *err)
+{
+    char png[4096], pfm[4096], dump[4200];
+    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, default_png, png, pfm, err);
+    for (int v = -1; r == PF_OK && o->dump_dir && v < GI_VIEW_COUNT; v++) {
+        if (v < 0) snprintf(dump, sizeof dump, "%s/captions.txt", o->dump_dir);
+        else snprintf(dump, sizeof dump, "%s/%02d-%s.png", o->dump_dir, v, gi_view_name((gi_view_id)v));
+        const char *same = png[0] && pf_imageio_same_output(png, dump) ? png
+                           : pf_imageio_same_output(pfm, dump)          ? pfm
+                                                                        : NULL;
+        if (same)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "'%s' is also a --dump-stages file (%s); give another -o or --hdr",
+                             same, dump);
+    }
+    return r;
+}
+
 int app_render(const pf_options *o)
 {
     pf_error err;
     pf_stage_times t;
     memset(&t, 0, sizeof t);
+    /* -o / --hdr: usage errors before any work (the default name is always valid) */
+    pf_result r = app__check_outputs(o, "out/scene.png", &err);
+    if (r != PF_OK) return app_fail(&err);
 
     /* Scene, Embree, jobs */
     app_setup su;
-    pf_result r = app_setup_begin(o, &su, &t, &err);
+    r = app_setup_begin(o, &su, &t, &err);
     if (r != PF_OK) return app_fail(&err);
+    char png[4096], pfm[4096], def[4096];
+    snprintf(def, sizeof def, "out/%s.png", su.stem);
+    if ((r = app__check_outputs(o, def, &err)) != PF_OK) {
+        app_setup_end(&su);
+        return app_fail(&err);
+    }
     const pf_scene *scene = &su.scene;
     uint32_t width = su.width, height = su.height;
     rs_context *raster = NULL;
@@ -50,8 +88,6 @@ int app_render(const pf_options *o)
 
     /* Output */
     double t0 = pf_time_now();
-    char png[4096], pfm[4096], def[4096];
-    snprintf(def, sizeof def, "out/%s.png", su.stem);
     r = app_write_image(o, def, frame.final, width, height, png, pfm, &err);
     if (r == PF_OK && o->dump_dir) {
         gi_view_settings vs = {o->exposure, 0}; /* the views `softgi view` shows at this exposure */
@@ -73,7 +109,8 @@ int app_render(const pf_options *o)
                        : frame.ind.para ? "paraboloid maps"
                                         : "Embree rays");
             pf_stage_print(&t, stdout);
-            printf("wrote %s and %s\n", png, pfm);
+            if (png[0]) printf("wrote %s and %s\n", png, pfm);
+            else printf("wrote %s\n", pfm);
         }
         if (o->print_hash)
             printf("hash %016llx\n",

@@ -9,7 +9,9 @@
 #include "app.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
+#include "gi_ism.h"
 #include "gi_reference.h"
+#include "pf_budget.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_jobs.h"
@@ -39,12 +41,13 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
                          pf_error *err)
 {
     pf_result r;
+    pf_gltf_options go = {.max_memory = o->max_memory};
     if (o->scene_path) {
-        r = pf_gltf_load(scene, o->scene_path, NULL, err);
+        r = pf_gltf_load(scene, o->scene_path, &go, err);
         app__stem(o->scene_path, stem, stem_size);
     } else {
         r = pf_gltf_load_memory(scene, softgi_default_scene, softgi_default_scene_size, NULL,
-                                "embedded scenes/cornell-box", NULL, err);
+                                "embedded scenes/cornell-box", &go, err);
         snprintf(stem, stem_size, "cornell-box");
     }
     if (r != PF_OK) return r;
@@ -121,11 +124,46 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     return PF_OK;
 }
 
+pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t width, uint32_t height, int frame,
+                           int indirect, pf_error *err)
+{
+    pf_budget b;
+    pf_budget_init(&b, o->max_memory);
+    pf_result r = pf_budget_take(&b, scene->memory_bytes, "the scene", err);
+    if (r != PF_OK) return r;
+    if (!frame) /* the path tracer: its image and per-pixel sums */
+        return pf_budget_take(&b, pf_budget_mul((uint64_t)width * height, 64), "the image", err);
+    uint32_t vpls = indirect && !o->direct_only ? (o->vpls ? o->vpls : 256) : 0;
+    uint32_t res = o->visibility_raytrace ? 1 : o->visibility_ism ? (o->ism_res ? o->ism_res : GI_ISM_DEFAULT_RES) : 0;
+    uint32_t area = 0;
+    for (uint32_t t = 0; t < scene->tri_count && !area; t++) {
+        const float *e = scene->materials[scene->tri_material[t]].emission;
+        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) area = o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS;
+    }
+    char what[160];
+    snprintf(what, sizeof what, "the frame (%ux%u, %u lights with shadow maps of %u^2, %u VPLs)", width, height,
+             scene->light_count, o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE, vpls);
+    uint64_t all = gi_frame_memory_estimate(scene, width, height, o->shadow_size, vpls, res, area);
+    r = pf_budget_take(&b, all, what, err);
+    if (r != PF_OK) { /* say which knob helps */
+        uint64_t no_vpls = gi_frame_memory_estimate(scene, width, height, o->shadow_size, 0, res, area);
+        uint64_t no_shadows = all - gi_frame_memory_estimate(scene, 0, 0, o->shadow_size, 0, res, 0);
+        const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs or --visibility raytrace"
+                           : all - no_shadows > all / 2 ? "use fewer lights or a smaller --shadow-size"
+                                                        : "use a smaller --size";
+        size_t n = strlen(err->message);
+        snprintf(err->message + n, sizeof err->message - n, "; %s", hint);
+    }
+    return r;
+}
+
 pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster,
                          pf_jobs *jobs, const pf_camera *camera, uint32_t width, uint32_t height, int indirect,
                          pf_error *err)
 {
-    pf_result r = gi_frame_init(f, scene, rt, raster, jobs, camera, width, height, o->shadow_size, err);
+    pf_result r = app_budget_check(o, scene, width, height, 1, indirect, err);
+    if (r != PF_OK) return r;
+    r = gi_frame_init(f, scene, rt, raster, jobs, camera, width, height, o->shadow_size, err);
     if (r != PF_OK) return r;
     if (o->area_strata || o->area_points)
         r = gi_frame_set_area_sampling(f, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
@@ -139,19 +177,25 @@ pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene
     return r;
 }
 
+/* The names come from pf_imageio_output_paths (-o NAME.png: the PNG and
+ * NAME.pfm or --hdr; -o NAME.pfm: only the PFM; other extensions refused).
+ * Both files are written to temporary files first and renamed over their
+ * targets only once both are complete, so a failure (a full disk, a bad
+ * value in the image) leaves both old files as they were. */
 pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
                           uint32_t height, char png[4096], char pfm[4096], pf_error *err)
 {
-    snprintf(png, 4096, "%s", o->out_path ? o->out_path : default_png);
-    if (o->hdr_path) snprintf(pfm, 4096, "%s", o->hdr_path);
-    else {
-        snprintf(pfm, 4096, "%s", png);
-        char *dot = strrchr(pfm, '.'), *slash = strrchr(pfm, '/');
-        if (dot && (!slash || dot > slash)) *dot = 0;
-        strncat(pfm, ".pfm", 4096 - strlen(pfm) - 1);
-    }
-    pf_result r = pf_imageio_write_png(png, rgb, width, height, o->exposure, err);
-    if (r == PF_OK) r = pf_imageio_write_pfm(pfm, rgb, width, height, err);
+    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, default_png, png, pfm, err);
+    if (r != PF_OK) return r;
+    pf_file fpng, fpfm;
+    memset(&fpng, 0, sizeof fpng);
+    memset(&fpfm, 0, sizeof fpfm);
+    if (png[0]) r = pf_imageio_stage_png(&fpng, png, rgb, width, height, o->exposure, err);
+    if (r == PF_OK) r = pf_imageio_stage_pfm(&fpfm, pfm, rgb, width, height, PF_IMAGEIO_RADIANCE, err);
+    if (r == PF_OK && png[0]) r = pf_file_commit(&fpng, err);
+    if (r == PF_OK) r = pf_file_commit(&fpfm, err);
+    pf_file_abort(&fpng); /* no-ops after a commit or a failure */
+    pf_file_abort(&fpfm);
     return r;
 }
 

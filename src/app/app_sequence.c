@@ -16,11 +16,20 @@
  *     DIR/frame_NNNN.depth.pfm  the G-buffer's view depth
  *   and print its time and how many VPLs moved.
  *
- * The folder is -o DIR, else the file's "output", else out/<name>; frame
- * files left from a longer earlier run are removed so `softgi compare` sees
- * exactly this sequence. With "track" pixels, DIR/track.txt lists them
- * ("X,Y" per line, for `softgi compare --track`; scaled when --size differs
- * from the file's "size"). --hash prints one FNV-1a
+ * The folder is -o DIR (anywhere: the user's choice), else the file's
+ * "output" under out/, else out/<name>; a folder a sequence file chooses is
+ * created without following symbolic links and must resolve inside out/
+ * (pf_sequence.h, "Where frames go"). softgi never deletes a file: frame
+ * files of an older, longer run stay, and DIR/frames.txt (the manifest,
+ * pf_sequence.h) tells `softgi compare` how many frames this run wrote; it
+ * says "running" from before frame 0 until every file is written, so a
+ * failed or interrupted run is never read as a finished one. Every file is
+ * written to a temporary file and renamed into place when complete
+ * (pf_imageio.h); a frame with a NaN, infinite or negative value stops the
+ * run (exit 1). DIR/track.txt lists the file's "track" pixels ("X,Y" per
+ * line, for `softgi compare --track`; scaled when --size differs from the
+ * file's "size"); it is written empty when the file has none (compare then
+ * tracks its default grid), replacing any older list. --hash prints one FNV-1a
  * hash over all frames (the per-frame hashes of the linear images, hashed in
  * frame order).
  *
@@ -91,6 +100,13 @@ static pf_result app__lights_at(const pf_sequence *seq, uint32_t frame, const pf
 static void app__frame_path(char *dst, size_t size, const char *dir, uint32_t frame, const char *suffix)
 {
     snprintf(dst, size, "%s/frame_%04u%s", dir, frame, suffix);
+}
+
+/* The camera file through gi_metrics_view_write, which writes the
+ * temporary file pf_imageio_write_via names. */
+static pf_result app__write_view(const char *path, void *user, pf_error *err)
+{
+    return gi_metrics_view_write(path, user, err);
 }
 
 static uint64_t app__fnv1a(uint64_t h, const void *data, size_t n)
@@ -276,15 +292,35 @@ int app_sequence(const pf_options *o)
     }
     if (r != PF_OK) return app__fail_run(&s, &err);
 
-    /* Output folder */
+    /* Output folder: -o is the user's; what the file chooses stays in out/ */
     char dir[4096], path[4200];
-    if (o->out_path) snprintf(dir, sizeof dir, "%s", o->out_path);
-    else if (seq->output[0]) snprintf(dir, sizeof dir, "%s", seq->output);
-    else snprintf(dir, sizeof dir, "out/%s", seq->name);
-    size_t dl = strlen(dir);
-    while (dl > 1 && dir[dl - 1] == '/') dir[--dl] = 0;
-    app__frame_path(path, sizeof path, dir, 0, ".pfm");
-    if ((r = pf_imageio_make_parent_dirs(path, &err)) != PF_OK) return app__fail_run(&s, &err);
+    if (o->out_path) {
+        snprintf(dir, sizeof dir, "%s", o->out_path);
+        size_t dl = strlen(dir);
+        while (dl > 1 && dir[dl - 1] == '/') dir[--dl] = 0;
+        app__frame_path(path, sizeof path, dir, 0, ".pfm");
+        r = pf_imageio_make_parent_dirs(path, &err);
+    } else {
+        const size_t bl = strlen(PF_SEQUENCE_OUTPUT_BASE);
+        const char *rel = seq->output[0] ? seq->output + bl + 1 : seq->name; /* seq->output = "out/<rel>" */
+        r = pf_imageio_make_dir_inside(PF_SEQUENCE_OUTPUT_BASE, rel, dir, sizeof dir, &err);
+        if (r != PF_OK) {
+            char m[sizeof err.message];
+            snprintf(m, sizeof m, "%s", err.message);
+            r = pf_error_set(&err, r, "%s: output folder %s", seq->file, m);
+        }
+    }
+    if (r != PF_OK) return app__fail_run(&s, &err);
+    /* --reuse-frames reads the images of a finished run of this sequence */
+    pf_sequence_manifest man = {seq->frames, 0};
+    int had_manifest = 0;
+    pf_sequence_manifest old;
+    if (o->reuse_frames && (r = pf_sequence_manifest_read(dir, &old, &had_manifest, &err)) == PF_OK &&
+        had_manifest && (!old.complete || old.frames != seq->frames))
+        r = pf_error_set(&err, PF_ERR_ARGUMENT, "--reuse-frames: %s/%s lists %s run of %u frames, this sequence has %u",
+                         dir, PF_SEQUENCE_MANIFEST, old.complete ? "a finished" : "an unfinished", old.frames,
+                         seq->frames);
+    if (r != PF_OK) return app__fail_run(&s, &err);
 
     /* Embree, jobs, rasterizer, frame: once for the whole sequence. */
     double t_build = pf_time_now();
@@ -313,7 +349,8 @@ int app_sequence(const pf_options *o)
                t_build * 1e3, dir);
     }
 
-    /* Frames */
+    /* Frames: the manifest says "running" until the last file is written */
+    if ((r = pf_sequence_manifest_write(dir, &man, &err)) != PF_OK) return app__fail_run(&s, &err);
     pf_stage_times total;
     memset(&total, 0, sizeof total);
     uint64_t hash = 0xcbf29ce484222325ull;
@@ -355,7 +392,7 @@ int app_sequence(const pf_options *o)
         app__frame_path(path, sizeof path, dir, f, ".png");
         if (r == PF_OK) r = pf_imageio_write_png(path, fr->final, width, height, o->exposure, &err);
         app__frame_path(path, sizeof path, dir, f, ".view");
-        if (r == PF_OK) r = gi_metrics_view_write(path, &view, &err);
+        if (r == PF_OK) r = pf_imageio_write_via(path, app__write_view, &view, &err);
         app__frame_path(path, sizeof path, dir, f, ".depth.pfm");
         if (r == PF_OK) r = gi_metrics_depth_write(path, fr->gbuf.depth, width, height, &err);
         double t_write = (pf_time_now() - t0) * 1e3;
@@ -373,31 +410,17 @@ int app_sequence(const pf_options *o)
     }
     if (r != PF_OK) return app__fail_run(&s, &err);
 
-    /* Frame files beyond this sequence (from a longer earlier run) would
-     * make compare read a different sequence: remove them. */
-    for (uint32_t f = seq->frames; f < 1000000; f++) {
-        static const char *const suffix[] = {".pfm", ".png", ".view", ".depth.pfm"};
-        int any = 0;
-        for (int k = 0; k < 4; k++) {
-            app__frame_path(path, sizeof path, dir, f, suffix[k]);
-            any |= remove(path) == 0;
-        }
-        if (!any) break;
-    }
+    /* track.txt (empty without "track": compare's default grid), then the
+     * manifest that makes the folder this run's finished sequence */
     snprintf(path, sizeof path, "%s/track.txt", dir);
-    if (seq->track_count) {
-        FILE *tf = fopen(path, "w");
-        int ok = tf != NULL;
-        for (uint32_t i = 0; ok && i < seq->track_count; i++)
-            ok = fprintf(tf, "%u,%u\n", track[i][0], track[i][1]) > 0;
-        if (tf && fclose(tf) != 0) ok = 0;
-        if (!ok) {
-            pf_error_set(&err, PF_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-            return app__fail_run(&s, &err);
-        }
-    } else {
-        remove(path);
-    }
+    char track_text[PF_SEQUENCE_MAX_TRACK * 24 + 1];
+    size_t tl = 0;
+    for (uint32_t i = 0; i < seq->track_count; i++)
+        tl += (size_t)snprintf(track_text + tl, sizeof track_text - tl, "%u,%u\n", track[i][0], track[i][1]);
+    r = pf_imageio_write_file(path, track_text, tl, &err);
+    man.complete = 1;
+    if (r == PF_OK) r = pf_sequence_manifest_write(dir, &man, &err);
+    if (r != PF_OK) return app__fail_run(&s, &err);
 
     if (!o->quiet) {
         double n = (double)seq->frames;

@@ -151,23 +151,27 @@ void gi_metrics_view_from_camera(gi_metrics_view *view, const pf_camera *cam, ui
     view->height = height;
 }
 
+/* pf_imageio_write_text's printer: 0 on success. */
+static int gi__view_print(FILE *f, void *user)
+{
+    const gi_metrics_view *v = user;
+    /* %.9g: every float survives the text round trip bit for bit. */
+    return fprintf(f,
+                   "softgi-view 1\nwidth %u\nheight %u\neye %.9g %.9g %.9g\nforward %.9g %.9g %.9g\n"
+                   "up %.9g %.9g %.9g\nright %.9g %.9g %.9g\nyfov %.9g\n",
+                   v->width, v->height, (double)v->eye.x, (double)v->eye.y, (double)v->eye.z, (double)v->forward.x,
+                   (double)v->forward.y, (double)v->forward.z, (double)v->up.x, (double)v->up.y, (double)v->up.z,
+                   (double)v->right.x, (double)v->right.y, (double)v->right.z, (double)v->yfov) > 0
+               ? 0
+               : -1;
+}
+
+/* Written to a temporary file and renamed (pf_imageio_write_text). */
 pf_result gi_metrics_view_write(const char *path, const gi_metrics_view *v, pf_error *err)
 {
     pf_result r = pf_imageio_make_parent_dirs(path, err);
     if (r != PF_OK) return r;
-    FILE *f = fopen(path, "w");
-    if (!f) return pf_error_set(err, PF_ERR_IO, "%s: cannot open for writing: %s", path, strerror(errno));
-    /* %.9g: every float survives the text round trip bit for bit. */
-    int ok = fprintf(f,
-                     "softgi-view 1\nwidth %u\nheight %u\neye %.9g %.9g %.9g\nforward %.9g %.9g %.9g\n"
-                     "up %.9g %.9g %.9g\nright %.9g %.9g %.9g\nyfov %.9g\n",
-                     v->width, v->height, (double)v->eye.x, (double)v->eye.y, (double)v->eye.z,
-                     (double)v->forward.x, (double)v->forward.y, (double)v->forward.z, (double)v->up.x,
-                     (double)v->up.y, (double)v->up.z, (double)v->right.x, (double)v->right.y, (double)v->right.z,
-                     (double)v->yfov) > 0;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok) return pf_error_set(err, PF_ERR_IO, "%s: write failed", path);
-    return PF_OK;
+    return pf_imageio_write_text(path, gi__view_print, (void *)v, err);
 }
 
 /* Reads "key X Y Z" (n floats) from f. */
@@ -221,7 +225,7 @@ pf_result gi_metrics_depth_write(const char *path, const float *depth, uint32_t 
     float *rgb = calloc(3 * n, sizeof(float));
     if (!rgb) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory writing %s", path);
     for (size_t i = 0; i < n; i++) rgb[3 * i] = depth[i];
-    pf_result r = pf_imageio_write_pfm(path, rgb, width, height, err);
+    pf_result r = pf_imageio_write_pfm_range(path, rgb, width, height, PF_IMAGEIO_DEPTH, err);
     free(rgb);
     return r;
 }
@@ -230,7 +234,7 @@ pf_result gi_metrics_depth_read(const char *path, float **depth, uint32_t *width
 {
     float *rgb = NULL;
     *depth = NULL;
-    pf_result r = pf_imageio_read_pfm(path, &rgb, width, height, err);
+    pf_result r = pf_imageio_read_pfm_range(path, &rgb, width, height, PF_IMAGEIO_DEPTH, err);
     if (r != PF_OK) return r;
     size_t n = (size_t)*width * *height;
     /* Compact R in place: element i is read (at 3i >= i) before it is overwritten. */

@@ -8,8 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <stb_image_write.h>
-
 #include "pf_imageio.h"
 
 static const char *const gi__view_names[GI_VIEW_COUNT] = {
@@ -648,11 +646,21 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
 
 pf_result gi_view_write_png(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h, pf_error *err)
 {
-    pf_result r = pf_imageio_make_parent_dirs(path, err);
-    if (r != PF_OK) return r;
-    if (!stbi_write_png(path, (int)w, (int)h, 3, rgb, (int)(w * 3)))
-        return pf_error_set(err, PF_ERR_IO, "%s: cannot write PNG", path);
-    return PF_OK;
+    return pf_imageio_write_png_rgb8(path, rgb, w, h, err); /* temporary file + rename (pf_imageio.h) */
+}
+
+typedef struct gi__captions {
+    const gi_frame *f;
+} gi__captions;
+
+static int gi__print_captions(FILE *out, void *user)
+{
+    const gi__captions *c = user;
+    for (int v = 0; v < GI_VIEW_COUNT; v++)
+        if (gi_view_available(c->f, (gi_view_id)v) &&
+            fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v), gi_view_caption((gi_view_id)v)) < 0)
+            return 1;
+    return 0;
 }
 
 pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_settings *s, pf_error *err)
@@ -660,20 +668,17 @@ pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_setting
     uint8_t *rgb = malloc((size_t)f->width * f->height * 3);
     if (!rgb) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     char path[4096];
-    snprintf(path, sizeof path, "%s/captions.txt", dir);
-    pf_result r = pf_imageio_make_parent_dirs(path, err);
-    FILE *cap = r == PF_OK ? fopen(path, "w") : NULL;
-    if (r == PF_OK && !cap) r = pf_error_set(err, PF_ERR_IO, "%s: cannot write", path);
+    pf_result r = PF_OK;
     for (int v = 0; v < GI_VIEW_COUNT && r == PF_OK; v++) {
         if (!gi_view_available(f, (gi_view_id)v)) continue;
         gi_view_render(f, (gi_view_id)v, s, rgb);
         snprintf(path, sizeof path, "%s/%02d-%s.png", dir, v, gi_view_name((gi_view_id)v));
         r = gi_view_write_png(path, rgb, f->width, f->height, err);
-        if (r == PF_OK && fprintf(cap, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v),
-                                  gi_view_caption((gi_view_id)v)) < 0)
-            r = pf_error_set(err, PF_ERR_IO, "%s/captions.txt: write failed", dir);
     }
-    if (cap && fclose(cap) != 0 && r == PF_OK) r = pf_error_set(err, PF_ERR_IO, "%s/captions.txt: write failed", dir);
     free(rgb);
+    /* captions.txt last: one line per image written */
+    gi__captions c = {f};
+    snprintf(path, sizeof path, "%s/captions.txt", dir);
+    if (r == PF_OK) r = pf_imageio_write_text(path, gi__print_captions, &c, err);
     return r;
 }

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 void pf_cli_usage(FILE *out)
 {
@@ -23,8 +24,10 @@ void pf_cli_usage(FILE *out)
           "HDR .pfm, printing per-stage timings.\n"
           "\n"
           "options:\n"
-          "  -o, --output FILE.png   PNG output (default out/<scene>.png)\n"
-          "  --hdr FILE.pfm          linear HDR output (default: the PNG path, .pfm)\n"
+          "  -o, --output FILE       by extension: FILE.png writes the PNG and the linear PFM\n"
+          "                          beside it; FILE.pfm writes only the PFM; nothing else\n"
+          "                          (default out/<scene>.png). sequence: -o DIR, the frames' folder\n"
+          "  --hdr FILE.pfm          linear HDR output beside a PNG (default: the PNG path, .pfm)\n"
           "  --size WxH              image size (default 640x480)\n"
           "  --threads N             worker threads incl. the main one (default: cores)\n"
           "  --isa auto|sse2|sse4.2|avx2|avx512\n"
@@ -276,7 +279,13 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
                 r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-bias '%s': expected a number in 1..64", val);
         }
         else if (!strcmp(a, "--dump-stages")) o->dump_dir = val;
-        else if (!strcmp(a, "--screenshot")) o->screenshot_path = val;
+        else if (!strcmp(a, "--screenshot")) {
+            size_t n = strlen(val);
+            o->screenshot_path = val;
+            if (n < 5 || strcasecmp(val + n - 4, ".png") != 0)
+                r = pf_error_set(err, PF_ERR_ARGUMENT, "--screenshot '%.200s': the screenshot is a PNG (name it .png)",
+                                 val);
+        }
         else if (!strcmp(a, "--pipeline")) {
             if (!strcmp(val, "on")) o->pipeline = 1;
             else if (!strcmp(val, "off")) o->pipeline = 0;

@@ -8,11 +8,14 @@
 #include "pf_sequence.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "pf_imageio.h"
 
 typedef struct pf__sq {
     const char *file;
@@ -32,8 +35,14 @@ static pf_result pf__sq_fail(const pf__sq *c, pf_result code, const char *where,
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    if (where && where[0]) return pf_error_set(c->err, code, "%s: %s: %s", c->file, where, msg);
-    return pf_error_set(c->err, code, "%s: %s", c->file, msg);
+    if (where && where[0]) pf_error_set(c->err, code, "%s: %s: %s", c->file, where, msg);
+    else pf_error_set(c->err, code, "%s: %s", c->file, msg);
+    /* one line: strings echoed from the file (a key, a scene name) may hold
+     * control characters (found by fuzz_sequence: a newline in "scene") */
+    if (c->err)
+        for (char *p = c->err->message; *p; p++)
+            if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = '?';
+    return code;
 }
 
 static const char *pf__type_name(const cJSON *v)
@@ -159,8 +168,14 @@ void pf_sequence_track_eval(const pf_sequence_track *t, uint32_t frame, float *o
         memcpy(out, t->value + (size_t)(t->count - 1) * d, sizeof(float) * d);
         return;
     }
-    uint32_t k = 0;
-    while (t->frame[k + 1] <= frame) k++; /* frame[k] <= frame < frame[k+1] */
+    /* binary search for frame[k] <= frame < frame[k+1] (a linear walk made
+     * checking every frame of a file with 10000 keys quadratic) */
+    uint32_t k = 0, hi = t->count - 1;
+    while (hi - k > 1) {
+        uint32_t mid = k + (hi - k) / 2;
+        if (t->frame[mid] <= frame) k = mid;
+        else hi = mid;
+    }
     const float *a = t->value + (size_t)k * d, *b = a + d;
     /* (1 - t) a + t b: exactly a at t = 0 and exactly b at t = 1 */
     double s = (double)(frame - t->frame[k]) / (double)(t->frame[k + 1] - t->frame[k]);
@@ -222,12 +237,19 @@ static pf_result pf__camera(const pf__sq *c, pf_sequence *s, const cJSON *arr)
         s->camera.frame[i] = frame;
         s->camera.count++;
     }
-    /* Between keys the eye may still sweep through the target: check every frame. */
+    /* Between keys the eye may still sweep through the target: check every
+     * frame, and with the renderer's own test (pf_camera_look_at), so a
+     * camera the file accepts is one softgi can render (found by
+     * fuzz_sequence: "fovy_deg": 1e-45 is > 0 but 0 in radians). */
     for (uint32_t f = 0; f < s->frames; f++) {
         float v[7];
         pf_sequence_track_eval(&s->camera, f, v);
         if (v[0] == v[3] && v[1] == v[4] && v[2] == v[5])
             return pf__sq_fail(c, PF_ERR_PARSE, "camera", "eye and target coincide at frame %u", f);
+        pf_camera cam;
+        pf_error e2;
+        if (pf_camera_look_at(&cam, pf_v3(v[0], v[1], v[2]), pf_v3(v[3], v[4], v[5]), pf_radians(v[6]), &e2) != PF_OK)
+            return pf__sq_fail(c, PF_ERR_PARSE, "camera", "frame %u: %s", f, e2.message);
     }
     return PF_OK;
 }
@@ -247,19 +269,20 @@ static pf_result pf__field_value(const pf__sq *c, pf_sequence_field fld, const c
     case PF_SEQUENCE_POSITION: return pf__floats(c, j, where, 3, PF_SCENE_MAX_COORD, v);
     case PF_SEQUENCE_DIRECTION: {
         if ((r = pf__floats(c, j, where, 3, 1e30, v)) != PF_OK) return r;
-        pf_vec3 n = pf_v3_normalize_safe(pf_v3(v[0], v[1], v[2]));
-        if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)
-            return pf__sq_fail(c, PF_ERR_PARSE, where, "direction must not be zero");
-        v[0] = n.x, v[1] = n.y, v[2] = n.z;
+        /* normalised in double: the squares of float components near 1e30
+         * would overflow float and turn the vector into zero */
+        double len = sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
+        if (!(len > 1e-30)) return pf__sq_fail(c, PF_ERR_PARSE, where, "direction must not be zero");
+        for (int k = 0; k < 3; k++) v[k] = (float)(v[k] / len);
         return PF_OK;
     }
     case PF_SEQUENCE_COLOR:
-        if ((r = pf__floats(c, j, where, 3, 1e30, v)) != PF_OK) return r;
+        if ((r = pf__floats(c, j, where, 3, PF_SEQUENCE_MAX_EMISSION, v)) != PF_OK) return r;
         if (v[0] < 0.0f || v[1] < 0.0f || v[2] < 0.0f)
             return pf__sq_fail(c, PF_ERR_PARSE, where, "colour must be >= 0");
         return PF_OK;
     case PF_SEQUENCE_INTENSITY:
-        if ((r = pf__number(c, j, where, 1e30, &d)) != PF_OK) return r;
+        if ((r = pf__number(c, j, where, PF_SEQUENCE_MAX_EMISSION, &d)) != PF_OK) return r;
         if (d < 0.0) return pf__sq_fail(c, PF_ERR_PARSE, where, "intensity must be >= 0");
         v[0] = (float)d;
         return PF_OK;
@@ -478,6 +501,21 @@ pf_result pf_sequence_light_at(const pf_sequence *seq, uint32_t i, uint32_t fram
                                         out->outer_cone <= pf_radians(90.0f)))
         return pf_error_set(err, PF_ERR_PARSE, "lights[%u]: need 0 <= inner < outer <= 90 degrees at frame %u", i,
                             frame);
+    /* What the renderer multiplies: each channel of intensity x colour must
+     * be finite, >= 0 and at most PF_SEQUENCE_MAX_EMISSION (each factor alone
+     * may be in range while the product overflows, e.g. 1e30 x 1e30; and a
+     * scene light's colour meets the file's intensity only here). */
+    const float col[3] = {out->color.x, out->color.y, out->color.z};
+    for (int k = 0; k < 3; k++) {
+        double e = (double)out->intensity * (double)col[k];
+        if (!(e >= 0.0 && e <= PF_SEQUENCE_MAX_EMISSION) || !isfinite(out->intensity) || !isfinite(col[k]))
+            return pf_error_set(err, PF_ERR_NONFINITE,
+                                "lights[%u]: intensity %g x colour %g is not in [0, %g] at frame %u", i,
+                                (double)out->intensity, (double)col[k], PF_SEQUENCE_MAX_EMISSION, frame);
+    }
+    if (!pf_v3_is_finite(out->position) || !pf_v3_is_finite(out->direction))
+        return pf_error_set(err, PF_ERR_NONFINITE, "lights[%u]: position or direction not finite at frame %u", i,
+                            frame);
     return PF_OK;
 }
 
@@ -514,6 +552,41 @@ static pf_result pf__path(const pf__sq *c, const cJSON *v, const char *where, ch
     return PF_OK;
 }
 
+static int pf__has_control(const char *p)
+{
+    for (; *p; p++)
+        if ((unsigned char)*p < 0x20 || *p == 0x7f) return 1;
+    return 0;
+}
+
+/* "output": a relative folder without ".." components, placed under
+ * PF_SEQUENCE_OUTPUT_BASE (a sequence file from a stranger must not choose
+ * where softgi writes; -o DIR is the user's choice). Symbolic links are
+ * refused when the folder is created (pf_imageio_make_dir_inside). */
+static pf_result pf__output(const pf__sq *c, const cJSON *v, char *dst, size_t size)
+{
+    if (!cJSON_IsString(v)) return pf__sq_fail(c, PF_ERR_PARSE, "output", "expected a string, got %s", pf__type_name(v));
+    const char *p = v->valuestring;
+    if (!p[0]) return pf__sq_fail(c, PF_ERR_PARSE, "output", "must not be empty");
+    if (p[0] == '/')
+        return pf__sq_fail(c, PF_ERR_PARSE, "output",
+                           "'%.200s': must be a relative folder (it is placed under %s/; give -o DIR to write elsewhere)",
+                           p, PF_SEQUENCE_OUTPUT_BASE);
+    for (const char *q = p; *q;) {
+        size_t n = strcspn(q, "/");
+        if (n == 2 && q[0] == '.' && q[1] == '.')
+            return pf__sq_fail(c, PF_ERR_PARSE, "output",
+                               "'%.200s': must not contain '..' (it is placed under %s/; give -o DIR to write elsewhere)",
+                               p, PF_SEQUENCE_OUTPUT_BASE);
+        q += n;
+        while (*q == '/') q++;
+    }
+    if (pf__has_control(p)) return pf__sq_fail(c, PF_ERR_PARSE, "output", "must not contain control characters");
+    int n = snprintf(dst, size, "%s/%s", PF_SEQUENCE_OUTPUT_BASE, p);
+    if (n < 0 || (size_t)n >= size) return pf__sq_fail(c, PF_ERR_PARSE, "output", "path too long");
+    return PF_OK;
+}
+
 static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
 {
     if (!cJSON_IsObject(root)) return pf__sq_fail(c, PF_ERR_PARSE, NULL, "expected a JSON object at the top, got %s", pf__type_name(root));
@@ -524,8 +597,13 @@ static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
     const cJSON *v = pf__get(root, "name");
     if (v) {
         if (!cJSON_IsString(v)) return pf__sq_fail(c, PF_ERR_PARSE, "name", "expected a string, got %s", pf__type_name(v));
-        if (!v->valuestring[0] || strlen(v->valuestring) >= sizeof s->name || strchr(v->valuestring, '/'))
-            return pf__sq_fail(c, PF_ERR_PARSE, "name", "expected 1 to %zu characters without '/'", sizeof s->name - 1);
+        const char *nm = v->valuestring;
+        if (!nm[0] || strlen(nm) >= sizeof s->name || strchr(nm, '/') || !strcmp(nm, ".") || !strcmp(nm, "..") ||
+            pf__has_control(nm))
+            return pf__sq_fail(c, PF_ERR_PARSE, "name",
+                               "expected 1 to %zu characters without '/' or control characters, not '.' or '..' "
+                               "(it names the folder out/NAME)",
+                               sizeof s->name - 1);
         snprintf(s->name, sizeof s->name, "%s", v->valuestring);
     }
 
@@ -548,8 +626,7 @@ static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
         if ((r = pf__uint(c, v->child, "size[0]", 1, PF_SEQUENCE_MAX_SIZE, &s->width)) != PF_OK) return r;
         if ((r = pf__uint(c, v->child->next, "size[1]", 1, PF_SEQUENCE_MAX_SIZE, &s->height)) != PF_OK) return r;
     }
-    if ((v = pf__get(root, "output")) && (r = pf__path(c, v, "output", s->output, sizeof s->output)) != PF_OK)
-        return r;
+    if ((v = pf__get(root, "output")) && (r = pf__output(c, v, s->output, sizeof s->output)) != PF_OK) return r;
     if ((v = pf__get(root, "camera")) && (r = pf__camera(c, s, v)) != PF_OK) return r;
     if ((v = pf__get(root, "lights")) && (r = pf__lights(c, s, v)) != PF_OK) return r;
 
@@ -588,7 +665,7 @@ static void pf__default_name(const char *file, char *name, size_t size)
     size_t n = strlen(name);
     if (n > 5 && !strcmp(name + n - 5, ".json")) name[n -= 5] = 0;
     if (n > 4 && !strcmp(name + n - 4, ".seq")) name[n -= 4] = 0;
-    if (!name[0]) snprintf(name, size, "sequence");
+    if (!name[0] || !strcmp(name, ".") || !strcmp(name, "..")) snprintf(name, size, "sequence");
 }
 
 /* 1-based line and column of offset `at` in json. */
@@ -705,4 +782,44 @@ void pf_sequence_free(pf_sequence *seq)
         for (int k = 0; k < PF_SEQUENCE_FIELD_COUNT; k++) pf__track_free(&seq->lights[i].field[k]);
     free(seq->lights);
     memset(seq, 0, sizeof *seq);
+}
+
+/* ---------------------------------------------------------------- manifest */
+
+pf_result pf_sequence_manifest_write(const char *dir, const pf_sequence_manifest *m, pf_error *err)
+{
+    char path[4200], text[128];
+    snprintf(path, sizeof path, "%s/%s", dir, PF_SEQUENCE_MANIFEST);
+    int n = snprintf(text, sizeof text, "softgi-frames 1\nframes %u\nstate %s\n", m->frames,
+                     m->complete ? "complete" : "running");
+    return pf_imageio_write_file(path, text, (size_t)n, err);
+}
+
+pf_result pf_sequence_manifest_read(const char *dir, pf_sequence_manifest *m, int *present, pf_error *err)
+{
+    char path[4200], text[256];
+    memset(m, 0, sizeof *m);
+    *present = 0;
+    snprintf(path, sizeof path, "%s/%s", dir, PF_SEQUENCE_MANIFEST);
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        if (errno == ENOENT) return PF_OK;
+        return pf_error_set(err, PF_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    }
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    int big = fgetc(f) != EOF;
+    fclose(f);
+    text[n] = 0;
+    unsigned frames = 0;
+    char state[16] = "";
+    int used = 0;
+    if (big || strlen(text) != n ||
+        sscanf(text, "softgi-frames 1\nframes %u\nstate %15s\n%n", &frames, state, &used) != 2 ||
+        (size_t)used != n || frames < 1 || frames > PF_SEQUENCE_MAX_FRAMES ||
+        (strcmp(state, "complete") && strcmp(state, "running")))
+        return pf_error_set(err, PF_ERR_PARSE, "%s: not a softgi-frames 1 manifest", path);
+    m->frames = frames;
+    m->complete = !strcmp(state, "complete");
+    *present = 1;
+    return PF_OK;
 }

@@ -7,14 +7,16 @@
  *
  *   {
  *     "name": "cornell-light-move",          optional; default: the file name
- *                                            without .json / .seq.json
+ *                                            without .json / .seq.json (no '/',
+ *                                            not "." or "..")
  *     "scene": "cornell-box.gltf",           required: a .gltf/.glb path relative
  *                                            to this file (or absolute), or
  *                                            "embedded:cornell-box"
  *     "frames": 48,                          required: 1..PF_SEQUENCE_MAX_FRAMES
  *     "size": [640, 480],                    optional (--size wins; default 640x480)
- *     "output": "renders/light",             optional folder, relative to this file
- *                                            (-o wins; default out/<name>)
+ *     "output": "renders/light",             optional folder under out/ (see
+ *                                            "Where frames go"; -o wins;
+ *                                            default out/<name>)
  *     "camera": [                            optional (absent: the scene's camera
  *       {"frame": 0,  "eye": [x,y,z],        or --camera, held still); every key
  *        "target": [x,y,z], "fovy_deg": 39}, has all four fields
@@ -50,6 +52,25 @@
  * opposite). A camera is rebuilt every frame with pf_camera_look_at from the
  * interpolated eye, target and fovy.
  *
+ * Where frames go. Sequence files come from strangers too, so a file cannot
+ * choose where softgi writes: "output" must be a relative folder without
+ * ".." components and is placed under PF_SEQUENCE_OUTPUT_BASE ("out/",
+ * relative to the working folder, like the default out/<name>); softgi
+ * sequence creates it component by component without following symbolic
+ * links and checks that its realpath lies inside out/. Only -o DIR (the
+ * user's own choice) writes anywhere. (Before this rule "output" was
+ * relative to the sequence file and could be absolute; no shipped sequence
+ * used it.)
+ *
+ * Limits, against absurd or hostile files: frames 1..PF_SEQUENCE_MAX_FRAMES,
+ * size 1..PF_SEQUENCE_MAX_SIZE a side, at most PF_SEQUENCE_MAX_LIGHTS lights
+ * and PF_SEQUENCE_MAX_TRACK tracked pixels, at most one key per frame per
+ * track, PF_SEQUENCE_MAX_FILE bytes; positions, eye and target within
+ * +-PF_SCENE_MAX_COORD; intensity and each colour channel, and their product
+ * at every frame (pf_sequence_light_at), in [0, PF_SEQUENCE_MAX_EMISSION]:
+ * 1e30 x 1e30 would overflow float, and 1e38 alone overflows the first
+ * irradiance computed from it.
+ *
  * Errors: every bad input (unreadable file, JSON syntax error with line and
  * column, missing key, wrong type, non-integer or out-of-range frame, NaN or
  * huge number, keys out of order, a field on the wrong light type, ...) gives
@@ -70,6 +91,11 @@
 #define PF_SEQUENCE_MAX_TRACK 64u
 #define PF_SEQUENCE_MAX_SIZE 16384u
 #define PF_SEQUENCE_MAX_FILE (16u << 20) /* bytes */
+/* intensity x colour per channel, W/sr (W/m^2 directional): far above any
+ * physical light in any unit the scenes use (the conference room in cm
+ * needs 2e5), far below float overflow after 1/r^2 and flux sums */
+#define PF_SEQUENCE_MAX_EMISSION 1e12
+#define PF_SEQUENCE_OUTPUT_BASE "out" /* where a file's "output" folder goes */
 #define PF_SEQUENCE_EMBEDDED_CORNELL "embedded:cornell-box"
 
 /* One keyframed quantity: count keys at strictly increasing frames, each
@@ -104,7 +130,8 @@ typedef struct pf_sequence {
     int scene_embedded;    /* "embedded:cornell-box" */
     uint32_t frames;
     uint32_t width, height; /* 0: not given */
-    char output[4096];      /* resolved folder; empty: not given */
+    char output[4096];      /* "out/<output>" (unchecked for links: app_sequence creates it with
+                               pf_imageio_make_dir_inside); empty: not given */
     pf_sequence_track camera; /* dim 7: eye xyz, target xyz, fovy_deg; count 0: no camera keys */
     uint32_t light_count;
     pf_sequence_light *lights;
@@ -112,6 +139,31 @@ typedef struct pf_sequence {
     uint32_t track_count;
     uint32_t track[PF_SEQUENCE_MAX_TRACK][2]; /* x, y */
 } pf_sequence;
+
+/* ---------------------------------------------------------------- the frames' folder
+ *
+ * `softgi sequence` writes DIR/frame_NNNN.{pfm,png,view,depth.pfm},
+ * DIR/track.txt and DIR/frames.txt, the manifest:
+ *   softgi-frames 1
+ *   frames N
+ *   state running|complete
+ * It is written "running" before the first frame and "complete" after the
+ * last (each write atomic), and `softgi compare` reads exactly frames
+ * 0..N-1 of a complete folder and refuses a running one. So softgi never
+ * deletes anything: frame files of an older, longer run (or anyone's
+ * frame_0099.png) stay in the folder and are simply not part of the
+ * sequence. A folder without frames.txt (made by hand or by an older
+ * softgi) is read up to its first missing frame_NNNN.pfm. */
+#define PF_SEQUENCE_MANIFEST "frames.txt"
+typedef struct pf_sequence_manifest {
+    uint32_t frames;
+    int complete;
+} pf_sequence_manifest;
+/* Writes DIR/frames.txt (atomically, pf_imageio). */
+pf_result pf_sequence_manifest_write(const char *dir, const pf_sequence_manifest *m, pf_error *err);
+/* Reads DIR/frames.txt: PF_OK and *present = 1, PF_OK and *present = 0
+ * when the folder has none, or a parse error naming the file. */
+pf_result pf_sequence_manifest_read(const char *dir, pf_sequence_manifest *m, int *present, pf_error *err);
 
 /* Reads and parses a sequence file. On failure *seq is empty (freeing it
  * is harmless). */
@@ -132,7 +184,8 @@ int pf_sequence_camera_at(const pf_sequence *seq, uint32_t frame, pf_vec3 *eye, 
 /* Light i at `frame`: its base (`scene_light` for an entry naming a scene
  * light, the entry's spec otherwise) with every keyed field interpolated.
  * Checks what only the base light decides: fields valid for its type, a
- * non-zero direction, 0 <= inner < outer <= 90 degrees. */
+ * non-zero direction, 0 <= inner < outer <= 90 degrees, every value
+ * finite, intensity x colour in [0, PF_SEQUENCE_MAX_EMISSION]. */
 pf_result pf_sequence_light_at(const pf_sequence *seq, uint32_t i, uint32_t frame, const pf_light *scene_light,
                                pf_light *out, pf_error *err);
 

@@ -62,6 +62,14 @@ static void test_usage_errors(void **state)
     tu_softgi_expect("render --light spot:0,1,0:0,0,0:10,30:1,1,1:1", 2, "direction must not be zero");
     tu_softgi_expect("render --light dir:0,-1,0:1,1,1", 2, "expected dir:dx,dy,dz:r,g,b:E");
     tu_softgi_expect("render --light area:0,0,0:1,1,1:1", 2, "type must be point, spot or dir");
+    /* fuzz_cli findings: coordinates beyond the scene limit made target - eye overflow to inf (a NaN camera);
+     * intensity x colour overflowed in shading; a huge direction's float length overflowed */
+    tu_softgi_expect("render --camera -3e38,0,0:3e38,0,0:60", 2, "within +-1e+07");
+    tu_softgi_expect("render --camera 0,0,0:2e7,0,0:60", 2, "within +-1e+07");
+    tu_softgi_expect("render --light point:1e8,0,0:1,1,1:1", 2, "position must lie within");
+    tu_softgi_expect("render --light point:0,0,0:1,1,1:1e38", 2, "intensity x colour must be at most");
+    tu_softgi_expect("render --light spot:1e7,-1e7,0:1e-19,1,0:5,90:1e38,0,1:3", 2, "");
+    tu_softgi_expect("render --light dir:1e38,1e38,0:1,1,1:1 --size 32x24 -q -o /dev/null/x.png", 1, "/dev/null");
 }
 
 static void test_bad_scenes(void **state)

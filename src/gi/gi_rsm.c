@@ -417,7 +417,8 @@ pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs,
         gi__rsm_rasterize(s, &s->maps[m]);
         gi__rsm_resolve(s, scene, jobs, m);
     }
-    memcpy(s->lights_, scene->lights, scene->light_count * sizeof(pf_light));
+    if (scene->light_count) /* lights may be NULL when there are none: memcpy's source must not be */
+        memcpy(s->lights_, scene->lights, scene->light_count * sizeof(pf_light));
     s->changed = 1;
     s->updates++;
     return PF_OK;

@@ -136,11 +136,20 @@ pf_result pf_cli_parse_camera(const char *spec, pf_vec3 *eye, pf_vec3 *target, f
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': expected ex,ey,ez:tx,ty,tz:fovy_deg", spec);
     *eye = pf_v3(e[0], e[1], e[2]);
     *target = pf_v3(t[0], t[1], t[2]);
+    for (int k = 0; k < 3; k++) /* as scene coordinates: beyond, target - eye overflows and shading is meaningless */
+        if (!(fabsf(e[k]) <= PF_SCENE_MAX_COORD && fabsf(t[k]) <= PF_SCENE_MAX_COORD))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': coordinates must lie within +-%g", spec,
+                                (double)PF_SCENE_MAX_COORD);
     if (!(*fovy > 0.0f && *fovy < 180.0f))
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': fovy must be in (0, 180) degrees", spec);
     if (e[0] == t[0] && e[1] == t[1] && e[2] == t[2])
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': eye and target must differ", spec);
     return PF_OK;
+}
+
+static int pf__coord_ok3(const float v[3])
+{
+    return fabsf(v[0]) <= PF_SCENE_MAX_COORD && fabsf(v[1]) <= PF_SCENE_MAX_COORD && fabsf(v[2]) <= PF_SCENE_MAX_COORD;
 }
 
 static pf_result pf__colour_intensity(const char *spec, const char *cs, size_t cl, const char *is, size_t il,
@@ -151,6 +160,10 @@ static pf_result pf__colour_intensity(const char *spec, const char *cs, size_t c
         return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': bad colour r,g,b or intensity", spec);
     if (c[0] < 0 || c[1] < 0 || c[2] < 0 || out->intensity < 0)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': colour and intensity must be >= 0", spec);
+    double cmax = fmax(c[0], fmax(c[1], c[2]));
+    if (cmax * out->intensity > PF_MAX_RADIANCE)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': intensity x colour must be at most %g", spec,
+                            (double)PF_MAX_RADIANCE);
     out->color = pf_v3(c[0], c[1], c[2]);
     return PF_OK;
 }
@@ -160,9 +173,11 @@ static pf_result pf__direction(const char *spec, const char *s, size_t l, pf_vec
     float d[3];
     if (!pf__floats(s, l, d, 3))
         return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': bad direction dx,dy,dz", spec);
-    *out = pf_v3_normalize(pf_v3(d[0], d[1], d[2]));
-    if (out->x == 0.0f && out->y == 0.0f && out->z == 0.0f)
+    /* normalised in double: (1e38, 1e38, 0) overflows a float length */
+    double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+    if (!(len > 0.0) || !isfinite(len))
         return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': direction must not be zero", spec);
+    *out = pf_v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
     return PF_OK;
 }
 
@@ -179,6 +194,9 @@ pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': expected point:x,y,z:r,g,b:I", spec);
         out->type = PF_LIGHT_POINT;
         out->position = pf_v3(v[0], v[1], v[2]);
+        if (!pf__coord_ok3(v))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': position must lie within +-%g", spec,
+                                (double)PF_SCENE_MAX_COORD);
         snprintf(out->name, sizeof out->name, "cli-point");
         return pf__colour_intensity(spec, st[2], ln[2], st[3], ln[3], out, err);
     }
@@ -189,6 +207,9 @@ pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
                                 "--light '%s': expected spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I", spec);
         out->type = PF_LIGHT_SPOT;
         out->position = pf_v3(v[0], v[1], v[2]);
+        if (!pf__coord_ok3(v))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': position must lie within +-%g", spec,
+                                (double)PF_SCENE_MAX_COORD);
         if ((r = pf__direction(spec, st[2], ln[2], &out->direction, err)) != PF_OK) return r;
         if (!(cone[0] >= 0.0f && cone[0] < cone[1] && cone[1] <= 90.0f))
             return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': need 0 <= inner < outer <= 90 degrees", spec);

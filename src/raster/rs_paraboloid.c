@@ -1438,7 +1438,10 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             continue;
         }
         float k = sc->cnear[c] * key_scale;
-        sc->key[c] = k < 65535.0f ? (uint16_t)k : 65535;
+        /* a cluster reaching behind the map's origin has a negative near
+         * distance (key 0: first); converting a negative or NaN float to
+         * uint16_t is undefined */
+        sc->key[c] = !(k > 0.0f) ? 0 : k < 65535.0f ? (uint16_t)k : 65535;
         sc->order[n++] = c;
     }
     /* 2. front to back */

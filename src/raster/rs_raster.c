@@ -14,6 +14,7 @@
  * at any pixel centre below 2^25 * 2^24 * 2 = 2^50: exact in int64. */
 #include "rs_raster.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -348,7 +349,11 @@ static int64_t rs__floor64(float x)
  * False for NaN. */
 static int rs__inside(float x, float y, float z, float w)
 {
-    return x >= -w && x <= w && y >= -w && y <= w && z >= 0.0f && z <= w && w < INFINITY;
+    /* w >= FLT_MIN (not just >= 0): a vertex at the eye (x = y = z = w = 0)
+     * or with a denormal w (0 under DAZ) would pass the tests above, and 1/w
+     * = inf would make its snapped position NaN, whose conversion to an
+     * integer is undefined. Such vertices take the clipper's path. */
+    return x >= -w && x <= w && y >= -w && y <= w && z >= 0.0f && z <= w && w >= FLT_MIN && w < INFINITY;
 }
 
 /* The snapped screen position (1/RS_SUB pixel, y down) of a clip-space
@@ -508,7 +513,15 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
     for (int k = 0; k < 3; k++) {
         if (snapped)
             X[k] = snapped[2 * k], Y[k] = snapped[2 * k + 1];
-        else
+        else if (!(v[k].w >= FLT_MIN)) {
+            /* a clipped vertex at the eye (w = 0 passes the z >= 0 plane):
+             * every point of the triangle then lies on a line through the
+             * eye with one of the other two, so it projects to a segment and
+             * covers nothing; 1/w = inf would snap to NaN (undefined as an
+             * integer) */
+            ch->stats.triangles_culled++;
+            return;
+        } else
             rs__snap(v[k].x, v[k].y, v[k].w, W, H, &X[k], &Y[k]);
     }
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);

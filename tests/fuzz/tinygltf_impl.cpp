@@ -1,8 +1,10 @@
 /* tinygltf_impl: the one translation unit holding tinygltf's and stb_image's
- * implementations for the fuzz build, so the sanitizers instrument them too
- * (the system libtinygltf.so and libstb.so are not instrumented and are not
- * linked here). stb_image_write is left out (TINYGLTF_NO_STB_IMAGE_WRITE, set
- * for every TU of the fuzz target): the loader never writes images. */
+ * implementations in the fuzz build (SOFTGI_FUZZ=ON, top-level
+ * CMakeLists.txt), where it is compiled into softgi_core instead of linking
+ * the system libtinygltf.so, so the sanitizers and libFuzzer's coverage
+ * instrument the JSON parser and the image decoder too. stb_image_write is
+ * left out (TINYGLTF_NO_STB_IMAGE_WRITE, set for all of softgi_core in that
+ * build): PNG output still comes from the system libstb. */
 #define TINYGLTF_IMPLEMENTATION
 #define STB_IMAGE_IMPLEMENTATION
 #include <tiny_gltf.h>

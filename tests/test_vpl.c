@@ -352,6 +352,20 @@ static void test_accumulate_simd_identical(void **state)
     }
 }
 
+/* The rasterizer's SIMD paths, and whether this CPU runs each. */
+static const rs_simd k_simds[3] = {RS_SIMD_SCALAR, RS_SIMD_AVX2, RS_SIMD_AVX512};
+static int simd_runs(rs_simd s)
+{
+    return s == RS_SIMD_SCALAR || pf_isa_detect() >= (s == RS_SIMD_AVX2 ? PF_ISA_AVX2 : PF_ISA_AVX512);
+}
+
+static void load_cornell(fx *x)
+{
+    pf_error err;
+    memset(x, 0, sizeof *x);
+    if (pf_gltf_load(&x->scene, CORNELL, NULL, &err) != PF_OK) fail_msg("%s", err.message);
+}
+
 /* A method that breaks the frame's contract: NaN, zero and non-unit
  * normals, NaN and negative intensities, a non-finite position, more VPLs
  * than the budget. The frame must make those entries inert (gi__vpl_check):
@@ -386,19 +400,16 @@ static void test_bad_vpls_are_inert(void **state)
 {
     (void)state;
     static const gi_vpl_method bad = {"bad", "test", bad_create, bad_update, bad_destroy};
-    const rs_simd simds[3] = {RS_SIMD_SCALAR, RS_SIMD_AVX2, RS_SIMD_AVX512};
     for (int k = 0; k < 3; k++) {
-        if (k && pf_isa_detect() < (k == 1 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+        if (!simd_runs(k_simds[k])) continue;
         fx x;
-        memset(&x, 0, sizeof x);
-        pf_error err;
-        assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+        load_cornell(&x);
         gi_indirect_options io;
         memset(&io, 0, sizeof io);
         io.method = &bad;
         io.vpls = 64;
         io.clamp = -1.0f;
-        tu_fx_begin(&x, 2, simds[k], 40, 30, &x.scene.cameras[0], &io, 1);
+        tu_fx_begin(&x, 2, k_simds[k], 40, 30, &x.scene.cameras[0], &io, 1);
         gi_frame_render_raster(&x.f);
         const gi_vpl_set *vs = &x.f.ind.vpls;
         assert_int_equal(vs->count, 64);
@@ -448,14 +459,12 @@ static void test_vpl_at_pixel_position(void **state)
 {
     (void)state;
     static const gi_vpl_method origin = {"origin", "test", bad_create, origin_update, bad_destroy};
-    const rs_simd simds[3] = {RS_SIMD_SCALAR, RS_SIMD_AVX2, RS_SIMD_AVX512};
     uint64_t h0 = 0;
     for (int k = 0; k < 3; k++) {
-        if (k && pf_isa_detect() < (k == 1 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+        if (!simd_runs(k_simds[k])) continue;
         fx x;
-        memset(&x, 0, sizeof x);
+        load_cornell(&x);
         pf_error err;
-        assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
         pf_camera cam; /* from outside the box, so that background (origin) pixels exist */
         assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.1f, 0.35f, -0.9f), pf_v3(0.3f, 0.3f, 0.3f), pf_radians(70), &err),
                          PF_OK);
@@ -464,7 +473,7 @@ static void test_vpl_at_pixel_position(void **state)
         io.method = &origin;
         io.vpls = 64;
         io.no_interleave = 1; /* every pixel sees every VPL */
-        tu_fx_begin(&x, 2, simds[k], 40, 30, &cam, &io, 1);
+        tu_fx_begin(&x, 2, k_simds[k], 40, 30, &cam, &io, 1);
         gi_frame_render_raster(&x.f);
         uint32_t background = 0;
         for (uint32_t i = 0; i < 40 * 30; i++) background += x.f.gbuf.prim[i] == RS_GBUFFER_EMPTY;

@@ -162,6 +162,11 @@ static void pf__fetch(const pf_image *img, uint32_t level, uint32_t x, uint32_t 
 static float pf__reduce_uv(float u, pf_wrap mode)
 {
     if (fabsf(u) < 1.0e6f) return u;
+    /* A NaN or infinite uv (barycentrics of a degenerate triangle: 0/0 at
+     * an alpha test of the rasterizer, found by fuzz_frame) samples texel
+     * (0, 0): the texel index below is converted to an integer, which is
+     * undefined for a NaN. Finite uvs keep their bits. */
+    if (!isfinite(u)) return 0.0f;
     if (mode == PF_WRAP_CLAMP) return u < 0.0f ? -1.0f : 2.0f;
     return fmodf(u, 2.0f); /* exact at this magnitude; period 2 suits REPEAT and MIRROR */
 }

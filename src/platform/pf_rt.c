@@ -210,7 +210,19 @@ static void pf__pack(struct RTCRay8 *r, int valid[PF_RT_WIDTH], const pf_ray *ra
     }
 }
 
+static void pf__intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count, int exact);
+
 void pf_rt_intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count)
+{
+    pf__intersect(rt, rays, hits, count, 1);
+}
+
+void pf_rt_intersect_embree(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count)
+{
+    pf__intersect(rt, rays, hits, count, 0);
+}
+
+static void pf__intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count, int exact)
 {
     for (uint32_t base = 0; base < count; base += PF_RT_WIDTH) {
         uint32_t n = count - base < PF_RT_WIDTH ? count - base : PF_RT_WIDTH;
@@ -238,6 +250,7 @@ void pf_rt_intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t
                 h->prim = rh.hit.primID[i];
                 h->u = rh.hit.u[i];
                 h->v = rh.hit.v[i];
+                if (!exact) continue;
                 const pf_ray *src = &rays[base + i];
                 double org[3] = {src->org.x, src->org.y, src->org.z}, dir[3] = {src->dir.x, src->dir.y, src->dir.z};
                 pf__exact_hit(rt->src, h->prim, org, dir, &h->t, &h->u, &h->v);

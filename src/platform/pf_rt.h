@@ -57,6 +57,10 @@ const pf_scene *pf_rt_scene(const pf_rt *rt);
 
 /* Closest hits for rays[0..count), in packets of PF_RT_WIDTH. */
 void pf_rt_intersect(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count);
+/* The same with Embree's own t, u, v (not recomputed): faster (about 20% on
+ * a primary-ray pass over Sibenik), but their last bits depend on the
+ * processor. For benchmarks that compare with Embree, never for images. */
+void pf_rt_intersect_embree(const pf_rt *rt, const pf_ray *rays, pf_hit *hits, uint32_t count);
 /* Occlusion: occluded[i] = 1 if anything lies on rays[i] within (tnear, tfar). */
 void pf_rt_occluded(const pf_rt *rt, const pf_ray *rays, uint8_t *occluded, uint32_t count);
 

@@ -123,7 +123,8 @@ int app_reference(const pf_options *o)
             else printf("wrote %s\n", pfm);
         }
         if (o->print_hash)
-            printf("hash %016llx\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3));
+            printf("hash %016llx (isa %s)\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3),
+                   pf_isa_name(su.isa));
     }
     free(image);
     app_setup_end(&su);

@@ -113,8 +113,9 @@ int app_render(const pf_options *o)
             else printf("wrote %s\n", pfm);
         }
         if (o->print_hash)
-            printf("hash %016llx\n",
-                   (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3));
+            printf("hash %016llx (isa %s)\n",
+                   (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3),
+                   pf_isa_name(su.isa));
     }
     gi_frame_free(&frame);
     rs_context_destroy(raster);

@@ -432,7 +432,7 @@ int app_sequence(const pf_options *o)
         pf_stage_print(&total, stdout);
         printf("wrote %u frames to %s\n", seq->frames, dir);
     }
-    if (o->print_hash) printf("hash %016llx\n", (unsigned long long)hash);
+    if (o->print_hash) printf("hash %016llx (isa %s)\n", (unsigned long long)hash, pf_isa_name(isa));
     app__cleanup(&s);
     return 0;
 }

@@ -1332,9 +1332,11 @@ extern "C" pf_result pf_gltf_load(pf_scene *out, const char *path, const pf_gltf
     struct stat st;
     if (stat(path, &st) != 0) return pf_error_set(err, PF_ERR_IO, "%s: no such file", path);
     if (!S_ISREG(st.st_mode)) return pf_error_set(err, PF_ERR_IO, "%s: not a regular file", path);
+    pf_budget budget; /* the file is read whole: its size counts before it is read (load() takes it again) */
+    pf_budget_init(&budget, opts ? opts->max_memory : 0);
     std::vector<unsigned char> bytes;
     std::string ferr;
-    if (!read_file(&bytes, &ferr, path, nullptr))
+    if (!read_file(&bytes, &ferr, path, &budget))
         return pf_error_set(err, PF_ERR_IO, "%s: %s", path, first_line(ferr).c_str());
     std::string p(path);
     size_t slash = p.find_last_of('/');

@@ -228,13 +228,13 @@ static void test_bad_inputs(void **state)
          PF_ERR_PARSE, "camera: frame 0: camera field of view must be in (0, 180) degrees"},
         {HEAD "\"camera\": [{\"frame\": 0, \"eye\": [0,0,0], \"target\": [0,0,1e-30], \"fovy_deg\": 40}]}",
          PF_ERR_PARSE, "camera: frame 0: camera eye and target must be finite and distinct"},
-        /* light emission: each factor and their product bounded (1e12) */
+        /* light emission: each factor and their product bounded (PF_MAX_RADIANCE, 1e10) */
         {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e38}]}", PF_ERR_NONFINITE,
-         "lights[0].intensity: |1e+38| exceeds 1e+12"},
+         "lights[0].intensity: |1e+38| exceeds 1e+10"},
         {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e30,"
-              " \"color\": [1e30, 1, 1]}]}", PF_ERR_NONFINITE, "exceeds 1e+12"},
+              " \"color\": [1e30, 1, 1]}]}", PF_ERR_NONFINITE, "exceeds 1e+10"},
         {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1e7,"
-              " \"color\": [1e7, 1, 1]}]}", PF_ERR_PARSE, "intensity 1e+07 x colour 1e+07 is not in [0, 1e+12]"},
+              " \"color\": [1e7, 1, 1]}]}", PF_ERR_PARSE, "intensity 1e+07 x colour 1e+07 is not in [0, 1e+10]"},
         {HEAD "\"lights\": [{\"type\": \"point\", \"position\": [0,0,0], \"intensity\": 1,"
               " \"keys\": [{\"frame\": 0, \"intensity\": 1e7}, {\"frame\": 1, \"color\": [1, 1e6, 1]}]}]}",
          PF_ERR_PARSE, "x colour 1e+06 is not in"},

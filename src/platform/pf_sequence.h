@@ -91,10 +91,12 @@
 #define PF_SEQUENCE_MAX_TRACK 64u
 #define PF_SEQUENCE_MAX_SIZE 16384u
 #define PF_SEQUENCE_MAX_FILE (16u << 20) /* bytes */
-/* intensity x colour per channel, W/sr (W/m^2 directional): far above any
- * physical light in any unit the scenes use (the conference room in cm
- * needs 2e5), far below float overflow after 1/r^2 and flux sums */
-#define PF_SEQUENCE_MAX_EMISSION 1e12
+/* intensity x colour per channel, W/sr (W/m^2 directional): the renderer's
+ * one limit (PF_MAX_RADIANCE, pf_scene.h), the same as for glTF and --light
+ * lights; far above any physical light in any unit the scenes use (the
+ * conference room in cm needs 2e5), far below float overflow after 1/r^2
+ * and flux sums */
+#define PF_SEQUENCE_MAX_EMISSION ((double)PF_MAX_RADIANCE)
 #define PF_SEQUENCE_OUTPUT_BASE "out" /* where a file's "output" folder goes */
 #define PF_SEQUENCE_EMBEDDED_CORNELL "embedded:cornell-box"
 

@@ -102,13 +102,6 @@ static void app__frame_path(char *dst, size_t size, const char *dir, uint32_t fr
     snprintf(dst, size, "%s/frame_%04u%s", dir, frame, suffix);
 }
 
-/* The camera file through gi_metrics_view_write, which writes the
- * temporary file pf_imageio_write_via names. */
-static pf_result app__write_view(const char *path, void *user, pf_error *err)
-{
-    return gi_metrics_view_write(path, user, err);
-}
-
 static uint64_t app__fnv1a(uint64_t h, const void *data, size_t n)
 {
     const unsigned char *p = data;
@@ -392,7 +385,7 @@ int app_sequence(const pf_options *o)
         app__frame_path(path, sizeof path, dir, f, ".png");
         if (r == PF_OK) r = pf_imageio_write_png(path, fr->final, width, height, o->exposure, &err);
         app__frame_path(path, sizeof path, dir, f, ".view");
-        if (r == PF_OK) r = pf_imageio_write_via(path, app__write_view, &view, &err);
+        if (r == PF_OK) r = gi_metrics_view_write(path, &view, &err);
         app__frame_path(path, sizeof path, dir, f, ".depth.pfm");
         if (r == PF_OK) r = gi_metrics_depth_write(path, fr->gbuf.depth, width, height, &err);
         double t_write = (pf_time_now() - t0) * 1e3;

@@ -341,43 +341,6 @@ pf_result pf_imageio_write_text(const char *path, int (*print)(FILE *f, void *us
     return r;
 }
 
-/* Replaces the temporary name in a message of another module's writer by
- * the target's, so the user sees the file they asked for. */
-static void pf__rename_in_message(pf_error *err, const char *tmp, const char *path)
-{
-    if (!err || !tmp[0]) return;
-    char *at = strstr(err->message, tmp);
-    if (!at) return;
-    char m[sizeof err->message];
-    /* a message too long for err->message is cut, as pf_error_set cuts it */
-    if (snprintf(m, sizeof m, "%.*s%s%s", (int)(at - err->message), err->message, path, at + strlen(tmp)) < 0) return;
-    memcpy(err->message, m, sizeof m);
-}
-
-pf_result pf_imageio_write_via(const char *path, pf_result (*write_fn)(const char *path, void *user, pf_error *err),
-                               void *user, pf_error *err)
-{
-    pf_file f;
-    pf_result r = pf_file_begin(&f, path, err);
-    if (r != PF_OK) return r;
-    /* the writer opens the file by name: our descriptor is closed first (a
-     * FIFO opened twice would wait for a second reader) */
-    close(f.fd);
-    f.open = 0;
-    f.fd = -1;
-    r = write_fn(f.direct ? f.path : f.tmp, user, err);
-    if (r != PF_OK) {
-        pf__rename_in_message(err, f.tmp, f.path);
-        pf_file_abort(&f);
-        return r;
-    }
-    if (f.direct) return PF_OK;
-    f.fd = open(f.tmp, O_RDONLY | O_CLOEXEC); /* to fsync what the writer wrote */
-    if (f.fd < 0) return pf__file_fail(&f, err, "cannot reopen the temporary file", errno);
-    f.open = 1;
-    return pf_file_commit(&f, err);
-}
-
 /* ---------------------------------------------------------------- checks */
 
 static int pf__bad_value(float v, pf_imageio_range range)
@@ -675,35 +638,35 @@ pf_result pf_imageio_read_pfm_memory(const void *data, size_t size, float **rgb,
     return pf_imageio_read_pfm_memory_ex(data, size, NULL, PF_IMAGEIO_RADIANCE, rgb, w, h, err);
 }
 
-pf_result pf_imageio_read_pfm_range(const char *path, float **out, uint32_t *w, uint32_t *h, pf_imageio_range range,
-                                    pf_error *err)
+pf_result pf_imageio_read_file(const char *path, uint64_t limit, const char *what, char **data, size_t *size,
+                               pf_error *err)
 {
-    *out = NULL;
-    *w = *h = 0;
-    /* the largest PFM we read: a short header and 2^28 RGB pixels */
-    const uint64_t limit = 256 + (uint64_t)PF_IMAGEIO_MAX_PIXELS * 12;
+    *data = NULL;
+    *size = 0;
     FILE *f = fopen(path, "rb");
-    if (!f) return pf_error_set(err, PF_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (!f) return pf_error_set(err, PF_ERR_IO, "%s: cannot open the %s: %s", path, what, strerror(errno));
+    /* a regular file's size is known: refused before reading, read in one
+     * allocation (+1: EOF is seen without a regrow); a pipe grows by doubling */
     struct stat st;
-    size_t cap = 1 << 16;
+    size_t cap = 1 << 12;
     if (fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode)) {
         if ((uint64_t)st.st_size > limit) {
             fclose(f);
-            return pf_error_set(err, PF_ERR_PARSE, "%s: %lld bytes is larger than any PFM softgi reads", path,
-                                (long long)st.st_size);
+            return pf_error_set(err, PF_ERR_PARSE, "%s: %lld bytes is larger than any %s softgi reads", path,
+                                (long long)st.st_size, what);
         }
-        cap = (size_t)st.st_size + 1; /* +1: EOF is seen without a regrow */
+        cap = (size_t)st.st_size + 1;
     }
     char *buf = malloc(cap);
     size_t n = 0;
     pf_result r = buf ? PF_OK : pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     while (r == PF_OK) {
         if (n == cap) {
-            if (cap >= limit) {
-                r = pf_error_set(err, PF_ERR_PARSE, "%s: larger than any PFM softgi reads", path);
+            if (cap > limit) {
+                r = pf_error_set(err, PF_ERR_PARSE, "%s: larger than any %s softgi reads", path, what);
                 break;
             }
-            size_t nc = cap * 2 > limit ? (size_t)limit : cap * 2;
+            size_t nc = cap * 2 > limit + 1 ? (size_t)limit + 1 : cap * 2;
             char *nb = realloc(buf, nc);
             if (!nb) {
                 r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
@@ -719,6 +682,24 @@ pf_result pf_imageio_read_pfm_range(const char *path, float **out, uint32_t *w, 
         }
     }
     fclose(f);
+    if (r != PF_OK) {
+        free(buf);
+        return r;
+    }
+    *data = buf;
+    *size = n;
+    return PF_OK;
+}
+
+pf_result pf_imageio_read_pfm_range(const char *path, float **out, uint32_t *w, uint32_t *h, pf_imageio_range range,
+                                    pf_error *err)
+{
+    *out = NULL;
+    *w = *h = 0;
+    /* the largest PFM we read: a short header and 2^28 RGB pixels */
+    char *buf;
+    size_t n;
+    pf_result r = pf_imageio_read_file(path, 256 + (uint64_t)PF_IMAGEIO_MAX_PIXELS * 12, "PFM image", &buf, &n, err);
     if (r == PF_OK) r = pf_imageio_read_pfm_memory_ex(buf, n, path, range, out, w, h, err);
     free(buf);
     return r;

@@ -100,12 +100,12 @@ pf_result pf_imageio_write_file(const char *path, const void *data, size_t size,
 /* A text file: `print` writes it to a memory stream (returns 0 on success);
  * the text is then written as one file. */
 pf_result pf_imageio_write_text(const char *path, int (*print)(FILE *f, void *user), void *user, pf_error *err);
-/* For a writer of another module that takes a path: `write` is called with
- * the temporary file's path (or the target itself when it is a device) and
- * must write the whole file there; it is then committed or, on failure,
- * removed. */
-pf_result pf_imageio_write_via(const char *path, pf_result (*write)(const char *path, void *user, pf_error *err),
-                               void *user, pf_error *err);
+
+/* Reads the whole file `path` (at most `limit` bytes; a regular file's size
+ * is checked before anything is read) into *data (malloc'ed, free() it).
+ * `what` names the kind of file in messages ("PFM image", "sequence file"). */
+pf_result pf_imageio_read_file(const char *path, uint64_t limit, const char *what, char **data, size_t *size,
+                               pf_error *err);
 
 /* Creates the parent directories of `path` (like mkdir -p of dirname). */
 pf_result pf_imageio_make_parent_dirs(const char *path, pf_error *err);

@@ -742,35 +742,10 @@ pf_result pf_sequence_parse(pf_sequence *seq, const char *json, size_t size, con
 pf_result pf_sequence_load(pf_sequence *seq, const char *path, pf_error *err)
 {
     memset(seq, 0, sizeof *seq);
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return pf_error_set(err, PF_ERR_IO, "%s: cannot open the sequence file", path);
-    char *buf = NULL;
-    size_t size = 0, cap = 0;
-    pf_result r = PF_OK;
-    for (;;) {
-        if (size == cap) {
-            if (cap >= PF_SEQUENCE_MAX_FILE) {
-                r = pf_error_set(err, PF_ERR_PARSE, "%s: larger than %u MiB: not a sequence file", path,
-                                 PF_SEQUENCE_MAX_FILE >> 20);
-                break;
-            }
-            cap = cap ? cap * 2 : 4096;
-            char *nb = realloc(buf, cap);
-            if (!nb) {
-                r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-                break;
-            }
-            buf = nb;
-        }
-        size_t n = fread(buf + size, 1, cap - size, fp);
-        size += n;
-        if (n == 0) {
-            if (ferror(fp)) r = pf_error_set(err, PF_ERR_IO, "%s: read error", path);
-            break;
-        }
-    }
-    fclose(fp);
-    if (r == PF_OK) r = pf_sequence_parse(seq, buf ? buf : "", size, path, err);
+    char *buf;
+    size_t size;
+    pf_result r = pf_imageio_read_file(path, PF_SEQUENCE_MAX_FILE - 1, "sequence file", &buf, &size, err);
+    if (r == PF_OK) r = pf_sequence_parse(seq, buf, size, path, err);
     free(buf);
     return r;
 }

@@ -37,6 +37,16 @@ static void app__stem(const char *path, char *buf, size_t size)
     if (dot && dot != buf) *dot = 0;
 }
 
+/* Whether any triangle's material emits (an area light, gi_area.h). */
+static int app__has_emitters(const pf_scene *scene)
+{
+    for (uint32_t t = 0; t < scene->tri_count; t++) {
+        const float *e = scene->materials[scene->tri_material[t]].emission;
+        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) return 1;
+    }
+    return 0;
+}
+
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err)
 {
@@ -71,12 +81,7 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
     }
     if (scene->light_count == 0 && !o->quiet) {
         /* emissive triangles are lights too (gi_area.h) */
-        uint32_t emitters = 0;
-        for (uint32_t t = 0; t < scene->tri_count && !emitters; t++) {
-            const float *e = scene->materials[scene->tri_material[t]].emission;
-            emitters = e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
-        }
-        if (!emitters)
+        if (!app__has_emitters(scene))
             fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
     }
     return PF_OK;
@@ -135,11 +140,7 @@ pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t 
         return pf_budget_take(&b, pf_budget_mul((uint64_t)width * height, 64), "the image", err);
     uint32_t vpls = indirect && !o->direct_only ? (o->vpls ? o->vpls : 256) : 0;
     uint32_t res = o->visibility_raytrace ? 1 : o->visibility_ism ? (o->ism_res ? o->ism_res : GI_ISM_DEFAULT_RES) : 0;
-    uint32_t area = 0;
-    for (uint32_t t = 0; t < scene->tri_count && !area; t++) {
-        const float *e = scene->materials[scene->tri_material[t]].emission;
-        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) area = o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS;
-    }
+    uint32_t area = app__has_emitters(scene) ? (o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS) : 0;
     char what[160];
     snprintf(what, sizeof what, "the frame (%ux%u, %u lights with shadow maps of %u^2, %u VPLs)", width, height,
              scene->light_count, o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE, vpls);

@@ -137,20 +137,15 @@ pf_result pf_cli_parse_camera(const char *spec, pf_vec3 *eye, pf_vec3 *target, f
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': expected ex,ey,ez:tx,ty,tz:fovy_deg", spec);
     *eye = pf_v3(e[0], e[1], e[2]);
     *target = pf_v3(t[0], t[1], t[2]);
-    for (int k = 0; k < 3; k++) /* as scene coordinates: beyond, target - eye overflows and shading is meaningless */
-        if (!(fabsf(e[k]) <= PF_SCENE_MAX_COORD && fabsf(t[k]) <= PF_SCENE_MAX_COORD))
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': coordinates must lie within +-%g", spec,
+    /* as scene coordinates: beyond, target - eye overflows and shading is meaningless */
+    if (!pf_scene_coord_ok(*eye) || !pf_scene_coord_ok(*target))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': coordinates must lie within +-%g", spec,
                                 (double)PF_SCENE_MAX_COORD);
     if (!(*fovy > 0.0f && *fovy < 180.0f))
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': fovy must be in (0, 180) degrees", spec);
     if (e[0] == t[0] && e[1] == t[1] && e[2] == t[2])
         return pf_error_set(err, PF_ERR_ARGUMENT, "--camera '%s': eye and target must differ", spec);
     return PF_OK;
-}
-
-static int pf__coord_ok3(const float v[3])
-{
-    return fabsf(v[0]) <= PF_SCENE_MAX_COORD && fabsf(v[1]) <= PF_SCENE_MAX_COORD && fabsf(v[2]) <= PF_SCENE_MAX_COORD;
 }
 
 static pf_result pf__colour_intensity(const char *spec, const char *cs, size_t cl, const char *is, size_t il,
@@ -195,7 +190,7 @@ pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
             return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': expected point:x,y,z:r,g,b:I", spec);
         out->type = PF_LIGHT_POINT;
         out->position = pf_v3(v[0], v[1], v[2]);
-        if (!pf__coord_ok3(v))
+        if (!pf_scene_coord_ok(out->position))
             return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': position must lie within +-%g", spec,
                                 (double)PF_SCENE_MAX_COORD);
         snprintf(out->name, sizeof out->name, "cli-point");
@@ -208,7 +203,7 @@ pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
                                 "--light '%s': expected spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I", spec);
         out->type = PF_LIGHT_SPOT;
         out->position = pf_v3(v[0], v[1], v[2]);
-        if (!pf__coord_ok3(v))
+        if (!pf_scene_coord_ok(out->position))
             return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': position must lie within +-%g", spec,
                                 (double)PF_SCENE_MAX_COORD);
         if ((r = pf__direction(spec, st[2], ln[2], &out->direction, err)) != PF_OK) return r;

@@ -22,11 +22,6 @@ void pf_scene_free(pf_scene *scene)
     memset(scene, 0, sizeof *scene);
 }
 
-static int pf__coord_ok(pf_vec3 p)
-{
-    return pf_v3_is_finite(p) && fabsf(p.x) <= PF_SCENE_MAX_COORD && fabsf(p.y) <= PF_SCENE_MAX_COORD &&
-           fabsf(p.z) <= PF_SCENE_MAX_COORD;
-}
 
 pf_result pf_scene_validate(pf_scene *s, pf_error *err)
 {
@@ -39,7 +34,7 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
         if (!pf_v3_is_finite(p))
             return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite position (%g, %g, %g)", v,
                                 (double)p.x, (double)p.y, (double)p.z);
-        if (!pf__coord_ok(p))
+        if (!pf_scene_coord_ok(p))
             return pf_error_set(err, PF_ERR_NONFINITE,
                                 "vertex %u lies at (%g, %g, %g), beyond the supported range |x| <= %g", v,
                                 (double)p.x, (double)p.y, (double)p.z, (double)PF_SCENE_MAX_COORD);
@@ -80,7 +75,7 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
             return pf_error_set(err, PF_ERR_TEXTURE, "texture %u has no image data", t);
     for (uint32_t c = 0; c < s->camera_count; c++) {
         const pf_camera *cam = &s->cameras[c];
-        if (!pf__coord_ok(cam->eye) || !pf_v3_is_finite(cam->forward) || !isfinite(cam->yfov))
+        if (!pf_scene_coord_ok(cam->eye) || !pf_v3_is_finite(cam->forward) || !isfinite(cam->yfov))
             return pf_error_set(err, PF_ERR_NONFINITE, "camera %u has a non-finite or huge placement", c);
         if (!(cam->yfov > 0.0f && cam->yfov < PF_PI))
             return pf_error_set(err, PF_ERR_PARSE, "camera %u has yfov %g rad, outside (0, pi)", c,
@@ -88,7 +83,7 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
     }
     for (uint32_t l = 0; l < s->light_count; l++) {
         const pf_light *li = &s->lights[l];
-        if (!pf__coord_ok(li->position) || !pf_v3_is_finite(li->direction) || !pf_v3_is_finite(li->color) ||
+        if (!pf_scene_coord_ok(li->position) || !pf_v3_is_finite(li->direction) || !pf_v3_is_finite(li->color) ||
             !isfinite(li->intensity))
             return pf_error_set(err, PF_ERR_NONFINITE, "light %u ('%s') has a non-finite or huge value", l,
                                 li->name);

@@ -149,6 +149,13 @@ typedef struct pf_surface {
  * fixed-point snapping and Embree's epsilons stop being meaningful. */
 #define PF_SCENE_MAX_COORD 1.0e7f
 
+/* A position softgi accepts: finite and within PF_SCENE_MAX_COORD. */
+static inline int pf_scene_coord_ok(pf_vec3 p)
+{
+    return pf_v3_is_finite(p) && fabsf(p.x) <= PF_SCENE_MAX_COORD && fabsf(p.y) <= PF_SCENE_MAX_COORD &&
+           fabsf(p.z) <= PF_SCENE_MAX_COORD;
+}
+
 void pf_scene_free(pf_scene *scene);
 
 /* Recomputes bounds and validates the scene: finite positions/normals/uvs,

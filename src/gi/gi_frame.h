@@ -15,7 +15,7 @@
  *   3. VPL set             gi_stage_vpl_update         (the VPL method: Instant Radiosity by default)
  *   4. VPL shadow maps     gi_stage_vpl_shadow_maps    (paraboloid maps of new/moved VPLs)
  *   5. split               gi_stage_split              (n x m interleaved tiles)
- *   6. assign              gi_stage_assign             (VPLs to tiles, intensity balanced)
+ *   6. assign              gi_stage_assign             (VPLs to tiles: survivors keep theirs)
  *   7. accumulate          gi_stage_accumulate         (bounded geometry term, map lookups)
  *   8. combine             gi_stage_combine
  *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)

@@ -59,6 +59,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->assign = calloc(o.vpls, sizeof(uint32_t));
     ind->sort_keys = calloc(o.vpls, sizeof(gi__lumkey));
     ind->tile_of = calloc(o.vpls, sizeof(uint32_t));
+    ind->assigned_id = calloc(o.vpls, sizeof(uint32_t));
+    ind->tile_load = calloc(T, sizeof(double));
     ind->cursor = calloc(T, sizeof(uint32_t));
     float **planes[] = {&ind->split_px, &ind->split_py, &ind->split_pz, &ind->split_nx, &ind->split_ny, &ind->split_nz};
     for (size_t k = 0; k < 6; k++) *planes[k] = calloc(px, sizeof(float));
@@ -67,7 +69,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->combined = calloc(3 * px, sizeof(float));
     ind->filtered = calloc(3 * px, sizeof(float));
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
-             ind->split_e && ind->combined && ind->filtered && ind->sort_keys && ind->tile_of && ind->cursor;
+             ind->split_e && ind->combined && ind->filtered && ind->sort_keys && ind->tile_of && ind->cursor &&
+             ind->assigned_id && ind->tile_load;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
     if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
         return pf_error_set(err, PF_ERR_ARGUMENT,
@@ -119,7 +122,7 @@ void gi_indirect_free(gi_indirect *ind)
     gi_ism_destroy(ind->ism);
     free(ind->atlas);
     free(ind->frames), free(ind->map_pos), free(ind->map_nrm);
-    free(ind->sort_keys), free(ind->tile_of), free(ind->cursor);
+    free(ind->sort_keys), free(ind->tile_of), free(ind->cursor), free(ind->assigned_id), free(ind->tile_load);
     free(ind->tile_x0), free(ind->tile_w), free(ind->tile_h), free(ind->assign), free(ind->assign_start);
     free(ind->split_px), free(ind->split_py), free(ind->split_pz);
     free(ind->split_nx), free(ind->split_ny), free(ind->split_nz), free(ind->split_valid);
@@ -327,30 +330,86 @@ static int gi__by_lum(const void *a, const void *b)
     return x->index < y->index ? -1 : (x->index > y->index); /* ties: stable by index */
 }
 
-void gi_stage_assign(gi_frame *f)
+/* Deals every emitting VPL anew: sorted by luminance, brightest first, in
+ * boustrophedon order 0..T-1, T-1..0, ... so each tile's share of the bright
+ * VPLs is as even as the counts allow. VPLs that emit nothing (a method's
+ * free slots) go to no tile: they would add exactly zero. Their key -1 sorts
+ * them after every other, so the others are dealt exactly as if they were
+ * not there. */
+static void gi__assign_deal(gi_indirect *ind, uint32_t T, uint32_t N)
 {
-    gi_indirect *ind = &f->ind;
-    uint32_t T = ind->n * ind->m, N = ind->vpls.count;
     gi__lumkey *keys = ind->sort_keys;
-    uint32_t *tile_of = ind->tile_of;
-    /* VPLs that emit nothing (a method's free slots) go to no tile: they
-     * would add exactly zero. Their key -1 sorts them after every other, so
-     * the others are dealt exactly as if they were not there. */
     uint32_t live = 0;
     for (uint32_t i = 0; i < N; i++) {
         pf_vec3 c = ind->vpls.v[i].intensity;
         int emits = c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
         keys[i] = (gi__lumkey){emits ? pf_luminance(c) : -1.0f, i};
-        tile_of[i] = UINT32_MAX;
+        ind->tile_of[i] = UINT32_MAX;
         live += (uint32_t)emits;
     }
     qsort(keys, N, sizeof *keys, gi__by_lum);
-    /* deal in boustrophedon order: 0..T-1, T-1..0, ... so each tile's share
-     * of the bright VPLs is as even as the counts allow */
     for (uint32_t r = 0; r < live; r++) {
         uint32_t round = r / T, pos = r % T;
-        tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
+        ind->tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
     }
+}
+
+/* Keeps every survivor in its tile and inserts the others, brightest
+ * first, each into the tile with the least luminance so far (ties: fewer
+ * VPLs, then the lower tile). A survivor is a slot that emits, is not
+ * moved, carries the id it had when last assigned and had a tile then.
+ * Returns 0 (and changes nothing) when there is no survivor. */
+static int gi__assign_keep(gi_indirect *ind, uint32_t T, uint32_t N)
+{
+    gi__lumkey *keys = ind->sort_keys;
+    double *load = ind->tile_load;
+    uint32_t *count = ind->cursor, fresh = 0, kept = 0;
+    for (uint32_t t = 0; t < T; t++) load[t] = 0.0, count[t] = 0;
+    for (uint32_t i = 0; i < N; i++) {
+        const gi_vpl *v = &ind->vpls.v[i];
+        int emits = v->intensity.x > 0.0f || v->intensity.y > 0.0f || v->intensity.z > 0.0f;
+        int survives = emits && !v->moved && i < ind->assigned_count && ind->assigned_id[i] == v->id &&
+                       ind->tile_of[i] != UINT32_MAX;
+        if (survives) {
+            load[ind->tile_of[i]] += pf_luminance(v->intensity);
+            count[ind->tile_of[i]]++;
+            kept++;
+        } else {
+            ind->tile_of[i] = UINT32_MAX;
+            if (emits) keys[fresh++] = (gi__lumkey){pf_luminance(v->intensity), i};
+        }
+    }
+    if (!kept) return 0;
+    qsort(keys, fresh, sizeof *keys, gi__by_lum);
+    for (uint32_t r = 0; r < fresh; r++) {
+        uint32_t best = 0;
+        for (uint32_t t = 1; t < T; t++)
+            if (load[t] < load[best] || (load[t] == load[best] && count[t] < count[best])) best = t;
+        ind->tile_of[keys[r].index] = best;
+        load[best] += keys[r].lum;
+        count[best]++;
+    }
+    ind->assign_kept = kept;
+    return 1;
+}
+
+/* Laine 2007 Sec. 7 deals VPLs to tiles "in the order they are generated",
+ * which keeps a surviving VPL in its tile; sorting by intensity every frame
+ * balances the tiles better but re-deals survivors whenever intensities
+ * change (SMC, IIR, TCAS re-weight every frame), so each pixel would see a
+ * different subset every frame and the method's temporal coherence would
+ * be lost. So: a survivor keeps its tile, new VPLs are balanced in as they
+ * arrive (gi__assign_keep); a set with no survivor (the first frame, or IR
+ * after its light moved) is dealt anew (gi__assign_deal). */
+void gi_stage_assign(gi_frame *f)
+{
+    gi_indirect *ind = &f->ind;
+    uint32_t T = ind->n * ind->m, N = ind->vpls.count;
+    ind->assign_kept = 0;
+    if (!gi__assign_keep(ind, T, N)) gi__assign_deal(ind, T, N);
+    uint32_t *tile_of = ind->tile_of;
+    for (uint32_t i = 0; i < N; i++) ind->assigned_id[i] = ind->vpls.v[i].id;
+    ind->assigned_count = N;
     memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
     for (uint32_t i = 0; i < N; i++)
         if (tile_of[i] != UINT32_MAX) ind->assign_start[tile_of[i] + 1]++;

@@ -15,10 +15,13 @@
  *   gi_stage_split             the G-buffer split into n x m interleaved
  *                              tiles: pixel (a, b) of tile (i, j) is pixel
  *                              (a n + i, b m + j) of the image (Sec. 5.1)
- *   gi_stage_assign            VPLs to tiles, balancing intensity: sorted by
- *                              luminance, dealt in a boustrophedon order, so
- *                              every tile gets a representative subset (the
- *                              problem Laine 2007 Sec. 7 names)
+ *   gi_stage_assign            VPLs to tiles, stable over a VPL's life: a
+ *                              surviving VPL keeps its tile (Laine 2007
+ *                              Sec. 7), new ones go to the tile with the
+ *                              least luminance; a set with no survivor is
+ *                              sorted by luminance and dealt in boustrophedon
+ *                              order, so every tile gets a representative
+ *                              subset (the problem Laine 2007 Sec. 7 names)
  *   gi_stage_accumulate        each tile pixel's irradiance from its tile's
  *                              VPLs: E = T * sum I G_b V, with G_b =
  *                              min(cos cos / r^2, b) and V from the VPL's
@@ -112,7 +115,13 @@ typedef struct gi_indirect {
     pf_vec3 *map_pos, *map_nrm; /* VPL positions / normals as the map renderer takes them */
     /* per-frame scratch, allocated once at init for the VPL budget */
     void *sort_keys;          /* luminance keys for gi_stage_assign */
-    uint32_t *tile_of, *cursor;
+    uint32_t *cursor;
+    double *tile_load;        /* per tile: luminance of its VPLs (gi_stage_assign) */
+    /* kept between frames: each slot's tile and the id it had when assigned
+     * (a survivor keeps its tile) */
+    uint32_t *tile_of, *assigned_id;
+    uint32_t assigned_count;  /* slots assigned last time */
+    uint32_t assign_kept;     /* survivors that kept their tile this frame */
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */

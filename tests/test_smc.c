@@ -138,13 +138,25 @@ static void test_knn_brute_force(void **state)
             float got = gi_knn_kth_dist2(&t, c, ks[j], ex);
             if (got != d[ks[j] - 1])
                 fail_msg("query %d k %u: tree %.9g, brute force %.9g", q, ks[j], got, d[ks[j] - 1]);
+        }        /* the nearest point: the lowest index among the equally near (the
+         * duplicates of p[7] ask for the tie-break) */
+        uint32_t best = 0;
+        float bd = INFINITY;
+        for (int i = 0; i < N; i++) {
+            pf_vec3 v = pf_v3_sub(p[i], c);
+            if (pf_v3_dot(v, v) < bd) bd = pf_v3_dot(v, v), best = (uint32_t)i;
         }
+        float nd;
+        assert_int_equal(gi_knn_nearest(&t, c, &nd), best);
+        assert_true(nd == bd);
     }
+    assert_int_equal(gi_knn_nearest(&t, p[120], NULL), 7); /* p[100..139] duplicate p[7] */
     /* fewer points than k: infinity; an empty tree too */
     assert_int_equal(gi_knn_build(&t, p, 3, &err), PF_OK);
     assert_true(isinf(gi_knn_kth_dist2(&t, p[0], 3, 0)));
     assert_int_equal(gi_knn_build(&t, p, 0, &err), PF_OK);
     assert_true(isinf(gi_knn_kth_dist2(&t, p[0], 1, GI_KNN_NONE)));
+    assert_int_equal(gi_knn_nearest(&t, p[0], NULL), GI_KNN_NONE);
     gi_knn_free(&t);
 }
 
@@ -425,8 +437,14 @@ static double furnace_irradiance(uint32_t vpls, const char *const *params)
 
 /* Units: in the furnace (Le = 1, albedo a = 0.5) every wall reflects
  * radiance a Le after one bounce, so the indirect irradiance anywhere
- * inside is pi a Le. SMC's VPLs (intensity = albedo E A / pi, A = 1 / (I p))
- * must add up to it. */
+ * inside is pi a Le. SMC's VPLs (intensity = albedo E A / pi) must add up
+ * to it: with the default areas (each VPL's Voronoi cell measured by the
+ * intersection points, gi_smc.c "rendering areas") within 3% (measured
+ * +1.0%). The paper's A = 1 / (I p) from Eq. 7 over-estimates the area of a
+ * VPL of the evenly spread (blue noise) set SMC keeps: the disc to the k-th
+ * neighbour holds about k + 1 VPLs, so A = pi r_k^2 / k is about
+ * (k + 1) / k too large (12.5% at k = 8, measured 8.6%; k = 1, Eq. 8's
+ * value at this I, measured +29%). */
 static void test_units_furnace(void **state)
 {
     (void)state;
@@ -434,17 +452,46 @@ static void test_units_furnace(void **state)
     if (!tu_load_or_skip(&s, SPHERE)) return;
     pf_scene_free(&s);
     const double want = PF_PI * 0.5;
-    static const char *const p8[] = {"k=8", "warmup=20", NULL};
-    static const char *const p1[] = {"warmup=20", NULL};
-    double e8 = furnace_irradiance(1024, p8), e1 = furnace_irradiance(1024, p1);
-    print_message("furnace indirect irradiance, 1024 VPLs: k = 8: %.4f, k = 1 (Eq. 8): %.4f, analytic %.4f\n", e8, e1,
-                  want);
-    /* Eq. 7 over-estimates the area of a VPL of an evenly spread (blue
-     * noise) set: the disc to the k-th neighbour holds about k + 1 VPLs, so
-     * A = pi r_k^2 / k is about (k + 1) / k too large (12.5% at k = 8;
-     * measured 8.6%). Larger k converges: k = 8 must beat k = 1. */
+    static const char *const pv[] = {"warmup=20", NULL};
+    static const char *const p8[] = {"area=knn", "k=8", "warmup=20", NULL};
+    static const char *const p1[] = {"area=knn", "warmup=20", NULL};
+    double ev = furnace_irradiance(1024, pv), e8 = furnace_irradiance(1024, p8), e1 = furnace_irradiance(1024, p1);
+    print_message("furnace indirect irradiance, 1024 VPLs: voronoi areas %.4f; Eq. 7 areas: k = 8: %.4f, "
+                  "k = 1 (Eq. 8): %.4f; analytic %.4f\n",
+                  ev, e8, e1, want);
+    assert_true(fabs(ev / want - 1.0) < 0.03);
     assert_true(e8 / want > 0.97 && e8 / want < 1.125);
-    assert_true(e1 / want > e8 / want);
+    assert_true(e1 / want > e8 / want && e1 / want > 1.10);
+}
+
+/* The rendering areas do not drift: on the Cornell box (static camera and
+ * light) the mean indirect irradiance of frames 0-9 and of frames 290-299
+ * (after the 100 warm-up iterations) agree within 2% (measured +0.5%).
+ * The light is moved from 1 cm under the ceiling to 18 cm from every
+ * surface: next to a surface the light makes a hot spot whose radiosity
+ * changes by orders of magnitude within a VPL's cell, SMC gathers ever
+ * more VPLs there, and a VPL's L(y) times its cell's area over-estimates
+ * the cell's light more the more VPLs crowd there (measured over these 300
+ * frames: +8.2% with these areas, +6.0% with the paper's; an open problem,
+ * docs/smc.md). */
+static void test_no_drift(void **state)
+{
+    (void)state;
+    fx x;
+    fx_load(&x, CORNELL);
+    x.scene.lights[0].position = pf_v3(0.278f, 0.35f, 0.15f); /* 18 cm from any surface (see above) */
+    fx_begin(&x, 2, 40, 30, &x.scene.cameras[0], 256, NULL);
+    double early = 0.0, late = 0.0;
+    for (uint32_t n = 0; n < 300; n++) {
+        gi_frame_render_raster(&x.f);
+        if (n >= 10 && n < 290) continue;
+        double sum = 0.0;
+        for (uint32_t i = 0; i < 40 * 30; i++) sum += x.f.ind.combined[3 * i + 1];
+        *(n < 10 ? &early : &late) += sum;
+    }
+    print_message("Cornell box, 256 VPLs: mean irradiance of frames 290-299 / frames 0-9 = %.4f\n", late / early);
+    assert_true(fabs(late / early - 1.0) < 0.02);
+    fx_end(&x);
 }
 
 /* ---------------------------------------------------------------- timing */
@@ -587,6 +634,7 @@ int main(void)
         cmocka_unit_test(test_radiosity_point_light), cmocka_unit_test(test_radiosity_furnace),
         cmocka_unit_test(test_static_converges),      cmocka_unit_test(test_corridor_hidden_room),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_units_furnace),
+        cmocka_unit_test(test_no_drift),
         cmocka_unit_test(test_bad_input),             cmocka_unit_test(test_bench_sibenik),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

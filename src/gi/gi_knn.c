@@ -146,6 +146,48 @@ float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude)
     return gi__worst(&h);
 }
 
+/* The best (d2, index) so far in the total order (distance, index). */
+typedef struct gi__best {
+    float d2;
+    uint32_t i;
+} gi__best;
+
+static void gi__offer(gi__best *b, float d2, uint32_t i)
+{
+    if (d2 < b->d2 || (d2 == b->d2 && i < b->i)) b->d2 = d2, b->i = i;
+}
+
+static void gi__nearest(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, gi__best *b)
+{
+    while (hi > lo) {
+        if (hi - lo <= 8) {
+            for (uint32_t i = lo; i < hi; i++) {
+                pf_vec3 d = pf_v3_sub(t->tpts[i], q);
+                gi__offer(b, pf_v3_dot(d, d), t->idx[i]);
+            }
+            return;
+        }
+        uint32_t mid = lo + (hi - lo) / 2;
+        pf_vec3 d = pf_v3_sub(t->tpts[mid], q);
+        gi__offer(b, pf_v3_dot(d, d), t->idx[mid]);
+        float delta = gi__coord(&q, t->axis[mid]) - gi__coord(&t->tpts[mid], t->axis[mid]);
+        uint32_t nlo = delta < 0.0f ? lo : mid + 1, nhi = delta < 0.0f ? mid : hi;
+        uint32_t flo = delta < 0.0f ? mid + 1 : lo, fhi = delta < 0.0f ? hi : mid;
+        gi__nearest(t, nlo, nhi, q, b);
+        /* <=: a point on the far side at the same distance may have a lower index */
+        if (!(delta * delta <= b->d2)) return;
+        lo = flo, hi = fhi;
+    }
+}
+
+uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2)
+{
+    gi__best b = {INFINITY, GI_KNN_NONE};
+    gi__nearest(t, 0, t->count, q, &b);
+    if (dist2) *dist2 = b.d2;
+    return b.i;
+}
+
 float gi_knn_density(uint32_t k, uint32_t n, float r2)
 {
     if (isinf(r2) || n == 0) return 0.0f;

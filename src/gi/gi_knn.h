@@ -49,6 +49,12 @@ void gi_knn_free(gi_knn *t);
  * INFINITY when fewer than k points qualify. 1 <= k <= GI_KNN_MAX_K. */
 float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude);
 
+/* Index (into the points given to gi_knn_build) of the point nearest to q,
+ * the lowest index among equally near ones, so the answer is a property of
+ * the point set; *dist2 (may be NULL) gets its squared distance.
+ * GI_KNN_NONE for an empty tree. */
+uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2);
+
 /* Eq. 7: density w.r.t. area of N points, given the squared k-NN radius
  * (0 for r2 = INFINITY; INFINITY for r2 = 0). */
 float gi_knn_density(uint32_t k, uint32_t n, float r2);

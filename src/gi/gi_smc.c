@@ -21,6 +21,9 @@
  *                                                (3.2.3)
  *   line 8     gi__smc_estimate_densities_candidates  kNN, Eq. 7, k = 1
  *   line 19    gi__smc_estimate_densities_vpls   kNN, Eq. 7, k of Eq. 8
+ *   (beyond)   gi__smc_estimate_areas_vpls       rendering areas: Voronoi
+ *                                                cells measured with line 5's
+ *                                                points (see "Units")
  *   line 9     gi__smc_count_undersampled        M_min, Eq. 9 (the 95% rule)
  *   line 10-13 gi__smc_invalidate_and_clamp      FINDSMALLESTINTENSITY until
  *                                                |INVALID| >= M_min, then
@@ -38,7 +41,14 @@
  * L A cos; gi_vpl.h's intensity is exactly that at normal exitance:
  *     intensity = L(y) A_y = albedo E(y) / pi * 1 / (I p(y))
  * which is Instant Radiosity's "flux * albedo / pi" (gi_ir.c) with the flux
- * Phi = E(y) A_y arriving on the patch. With Eq. 7, A_y = pi r_k^2 / k.
+ * Phi = E(y) A_y arriving on the patch. With Eq. 7, A_y = pi r_k^2 / k
+ * (--param area=knn, the paper). By default (area=voronoi, beyond the
+ * paper) A_y is the area of y's Voronoi cell among the live VPLs, measured
+ * with each iteration's intersection points and averaged over the VPL's
+ * life (gi__smc_estimate_areas_vpls): the paper's discs add up to about
+ * 1.3x the surface they cover on the repulsive set lines 10-17 keep, the
+ * cells to the surface itself. Lines 8-17 rank with Eq. 7 as the paper
+ * does either way; only what is rendered changes.
  * The paper's scalar intensity I(y) = L(y) / p(y) (Eq. 6) is used, as
  * luminance, only to rank VPLs and candidates (lines 9-17).
  *
@@ -96,8 +106,13 @@
  *   spp=16         radiosity samples (Sec. 3.2.3)
  *   bounces=0      radiosity bounces, 0: the frame's --bounces (default 3, Sec. 5)
  *   warmup=100     iterations before the first frame (Sec. 3.2)
- *   k=0            kNN k for rendering, 0: Eq. 8
- *   independent=1  separate ranking and rendering estimates (above) */
+ *   k=0            kNN k of line 19 (ranking, and rendering with area=knn), 0: Eq. 8
+ *   independent=1  separate ranking and rendering estimates (above)
+ *   area=voronoi   rendering areas: voronoi (beyond the paper, above) or knn
+ *                  (the paper's 1 / (I p), Eq. 7)
+ *   area_window=32 with area=voronoi: the running mean of a VPL's cell
+ *                  measures averages all of them up to this many, then
+ *                  forgets at rate 1 / area_window (follows moving cells) */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -121,6 +136,9 @@ typedef struct gi__smc_vpl {
     uint32_t rank_epoch;  /* lights E_rank was estimated with */
     float density;      /* p(y), Eq. 7 */
     float intensity;    /* lum(L) / p, Eq. 6 */
+    float area;         /* rendering area (area=voronoi): running mean of its cell's estimates */
+    float cell;         /* this iteration's estimate of its cell's area */
+    uint32_t area_n;    /* estimates in the mean (capped at area_window) */
     uint32_t id, alive, valid, born;
 } gi__smc_vpl;
 
@@ -140,6 +158,7 @@ typedef struct gi__smc_cand {
     uint32_t x;        /* index into X of the point it was traced from */
     uint32_t hit;
     float key;         /* resampling key, then density */
+    float area;        /* the area it stands for among the intersection points: pi r_k^2 / k */
     float intensity;
 } gi__smc_cand;
 
@@ -158,8 +177,12 @@ static int gi__smc_cmp_sortkey(const void *a, const void *b)
     return x->i < y->i ? -1 : (x->i > y->i);
 }
 
+/* Rendering areas: the paper's 1 / (I p(y)) from Eq. 7, or (the default)
+ * each VPL's Voronoi cell measured with the intersection points. */
+typedef enum gi__smc_area { GI__SMC_AREA_VORONOI = 0, GI__SMC_AREA_KNN } gi__smc_area;
+
 typedef struct gi__smc_params {
-    uint32_t m_max, v, vis_iters, points, ratio, spp, bounces, warmup, k, independent;
+    uint32_t m_max, v, vis_iters, points, ratio, spp, bounces, warmup, k, independent, area, area_window;
 } gi__smc_params;
 
 typedef struct gi__smc_state {
@@ -179,6 +202,7 @@ typedef struct gi__smc_state {
     uint32_t *list, *list2;   /* scratch index lists (I) */
     pf_vec3 *knn_pts;         /* scratch for tree builds (max(raw, I)) */
     uint32_t *knn_slot;
+    uint32_t *nearest;        /* per intersection point: tree index of its nearest VPL */
     gi__smc_sortkey *sortkeys; /* scratch (max(raw, I)) */
     gi_knn tree;
     pf_light *lights;         /* the lights E was estimated with */
@@ -195,9 +219,11 @@ static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return
 static pf_result gi__smc_create(void **state, const gi_params *params, pf_error *err)
 {
     static const char *const known[] = {"Mmax",    "V",      "vis_iters", "points", "ratio", "spp",
-                                        "bounces", "warmup", "k",         "independent", NULL};
+                                        "bounces", "warmup", "k",         "independent", "area", "area_window",
+                                        NULL};
+    static const char *const areas[] = {"voronoi", "knn", NULL};
     *state = NULL;
-    gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0, 1};
+    gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0, 1, GI__SMC_AREA_VORONOI, 32};
     pf_result r = gi_params_check(params, "smc", known, err);
     if (r == PF_OK) r = gi_param_u32(params, "Mmax", 1, 1u << 20, &p.m_max, err);
     if (r == PF_OK) r = gi_param_u32(params, "V", 0, 1024, &p.v, err);
@@ -209,6 +235,8 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
     if (r == PF_OK) r = gi_param_u32(params, "warmup", 1, 100000, &p.warmup, err);
     if (r == PF_OK) r = gi_param_u32(params, "k", 0, GI_KNN_MAX_K, &p.k, err);
     if (r == PF_OK) r = gi_param_u32(params, "independent", 0, 1, &p.independent, err);
+    if (r == PF_OK) r = gi_param_choice(params, "area", areas, &p.area, err);
+    if (r == PF_OK) r = gi_param_u32(params, "area_window", 1, 1u << 20, &p.area_window, err);
     if (r != PF_OK) return r;
     gi__smc_state *s = calloc(1, sizeof *s);
     if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
@@ -220,13 +248,13 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
 static void gi__smc_free_buffers(gi__smc_state *s)
 {
     free(s->y), free(s->prev_id), free(s->x), free(s->raw), free(s->cand), free(s->vis_hit);
-    free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->lights);
+    free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->nearest), free(s->lights);
     free(s->sortkeys);
     s->sortkeys = NULL;
     s->light_count = s->light_cap = s->lights_tracked = 0;
     gi_knn_free(&s->tree);
     s->y = NULL, s->prev_id = NULL, s->x = NULL, s->raw = NULL, s->cand = NULL, s->vis_hit = NULL;
-    s->list = s->list2 = NULL, s->knn_pts = NULL, s->knn_slot = NULL, s->lights = NULL;
+    s->list = s->list2 = NULL, s->knn_pts = NULL, s->knn_slot = NULL, s->nearest = NULL, s->lights = NULL;
 }
 
 static void gi__smc_destroy(void *state)
@@ -258,9 +286,10 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->list2 = calloc(I, sizeof(uint32_t));
     s->knn_pts = calloc(big, sizeof(pf_vec3));
     s->knn_slot = calloc(big, sizeof(uint32_t));
+    s->nearest = calloc(s->raw_cap ? s->raw_cap : 1, sizeof(uint32_t));
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
     if (!s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
-        !s->knn_pts || !s->knn_slot) {
+        !s->knn_pts || !s->knn_slot || !s->nearest) {
         gi__smc_free_buffers(s);
         s->I = 0;
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u VPLs", I);
@@ -533,6 +562,8 @@ static void gi__smc_key_job(void *ctx, uint32_t chunk, uint32_t worker)
         /* Efraimidis-Spirakis: the I largest u^(1/w), i.e. log(u) / w */
         float key = !(r2 > 0.0f) ? -INFINITY : (isinf(r2) ? 0.0f : logf(u) / r2);
         s->raw[i].key = key;
+        /* 1 / (raw_count p) by Eq. 7: the area this point stands for */
+        s->raw[i].area = r2 > 0.0f && isfinite(r2) ? (float)(PF_PI * (double)r2 / (double)c->k) : 0.0f;
     }
 }
 
@@ -681,6 +712,49 @@ static pf_result gi__smc_estimate_densities_vpls(gi__smc_state *s, const gi_vpl_
     return PF_OK;
 }
 
+/* ---------------------------------------------------------------- rendering areas */
+
+/* Beyond the paper (area=voronoi, the default; area=knn is the paper's).
+ * The area A_y a VPL stands for when rendered. Eq. 7 among the VPLs
+ * themselves over-estimates it on the set SMC converges to: lines 10-17
+ * keep the VPLs whose r_k came out large, so the set is repulsive and the
+ * discs pi r_k^2 / k add up to 1.3x the surface they cover (docs/smc.md).
+ * Here each VPL's Voronoi cell among the live VPLs is measured with this
+ * iteration's intersection points (line 5), which do not depend on which
+ * VPLs were kept: the cell's area is the sum of the areas pi r_k^2 / k that
+ * the points nearest to the VPL stand for (Eq. 7 among the intersection
+ * points, the resampling's own estimate; those points are independent
+ * draws, for which Eq. 7 is unbiased). One iteration's measure rests on
+ * about `ratio` points, so each VPL keeps a running mean of its measures:
+ * all of them while it has fewer than area_window, then an exponential
+ * mean of rate 1 / area_window, which follows a cell that changes (the
+ * camera moves, a neighbour is replaced). Areas do not depend on the
+ * lights. Needs the VPL tree of line 19. */
+#define GI__SMC_NEAREST_CHUNK 256
+
+static void gi__smc_nearest_job(void *ctx, uint32_t chunk, uint32_t worker)
+{
+    (void)worker;
+    gi__smc_state *s = ctx;
+    for (uint32_t i = chunk * GI__SMC_NEAREST_CHUNK; i < s->raw_count && i < (chunk + 1) * GI__SMC_NEAREST_CHUNK; i++)
+        s->nearest[i] = gi_knn_nearest(&s->tree, s->raw[i].pos, NULL);
+}
+
+static void gi__smc_estimate_areas_vpls(gi__smc_state *s, const gi_vpl_inputs *in)
+{
+    pf_jobs_parallel_for(in->jobs, gi__smc_nearest_job, s, (s->raw_count + GI__SMC_NEAREST_CHUNK - 1) / GI__SMC_NEAREST_CHUNK,
+                         1);
+    for (uint32_t i = 0; i < s->I; i++) s->y[i].cell = 0.0f;
+    for (uint32_t i = 0; i < s->raw_count; i++) /* in point order: the same sums for any thread count */
+        if (s->nearest[i] != GI_KNN_NONE) s->y[s->knn_slot[s->nearest[i]]].cell += s->raw[i].area;
+    for (uint32_t i = 0; i < s->I; i++) {
+        gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        if (v->area_n < s->prm.area_window) v->area_n++;
+        v->area += (v->cell - v->area) / (float)v->area_n;
+    }
+}
+
 /* ---------------------------------------------------------------- line 9 */
 
 /* M_min = min(M_max, M_strong), Eq. 9: M_strong counts the candidates
@@ -770,7 +844,9 @@ static pf_result gi__smc_initialize_vpls(gi__smc_state *s, const gi_vpl_inputs *
     gi__smc_take_strongest(s); /* all of them, in resampling order */
     for (uint32_t i = 0; i < s->I; i++) s->y[i].rank_epoch = s->light_epoch - 1u; /* no candidate estimates here */
     gi__smc_estimate_radiosities_vpls(s, in);
-    return gi__smc_estimate_densities_vpls(s, in, err);
+    r = gi__smc_estimate_densities_vpls(s, in, err);
+    if (r == PF_OK) gi__smc_estimate_areas_vpls(s, in);
+    return r;
 }
 
 /* Lines 3-19: one iteration. */
@@ -789,7 +865,9 @@ static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     gi__smc_invalidate_and_clamp(s, m_min);                       /* 10-13 */
     gi__smc_take_strongest(s);                                    /* 14-17 */
     gi__smc_estimate_radiosities_vpls(s, in);                     /* 18 */
-    return gi__smc_estimate_densities_vpls(s, in, err);           /* 19 */
+    r = gi__smc_estimate_densities_vpls(s, in, err);              /* 19 */
+    if (r == PF_OK) gi__smc_estimate_areas_vpls(s, in);           /* beyond the paper */
+    return r;
 }
 
 /* Line 20's input: every slot as a gi_vpl (see "Units" above). */
@@ -806,7 +884,9 @@ static pf_result gi__smc_output(gi__smc_state *s, gi_vpl_set *out, pf_error *err
         gi_vpl *o = &out->v[i];
         if (v->alive) {
             /* intensity = L A = albedo E / pi / (I p) */
-            float A = v->density > 0.0f && isfinite(v->density) ? 1.0f / ((float)s->I * v->density) : 0.0f;
+            float A = s->prm.area == GI__SMC_AREA_VORONOI
+                          ? v->area
+                          : (v->density > 0.0f && isfinite(v->density) ? 1.0f / ((float)s->I * v->density) : 0.0f);
             o->pos = v->pos;
             o->nrm = v->ns;
             o->intensity = pf_v3_scale(pf_v3_mul(v->albedo, v->E), PF_INV_PI * A);

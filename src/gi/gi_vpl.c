@@ -3,6 +3,7 @@
 #include "gi_vpl.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,6 +98,23 @@ pf_result gi_params_check(const gi_params *p, const char *method, const char *co
         }
     }
     return PF_OK;
+}
+
+pf_result gi_param_choice(const gi_params *p, const char *key, const char *const *names, uint32_t *out,
+                          pf_error *err)
+{
+    const char *v = gi__find(p, key);
+    if (!v) return PF_OK;
+    char list[256] = "";
+    for (uint32_t i = 0; names[i]; i++) {
+        if (!strcmp(v, names[i])) {
+            *out = i;
+            return PF_OK;
+        }
+        size_t n = strlen(list);
+        snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", names[i]);
+    }
+    return pf_error_set(err, PF_ERR_ARGUMENT, "--param %s=%s: expected one of %s", key, v, list);
 }
 
 pf_result gi_param_u32(const gi_params *p, const char *key, uint32_t lo, uint32_t hi, uint32_t *out, pf_error *err)

@@ -73,6 +73,11 @@ pf_result gi_params_check(const gi_params *p, const char *method, const char *co
  * *out keeps its default when the key is absent. p may be NULL. */
 pf_result gi_param_u32(const gi_params *p, const char *key, uint32_t lo, uint32_t hi, uint32_t *out, pf_error *err);
 pf_result gi_param_f32(const gi_params *p, const char *key, float lo, float hi, float *out, pf_error *err);
+/* The value of `key` as one of `names` (NULL-terminated): *out gets its
+ * index, or keeps its default when the key is absent; another value is an
+ * error that lists the names. */
+pf_result gi_param_choice(const gi_params *p, const char *key, const char *const *names, uint32_t *out,
+                          pf_error *err);
 
 typedef struct gi_vpl_method {
     const char *name;

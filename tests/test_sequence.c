@@ -747,7 +747,8 @@ static void test_reference_and_evaluate(void **state)
     /* evaluate: table with the method's row; the reference is reused */
     snprintf(dir, sizeof dir, "%s/ev", g_tmp);
     snprintf(args, sizeof args,
-             "evaluate --sequences '%s' --methods ir --size 32x24 --spp 4 --vpls 32 --isa sse2 --out '%s'", seq, dir);
+             "evaluate --sequences '%s' --methods ir,ir+reseed=1 --size 32x24 --spp 4 --vpls 32 --isa sse2 --out '%s'",
+             seq, dir);
     int st = tu_softgi_run(args, out, sizeof out);
     if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
     assert_non_null(strstr(out, "reference: 4 spp"));
@@ -761,11 +762,28 @@ static void test_reference_and_evaluate(void **state)
     table[nt] = 0;
     assert_non_null(strstr(table, "## light"));
     assert_non_null(strstr(table, "| ir | 6 |"));
+    assert_non_null(strstr(table, "| ir+reseed=1 | 6 |")); /* a method entry with a parameter of its own */
+    assert_null(strstr(table, "n/a"));
     snprintf(a, sizeof a, "%s/light/plot.svg", dir);
     FILE *pf = fopen(a, "r");
     assert_non_null(pf);
     fclose(pf);
+    /* a method that computes no indirect light gets n/a and the reason,
+     * never numbers: here the only light is switched off */
+    char dark[512];
+    snprintf(dark, sizeof dark, "%s/dark.seq.json", g_tmp);
+    write_file(dark, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"size\": [32, 24],"
+                     " \"lights\": [{\"light\": 0, \"keys\": [{\"frame\": 0, \"intensity\": 0}]}]}");
+    snprintf(args, sizeof args,
+             "evaluate --sequences '%s' --methods ir --size 32x24 --spp 4 --vpls 32 --isa sse2 -q --out '%s'", dark, dir);
+    tu_softgi_expect(args, 0, "");
+    snprintf(a, sizeof a, "%s/table.md", dir);
+    assert_true(read_all(a, table, sizeof table - 1, &nt));
+    table[nt] = 0;
+    assert_non_null(strstr(table, "| ir | n/a | n/a | n/a | n/a | n/a |"));
+    assert_non_null(strstr(table, "no frame of these methods holds any indirect light"));
     tu_softgi_expect("evaluate --methods ir,nosuch", 2, "unknown method 'nosuch'");
+    tu_softgi_expect("evaluate --methods nosuch+k=1", 2, "unknown method 'nosuch+k=1'");
     tu_softgi_expect("evaluate --frobnicate", 2, "unknown option '--frobnicate'");
     tu_softgi_expect("evaluate --methods", 2, "--methods needs a value");
     tu_softgi_expect("evaluate --methods ir,,iir", 2, "empty item");

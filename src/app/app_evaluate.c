@@ -17,7 +17,14 @@
  *   2. every method: `softgi sequence FILE --method M --vpls N` into
  *      OUT/NAME/M (the method keeps its state over the frames, as in an
  *      interactive session); a method that fails (e.g. one not implemented)
- *      is reported in the table and skipped;
+ *      is reported in the table and skipped. An entry METHOD+KEY=VALUE...
+ *      gives that method parameters of its own (its folder and row are
+ *      named by the whole entry): the default list has IR twice, as
+ *      `ir` (a static light keeps its VPLs) and `ir+reseed=1` (new VPLs
+ *      every frame, the IR the papers compare with). A method whose frames
+ *      hold no indirect light at all (it found no light it can use, e.g.
+ *      a reflective-shadow-map method on a scene lit only by emissive
+ *      triangles) gets a row of n/a with the reason, never numbers;
  *   3. `softgi compare --reference OUT/NAME/reference --name M:OUT/NAME/M ...
  *      --track (the sequence's tracked pixels) --table OUT/NAME/table.md
  *      --plot OUT/NAME/plot.svg`: |E|, |E'| (Eq. 10), TID and RMSE.
@@ -42,6 +49,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "app.h"
 #include "gi_vpl.h"
@@ -51,6 +59,7 @@
 
 #define EV_MAX_ITEMS 32
 #define EV_MAX_ARGS 96
+#define EV_MAX_ENTRY_PARAMS 8
 
 typedef struct ev__args {
     const char *methods[EV_MAX_ITEMS];
@@ -78,13 +87,14 @@ static void ev__usage(FILE *f)
           "and Fig. 7-style plot. Writes OUT/NAME/{reference,METHOD}/frame_NNNN.*,\n"
           "OUT/NAME/table.md, OUT/NAME/plot.svg and OUT/table.md.\n"
           "\n"
-          "  --methods LIST      comma-separated VPL methods (default: all of ir, iir, smc, mir,\n"
-          "                      invtm, tcas, ssvp)\n"
+          "  --methods LIST      comma-separated VPL methods, each optionally with parameters of\n"
+          "                      its own as METHOD+KEY=VALUE+... (default: ir, ir+reseed=1, iir,\n"
+          "                      smc, mir, invtm, tcas, ssvp)\n"
           "  --sequences LIST    comma-separated .seq.json files (default: scenes/sequences/\n"
           "                      cornell-{camera,light}, sibenik-{camera,light},\n"
           "                      conference-{camera,light})\n"
           "  --out DIR           output folder (default out/evaluate)\n"
-          "  --size WxH          image size for every sequence (default 256x192)\n"
+          "  --size WxH          image size for every sequence (default 320x240)\n"
           "  --spp N             reference samples per pixel (default 256)\n"
           "  --track-spp N       reference samples at the tracked pixels, where |E| and |E'| are\n"
           "                      measured (default 4096)\n"
@@ -121,11 +131,17 @@ static int ev__split(const char *list, char *store, size_t store_size, const cha
     return 0;
 }
 
+/* A --methods entry METHOD+KEY=VALUE+...: the method's name. */
+static void ev__method_name(const char *entry, char *out, size_t size)
+{
+    snprintf(out, size, "%.*s", (int)strcspn(entry, "+"), entry);
+}
+
 static int ev__parse(ev__args *a, int argc, char **argv, int *help)
 {
     memset(a, 0, sizeof *a);
     a->out = "out/evaluate";
-    a->size = "256x192";
+    a->size = "320x240";
     a->spp = "256";
     a->track_spp = "4096";
     a->vpls = "256";
@@ -150,10 +166,13 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
             int rc = 0;
             if (!strcmp(o, "--methods")) {
                 rc = ev__split(v, a->lists[0], sizeof a->lists[0], a->methods, &a->method_count, "methods");
-                for (uint32_t k = 0; !rc && k < a->method_count; k++)
-                    if (!gi_vpl_method_find(a->methods[k]))
+                for (uint32_t k = 0; !rc && k < a->method_count; k++) {
+                    char name[64];
+                    ev__method_name(a->methods[k], name, sizeof name);
+                    if (!gi_vpl_method_find(name))
                         rc = ev__fail(2, "--methods: unknown method '%s' (softgi knows %s)", a->methods[k],
                                       gi_vpl_method_names());
+                }
             } else if (!strcmp(o, "--sequences"))
                 rc = ev__split(v, a->lists[1], sizeof a->lists[1], a->sequences, &a->sequence_count, "sequences");
             else if (!strcmp(o, "--out")) a->out = v;
@@ -172,7 +191,7 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
     }
     if (strlen(a->out) > 2000) return ev__fail(2, "--out: the folder name is too long%s%s", "", "");
     if (!a->method_count) {
-        static const char *const all[] = {"ir", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
+        static const char *const all[] = {"ir", "ir+reseed=1", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
         for (size_t k = 0; k < sizeof all / sizeof all[0]; k++) a->methods[a->method_count++] = all[k];
     }
     if (!a->sequence_count) {
@@ -264,6 +283,44 @@ static int ev__read_text(const char *path, char *buf, size_t size)
     return 1;
 }
 
+/* Progress over the steps (a reference or a method run, each a step): on
+ * a terminal one line redrawn in place, with a bar, the elapsed time and an
+ * estimate of the time left from the mean step so far; elsewhere nothing
+ * beyond the step lines. step NULL: finished. */
+typedef struct ev__prog {
+    uint32_t done, total;
+    double t0;
+} ev__prog;
+
+/* Clears the progress line before a line of text (stdout is flushed
+ * first: the two streams share the terminal). */
+static void ev__progress_clear(const ev__args *a)
+{
+    if (a->quiet || !isatty(fileno(stderr))) return;
+    fflush(stdout);
+    fputs("\r\033[K", stderr);
+}
+
+static void ev__progress(const ev__args *a, const ev__prog *p, const char *seq, const char *step)
+{
+    if (a->quiet || !isatty(fileno(stderr))) return;
+    double el = pf_time_now() - p->t0;
+    char bar[21];
+    uint32_t fill = p->total ? 20u * p->done / p->total : 20u;
+    for (uint32_t i = 0; i < 20; i++) bar[i] = i < fill ? '#' : '.';
+    bar[20] = 0;
+    if (!step) {
+        fprintf(stderr, "\r\033[K[%s] %u/%u steps in %.0f s\n", bar, p->done, p->total, el);
+        return;
+    }
+    if (p->done)
+        fprintf(stderr, "\r\033[K[%s] %u/%u  %s: %s  %.0f s, about %.0f s left", bar, p->done, p->total, seq, step, el,
+                el / p->done * (p->total - p->done));
+    else
+        fprintf(stderr, "\r\033[K[%s] %u/%u  %s: %s", bar, p->done, p->total, seq, step);
+    fflush(stderr);
+}
+
 /* Step 1: the sequence's per-frame references (reused when the stamp says
  * they were made with the same settings). */
 static int ev__reference(const ev__args *a, const char *file, const char *dir)
@@ -283,6 +340,7 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     int finished = pf_sequence_manifest_read(dir, &man, &has_manifest, &merr) == PF_OK && (!has_manifest || man.complete);
     if (!a->rerun_reference && finished && ev__read_text(stamp_path, have, sizeof have)) {
         if (!strcmp(have, want)) {
+            ev__progress_clear(a);
             if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
             return 0;
         }
@@ -302,6 +360,7 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     if (rc) return rc;
     pf_error err;
     if (pf_imageio_write_file(stamp_path, want, strlen(want), &err) != PF_OK) return app_fail(&err);
+    ev__progress_clear(a);
     if (!a->quiet)
         printf("  reference: %s spp (tracked pixels %s)%s in %.1f s\n", a->spp, a->track_spp,
                reuse ? ", images reused" : "", pf_time_now() - t0);
@@ -309,15 +368,24 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
 }
 
 /* Step 2: one method's frames. Returns 0 or the exit status. */
-static int ev__method(const ev__args *a, const char *file, const char *method, const char *dir)
+static int ev__method(const ev__args *a, const char *file, const char *entry, const char *dir)
 {
     ev__argv v = {0};
+    char method[64], own[512];
+    ev__method_name(entry, method, sizeof method);
     ev__common(&v, a, file, dir);
     ev__push(&v, "--method");
     ev__push(&v, method);
     ev__push(&v, "--vpls");
     ev__push(&v, a->vpls);
-    /* parameters go only to methods that know them: try each alone first */
+    /* the entry's own parameters (METHOD+KEY=VALUE+...) always go to it */
+    snprintf(own, sizeof own, "%s", entry + strlen(method));
+    uint32_t n_own = 0;
+    for (char *p = strtok(own, "+"); p && n_own < EV_MAX_ENTRY_PARAMS; p = strtok(NULL, "+"), n_own++) {
+        ev__push(&v, "--param");
+        ev__push(&v, p);
+    }
+    /* --param parameters go only to methods that know them: try each alone first */
     const gi_vpl_method *m = gi_vpl_method_find(method);
     for (uint32_t i = 0; i < a->param_count; i++) {
         gi_params p = {0};
@@ -332,8 +400,32 @@ static int ev__method(const ev__args *a, const char *file, const char *method, c
     }
     double t0 = pf_time_now();
     int rc = ev__run_sequence(&v);
-    if (!rc && !a->quiet) printf("  %-6s %.1f s\n", method, pf_time_now() - t0);
+    ev__progress_clear(a);
+    if (!rc && !a->quiet) printf("  %-12s %.1f s\n", entry, pf_time_now() - t0);
     return rc;
+}
+
+/* Whether any frame in dir (a finished indirect-only run) holds indirect
+ * light: 1 yes, 0 no, -1 the frames could not be read (then the table
+ * keeps its numbers and compare reports the problem). */
+static int ev__has_light(const char *dir)
+{
+    pf_sequence_manifest man;
+    pf_error err;
+    int present = 0;
+    if (pf_sequence_manifest_read(dir, &man, &present, &err) != PF_OK || !present) return -1;
+    for (uint32_t i = 0; i < man.frames; i++) {
+        char path[2600];
+        snprintf(path, sizeof path, "%s/frame_%04u.pfm", dir, i);
+        float *rgb = NULL;
+        uint32_t w = 0, h = 0;
+        if (pf_imageio_read_pfm(path, &rgb, &w, &h, &err) != PF_OK) return -1;
+        int lit = 0;
+        for (size_t k = 0; k < (size_t)w * h * 3 && !lit; k++) lit = rgb[k] > 0.0f;
+        free(rgb);
+        if (lit) return 1;
+    }
+    return 0;
 }
 
 /* Step 3: softgi compare over the methods that rendered. */
@@ -373,6 +465,18 @@ static int ev__compare(const char *seq_dir, const char *ref_dir, char names[][26
     return app_compare(v.argc, v.argv);
 }
 
+/* Rows for the methods that computed no indirect light: n/a and why,
+ * under the sequence's table (same columns as softgi compare's). */
+static void ev__unlit_rows(FILE *summary, const char *const *unlit, uint32_t count)
+{
+    if (!count) return;
+    fprintf(summary, "\n| method | frames | mean \\|E\\| | mean \\|E'\\| | TID | RMSE |\n|---|---:|---:|---:|---:|---:|\n");
+    for (uint32_t i = 0; i < count; i++) fprintf(summary, "| %s | n/a | n/a | n/a | n/a | n/a |\n", unlit[i]);
+    fprintf(summary, "\nn/a: no frame of these methods holds any indirect light: the method found no light it "
+                     "can use in this scene (e.g. a reflective-shadow-map method on a scene lit only by emissive "
+                     "triangles), so its numbers would measure nothing.\n");
+}
+
 static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
 {
     int help = 0;
@@ -397,33 +501,45 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
     fprintf(summary, "# softgi evaluate\n\nSettings: size %s, reference %s spp, %s VPLs, %s.\n", a->size, a->spp, a->vpls,
             a->full ? "whole images" : "indirect light only");
     int worst = 0;
+    ev__prog pr = {0, a->sequence_count * (a->method_count + 1), pf_time_now()};
     for (uint32_t s = 0; s < a->sequence_count; s++) {
         char name[256], seq_dir[2400], ref_dir[2500];
         ev__sequence_name(a->sequences[s], name, sizeof name);
         snprintf(seq_dir, sizeof seq_dir, "%s/%s", a->out, name);
         snprintf(ref_dir, sizeof ref_dir, "%s/reference", seq_dir);
+        ev__progress_clear(a);
         if (!a->quiet) printf("evaluate: %s (%s)\n", name, a->sequences[s]);
         fprintf(summary, "\n## %s\n\n", name);
+        ev__progress(a, &pr, name, "reference");
         rc = ev__reference(a, a->sequences[s], ref_dir);
+        pr.done++;
         if (rc) {
             fprintf(summary, "The reference failed (exit %d); sequence skipped.\n", rc);
             worst = rc;
             continue;
         }
-        uint32_t ok = 0;
+        uint32_t ok = 0, dark = 0;
+        const char *unlit[EV_MAX_ITEMS];
         for (uint32_t m = 0; m < a->method_count; m++) {
             char dir[2500];
             snprintf(dir, sizeof dir, "%s/%s", seq_dir, a->methods[m]);
+            ev__progress(a, &pr, name, a->methods[m]);
             rc = ev__method(a, a->sequences[s], a->methods[m], dir);
+            pr.done++;
             if (rc) {
                 fprintf(summary, "- `%s` failed (exit %d): see the message above; not in the table.\n",
                         a->methods[m], rc);
                 continue;
             }
+            if (!a->full && ev__has_light(dir) == 0) {
+                unlit[dark++] = a->methods[m];
+                continue;
+            }
             snprintf(names[ok++], sizeof names[0], "%s:%s", a->methods[m], dir);
         }
         if (!ok) {
-            fprintf(summary, "No method rendered this sequence.\n");
+            fprintf(summary, "No method rendered indirect light in this sequence.\n");
+            ev__unlit_rows(summary, unlit, dark);
             continue;
         }
         rc = ev__compare(seq_dir, ref_dir, names, ok);
@@ -436,6 +552,7 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
         snprintf(table, sizeof table, "%s/table.md", seq_dir);
         fprintf(summary, "\n");
         ev__append_file(summary, table);
+        ev__unlit_rows(summary, unlit, dark);
         fprintf(summary, "\nPlot: `%s/plot.svg`.\n", seq_dir);
     }
     int bad = ferror(summary) != 0;
@@ -444,6 +561,7 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
                       : pf_imageio_write_file(all_table, summary_text, summary_len, &err);
     free(summary_text);
     if (r != PF_OK) return app_fail(&err);
+    ev__progress(a, &pr, NULL, NULL);
     if (!a->quiet) printf("evaluate: wrote %s\n", all_table);
     return worst;
 }

@@ -5,7 +5,12 @@
  * Sampling: the Halton sequence with a fixed start, one index per light
  * path, so a static scene keeps a static VPL set; when anything changes (a
  * light moves), the whole set is regenerated from the same indices, which is
- * the flickering baseline the later methods beat. Dimensions of path i:
+ * the flickering baseline the later methods beat. With --param reseed=1
+ * every frame takes the next stretch of the sequence instead (frame f
+ * starts at index f * 64 * budget + 1, past any path the previous frame
+ * could start), so the set is new every frame even under a static light:
+ * the IR that the papers compare with (Hedman 2017 Table 1, Laine 2007
+ * Sec. 8), which flickers under a static light too. Dimensions of path i:
  * 2 light choice, 3/5 emission (area lights: also 7/11), then per bounce k (0-based) a pair of
  * primes for the cosine-weighted direction and one for Russian roulette.
  *
@@ -34,15 +39,21 @@ static const uint32_t gi__primes[] = {2,  3,  5,  7,  11, 13, 17, 19, 23, 29, 31
 
 typedef struct gi__ir_state {
     gi_vpl_set prev; /* last frame's set, for the moved flags */
+    uint32_t reseed; /* --param reseed=1: a new stretch of the sequence every frame */
 } gi__ir_state;
 
 static pf_result gi__ir_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {NULL};
+    static const char *const known[] = {"reseed", NULL};
+    uint32_t reseed = 0;
     pf_result r = gi_params_check(params, "ir", known, err);
+    if (r == PF_OK) r = gi_param_u32(params, "reseed", 0, 1, &reseed, err);
     if (r != PF_OK) return r;
-    *state = calloc(1, sizeof(gi__ir_state));
-    return *state ? PF_OK : pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+    gi__ir_state *s = calloc(1, sizeof *s);
+    if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+    s->reseed = reseed;
+    *state = s;
+    return PF_OK;
 }
 
 static void gi__ir_destroy(void *state)
@@ -64,10 +75,14 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     gi_lightpath_lights c;
     gi_lightpath_lights_init(&c, s, in->area);
     if (c.nl == 0 || !(c.total > 0.0)) return PF_OK; /* nothing emits: no VPLs */
-    uint32_t paths = 0;
-    for (uint32_t path = 0; out->count < budget && path < budget * 64u; path++) {
+    uint32_t paths = 0, max_paths = budget * 64u;
+    /* the frame's first Halton index (0 maps every dimension to 0); wraps
+     * after 2^31 indices, some 130,000 frames at the default budget, and
+     * start + path stays below 2^32 */
+    uint32_t start = st->reseed ? (uint32_t)(((uint64_t)in->frame * max_paths) % 0x7fffffffu) + 1u : 1u;
+    for (uint32_t path = 0; out->count < budget && path < max_paths; path++) {
         paths++;
-        uint32_t hi = path + 1; /* Halton index (0 maps every dimension to 0) */
+        uint32_t hi = start + path;
         gi_lightpath_numbers u;
         memset(&u, 0, sizeof u);
         u.choice = gi_halton(hi, 2);
@@ -118,7 +133,6 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     if (r != PF_OK) return r;
     memcpy(st->prev.v, out->v, sizeof(gi_vpl) * out->count);
     st->prev.count = out->count;
-    (void)in->frame;
     return PF_OK;
 }
 

@@ -36,7 +36,10 @@
  * pipelining it is the update job's own time, which overlaps the other
  * stages (its share then says how much of the frame it hides in).
  * Output: one table per scene (stages as rows, configurations as columns,
- * ms and share of the frame), the target line (issue 4: IR with 256 VPLs and
+ * ms and share of the frame), the same frame in Hedman 2017 Table 2's
+ * columns (with the method's own parts of its update where it reports
+ * them: SMC's candidate sampling, resampling, indirect visibility,
+ * radiosity and kNN), the target line (issue 4: IR with 256 VPLs and
  * a static light at >= 15 frames/s on 2 threads) and one JSON line (prefix
  * "json: "). */
 #include <math.h>
@@ -84,6 +87,7 @@ typedef struct bf_result {
     int pipeline;
     /* medians over the measured frames */
     pf_stage_times stages; /* names in the order the frame ran them, ms = median */
+    pf_stage_times parts;  /* the method's own parts of its update (gi_vpl_method.parts), ms = median */
     double frame_ms, fps;
     /* the first (warm-up) frame: every VPL new, every map rendered */
     pf_stage_times first;
@@ -135,6 +139,23 @@ static pf_vec3 bf__light_at(const bf_scene *bs, const pf_scene *scene, int movin
  * load during the run falls on both alike. `light` is the scene's one light
  * (moved before each frame with --moving-light; every mode's frame i sees
  * the same position). */
+/* Frame `frame`'s times t into the per-frame table ms ([name][frame]),
+ * matched by name into `names`, so a stage a frame skips counts 0 ms. */
+static void bf__collect(pf_stage_times *names, double *ms, const pf_stage_times *t, uint32_t frames, uint32_t frame)
+{
+    for (uint32_t s = 0; s < t->count; s++) {
+        uint32_t k = 0;
+        while (k < names->count && strcmp(names->name[k], t->name[s])) k++;
+        if (k == names->count) {
+            if (k == PF_MAX_STAGES) continue;
+            names->name[k] = t->name[s];
+            names->count++;
+            for (uint32_t j = 0; j < frames; j++) ms[k * frames + j] = 0.0;
+        }
+        ms[k * frames + frame] = t->ms[s];
+    }
+}
+
 static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scene *bs, pf_rt *rt, rs_context *rs,
                              pf_jobs *jobs, uint32_t threads, uint32_t vpls, const int *modes, uint32_t nmodes,
                              const pf_options *o, uint32_t frames, bf_result *out, pf_error *err)
@@ -145,6 +166,7 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
     light->position = bf__light_at(bs, lit, o->moving_light, 0);
     gi_frame f[2];
     double *frame_ms[2] = {NULL, NULL}, *stage_ms[2] = {NULL, NULL}; /* stage_ms: [stage][frame] */
+    double *part_ms[2] = {NULL, NULL};                                /* part_ms: [part][frame] */
     uint32_t ready = 0;
     for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
         memset(&out[m], 0, sizeof out[m]);
@@ -163,7 +185,8 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         if (r == PF_OK) r = gi_frame_enable_indirect(&f[m], &io, 0, err);
         frame_ms[m] = malloc(sizeof(double) * frames);
         stage_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
-        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m]))
+        part_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
+        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m] || !part_ms[m]))
             r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
     }
     for (uint32_t i = 0; i <= frames && r == PF_OK; i++) { /* i == 0: the first frame, every map rendered */
@@ -181,6 +204,7 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
                 res->first_maps = f[m].ind.maps_rendered;
                 res->vpl_count = f[m].ind.vpls.count;
                 res->stages.count = 0;
+                res->parts.count = 0;
                 if (!res->vpl_count) /* e.g. a method that failed its update (its message is above) */
                     r = pf_error_set(err, PF_ERR_ARGUMENT, "method %s made no VPLs in the first frame",
                                      f[m].ind.opt.method->name);
@@ -189,27 +213,21 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
             res->moved_after += moved;
             res->maps_after += f[m].ind.maps_rendered;
             frame_ms[m][i - 1] = ms;
-            /* stages matched by name, so a stage that a frame skips counts 0 ms */
-            for (uint32_t s = 0; s < f[m].times.count; s++) {
-                uint32_t k = 0;
-                while (k < res->stages.count && strcmp(res->stages.name[k], f[m].times.name[s])) k++;
-                if (k == res->stages.count) {
-                    res->stages.name[k] = f[m].times.name[s];
-                    res->stages.count++;
-                    for (uint32_t j = 0; j < frames; j++) stage_ms[m][k * frames + j] = 0.0;
-                }
-                stage_ms[m][k * frames + i - 1] = f[m].times.ms[s];
-            }
+            bf__collect(&res->stages, stage_ms[m], &f[m].times, frames, i - 1);
+            const gi_vpl_method *method = f[m].ind.opt.method;
+            if (method->parts) bf__collect(&res->parts, part_ms[m], method->parts(f[m].ind.method_state), frames, i - 1);
         }
     }
     for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
         for (uint32_t k = 0; k < out[m].stages.count; k++)
             out[m].stages.ms[k] = bf__median(stage_ms[m] + k * frames, frames);
+        for (uint32_t k = 0; k < out[m].parts.count; k++)
+            out[m].parts.ms[k] = bf__median(part_ms[m] + k * frames, frames);
         out[m].frame_ms = bf__median(frame_ms[m], frames);
         out[m].fps = 1e3 / out[m].frame_ms;
     }
     for (uint32_t m = 0; m < nmodes; m++) {
-        free(frame_ms[m]), free(stage_ms[m]);
+        free(frame_ms[m]), free(stage_ms[m]), free(part_ms[m]);
         if (m < ready) gi_frame_free(&f[m]);
     }
     return r;
@@ -260,6 +278,42 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
 
 /* One scene's table: stages as rows, its configurations as columns, each
  * "ms share" (up to 28 + 8 x 17 = 164 columns), then the pipelining gains. */
+/* The frame in Hedman 2017 Table 2's columns (medians, ms): the method's
+ * own parts of VPL sampling where it reports them (SMC), VPL sampling in
+ * all (the update), shadow maps (the VPLs' maps), interleaved shading with
+ * the G-buffer (Hedman's "Interl. shading": visibility, attributes, split,
+ * assign, accumulate, combine, filter) and the totals. Direct light and
+ * compose are not indirect light and not in these columns. */
+static void bf__print_hedman_table2(const bf_result *res, uint32_t n)
+{
+    static const char *const shading[] = {"gbuffer raster (visibility)", "gbuffer resolve (attributes)", "split",
+                                          "assign VPLs to tiles", "accumulate", "combine", "filter"};
+    printf("in Hedman 2017 Table 2's columns (ms):\n");
+    pf_stage_times rows;
+    memset(&rows, 0, sizeof rows);
+    for (uint32_t c = 0; c < n; c++)
+        for (uint32_t s = 0; s < res[c].parts.count; s++) pf_stage_add(&rows, res[c].parts.name[s], 0.0);
+    for (uint32_t s = 0; s < rows.count; s++) {
+        printf("  %-26.26s", rows.name[s]);
+        for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", bf__stage_ms(&res[c].parts, rows.name[s]), "");
+        printf("\n");
+    }
+    const char *labels[] = {"VPL sampling total", "shadow maps", "interleaved shading", "final rendering total",
+                            "indirect light total"};
+    for (uint32_t l = 0; l < 5; l++) {
+        printf("  %-26s", labels[l]);
+        for (uint32_t c = 0; c < n; c++) {
+            double sampling = bf__stage_ms(&res[c].stages, BF_UPDATE_STAGE);
+            double maps = bf__stage_ms(&res[c].stages, BF_MAPS_STAGE), shade = 0.0;
+            for (size_t k = 0; k < sizeof shading / sizeof shading[0]; k++)
+                shade += bf__stage_ms(&res[c].stages, shading[k]);
+            const double v[] = {sampling, maps, shade, maps + shade, sampling + maps + shade};
+            printf("  %8.2f %6s", v[l], "");
+        }
+        printf("\n");
+    }
+}
+
 static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_result *res, uint32_t n,
                             uint32_t frames, int moving)
 {
@@ -320,6 +374,7 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
         printf("  %8.3f %6s", res[c].first_maps ? bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_maps : 0.0,
                "");
     printf("\n");
+    bf__print_hedman_table2(res, n);
     /* pipelining gains: consecutive off/on pairs of one VPL count and thread count */
     for (uint32_t c = 0; c + 1 < n; c++) {
         const bf_result *off = &res[c], *on = &res[c + 1];
@@ -488,6 +543,8 @@ int app_bench_frame(const pf_options *o)
                (unsigned long long)r->moved_after, (unsigned long long)r->maps_after, r->first_ms, r->first_maps,
                r->first_moved);
         bf__json_stages(&r->first);
+        printf(",\"method_parts_ms\":");
+        bf__json_stages(&r->parts);
         printf("}");
     }
     printf("],\"target\":{\"vpls\":%u,\"threads\":%u,\"fps\":%.0f", BF_TARGET_VPLS, BF_TARGET_THREADS, BF_TARGET_FPS);

@@ -209,10 +209,28 @@ typedef struct gi__smc_state {
     uint32_t light_count, light_cap, lights_tracked;
     const gi_vpl_inputs *in;  /* this update's inputs (for the jobs) */
     gi_radiosity_ctx rad;
+    pf_stage_times parts;     /* the last update's time by Hedman 2017 Table 2's columns */
+    double t_mark;            /* gi__smc_part: when the running part began */
 } gi__smc_state;
 
 
 static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return gi_radiosity_random(key, a, b, c); }
+
+/* Hedman 2017 Table 2's columns of VPL sampling, which the update's time
+ * is split into (timing only: nothing reads it back). */
+#define GI__SMC_T_CAND "candidate sampling"       /* lines 3, 5, 9-17 */
+#define GI__SMC_T_RESAMPLE "candidate resampling" /* line 6 */
+#define GI__SMC_T_VIS "indirect visibility"       /* line 4 */
+#define GI__SMC_T_RAD "radiosity"                 /* lines 7, 18 */
+#define GI__SMC_T_KNN "kNN"                       /* lines 8, 19 (and the rendering areas) */
+
+/* Charges the time since the last mark to `part` and sets a new mark. */
+static void gi__smc_part(gi__smc_state *s, const char *part)
+{
+    double t = pf_time_now();
+    pf_stage_add(&s->parts, part, (t - s->t_mark) * 1e3);
+    s->t_mark = t;
+}
 
 /* ---------------------------------------------------------------- create / destroy */
 
@@ -854,19 +872,28 @@ static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
 {
     uint64_t key = gi_radiosity_hash(0x5eed, s->iter++);
     gi__smc_raycast_from_camera(s, in, key);                      /* 3 */
+    gi__smc_part(s, GI__SMC_T_CAND);
     gi__smc_indirectly_visible_vpls(s, in, key);                  /* 4 */
+    gi__smc_part(s, GI__SMC_T_VIS);
     gi__smc_raycast_from_points(s, in, key);                      /* 5 */
+    gi__smc_part(s, GI__SMC_T_CAND);
     pf_result r = gi__smc_resample_candidates(s, in, key, err);   /* 6 */
+    gi__smc_part(s, GI__SMC_T_RESAMPLE);
     if (r != PF_OK) return r;
     gi__smc_estimate_radiosities_candidates(s, in);               /* 7 */
+    gi__smc_part(s, GI__SMC_T_RAD);
     r = gi__smc_estimate_densities_candidates(s, in, err);        /* 8 */
+    gi__smc_part(s, GI__SMC_T_KNN);
     if (r != PF_OK) return r;
     uint32_t m_min = gi__smc_count_undersampled(s);               /* 9 */
     gi__smc_invalidate_and_clamp(s, m_min);                       /* 10-13 */
     gi__smc_take_strongest(s);                                    /* 14-17 */
+    gi__smc_part(s, GI__SMC_T_CAND);
     gi__smc_estimate_radiosities_vpls(s, in);                     /* 18 */
+    gi__smc_part(s, GI__SMC_T_RAD);
     r = gi__smc_estimate_densities_vpls(s, in, err);              /* 19 */
     if (r == PF_OK) gi__smc_estimate_areas_vpls(s, in);           /* beyond the paper */
+    gi__smc_part(s, GI__SMC_T_KNN);
     return r;
 }
 
@@ -924,19 +951,25 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     s->rad.bounces = s->prm.bounces ? s->prm.bounces : (in->bounces ? in->bounces : 3);
     if (s->rad.bounces > GI_RADIOSITY_MAX_BOUNCES) s->rad.bounces = GI_RADIOSITY_MAX_BOUNCES;
     uint32_t iters = 1;
+    s->parts.count = 0;
+    s->t_mark = pf_time_now();
     if (!s->warmed) {
         r = gi__smc_initialize_vpls(s, in, err); /* line 1 */
+        gi__smc_part(s, GI__SMC_T_CAND);
         iters = s->prm.warmup;                   /* Sec. 3.2: 100 iterations before the first frame */
         s->warmed = 1;
     }
     for (uint32_t k = 0; k < iters && r == PF_OK; k++) r = gi__smc_iterate(s, in, err);
     s->in = NULL;
     if (r == PF_OK) r = gi__smc_output(s, out, err);
+    gi__smc_part(s, GI__SMC_T_CAND); /* line 20 (replacing into the output set) */
     s->updates++;
     return r;
 }
 
+static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc_state *)state)->parts; }
+
 const gi_vpl_method gi_method_smc = {
     "smc", "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)",
-    gi__smc_create, gi__smc_update, gi__smc_destroy,
+    gi__smc_create, gi__smc_update, gi__smc_destroy, gi__smc_parts,
 };

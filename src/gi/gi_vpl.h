@@ -22,6 +22,7 @@
 #include "pf_jobs.h"
 #include "pf_rt.h"
 #include "pf_scene.h"
+#include "pf_timer.h"
 #include "rs_gbuffer.h"
 #include "gi_area.h"
 
@@ -87,6 +88,10 @@ typedef struct gi_vpl_method {
     /* Fills `out` (cleared first) with the frame's VPL set. */
     pf_result (*update)(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err);
     void (*destroy)(void *state);
+    /* Optional (NULL: none): where the last update's time went, in the
+     * method's own parts (SMC: Hedman 2017 Table 2's columns), for `softgi
+     * bench frame`. The times never feed back into results. */
+    const pf_stage_times *(*parts)(const void *state);
 } gi_vpl_method;
 
 /* The methods softgi has, by name ("ir", "iir", ...). NULL if unknown. */

@@ -142,7 +142,7 @@ static pf_result gi__iir_create(void **state, const gi_params *params, pf_error 
     static const char *const known[] = {"recalcMin", "recalcMax", "albedoLod", NULL};
     pf_result r = gi_params_check(params, "iir", known, err);
     if (r != PF_OK) return r;
-    uint32_t rmin = 4, rmax = 8, lod = 4;
+    uint32_t rmin = 4, rmax = 8, lod = (uint32_t)GI_VPL_ALBEDO_LOD;
     if ((r = gi_param_u32(params, "recalcMin", 0, 65536, &rmin, err)) != PF_OK) return r;
     if ((r = gi_param_u32(params, "recalcMax", 1, 65536, &rmax, err)) != PF_OK) return r;
     if ((r = gi_param_u32(params, "albedoLod", 0, 16, &lod, err)) != PF_OK) return r;

@@ -106,7 +106,7 @@ int gi_lightpath_hit(const pf_rt *rt, pf_ray ray, pf_vec3 phi, gi_vpl *v, pf_vec
     pf_hit h = pf_rt_intersect1(rt, ray);
     if (h.prim == PF_RT_MISS) return 0;
     pf_surface sf;
-    pf_rt_surface(rt, &h, 0.0f, &sf);
+    pf_rt_surface(rt, &h, GI_VPL_ALBEDO_LOD, &sf); /* the VPL's albedo: gi_vpl.h's rule */
     pf_vec3 n = sf.ns, ng = sf.ng;
     if (pf_v3_dot(ng, ray.dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f); /* two-sided: face the photon */
     if (pf_v3_dot(n, ng) < 0.0f) n = pf_v3_scale(n, -1.0f);

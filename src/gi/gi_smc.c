@@ -535,7 +535,7 @@ static void gi__smc_trace_job(void *ctx, uint32_t chunk, uint32_t worker)
         C->x = from[i];
         if (hits[i].prim == PF_RT_MISS) continue;
         pf_surface sf;
-        pf_rt_surface(s->in->rt, &hits[i], 0.0f, &sf);
+        pf_rt_surface(s->in->rt, &hits[i], GI_VPL_ALBEDO_LOD, &sf); /* the VPL's albedo: gi_vpl.h's rule */
         int back = pf_v3_dot(sf.ng, rays[i].dir) > 0.0f;
         C->surf = sf.p;
         C->ng = back ? pf_v3_scale(sf.ng, -1.0f) : sf.ng;

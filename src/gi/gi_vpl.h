@@ -26,6 +26,18 @@
 #include "rs_gbuffer.h"
 #include "gi_area.h"
 
+/* The albedo a VPL takes from a textured surface (one rule for every
+ * method): the base-colour texture blurred to mip level 4 (1/16 of its
+ * resolution per side; the base-colour factor applies as everywhere).
+ * Laine 2007 Sec. 7 takes the albedo for VPLs from "a heavily blurred"
+ * texture, Hedman 2017 Sec. 5 "average material colours": a VPL stands for
+ * a patch of surface, not a point, and a full-resolution texel would make
+ * the VPL's colour flicker with the texel it happens to land on. Used by
+ * IR and MIR (gi_lightpath.c), SMC and IIR (the default of its --param
+ * albedoLod). Surfaces seen by the camera, the path tracer's vertices and
+ * the radiosity estimates keep mip 0. */
+#define GI_VPL_ALBEDO_LOD 4.0f
+
 typedef struct gi_vpl {
     pf_vec3 pos, nrm;
     pf_vec3 intensity; /* Phi * albedo / pi, RGB (W/sr at normal exitance) */

@@ -512,6 +512,29 @@ static void test_frame_threads_and_golden(void **state)
  * budget separates method error from reference noise. Pixels whose 3x3
  * neighbourhood sees more than one triangle are left out: the reference
  * averages over the pixel's area, the G-buffer samples its centre. */
+/* Whether pixel i (not on the image border) and its 3x3 neighbourhood see
+ * one surface: the same material in the same plane (the Cornell walls are
+ * quads of two triangles). The reference averages each pixel over its area
+ * and the frame samples its centre, so pixels that span surfaces are left
+ * out of comparisons. */
+static int interior_pixel(const fx *x, int W, size_t i)
+{
+    uint32_t p = x->f.gbuf.prim[i];
+    if (p == RS_GBUFFER_EMPTY) return 0;
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+            size_t j = i + (size_t)(dy * W + dx);
+            uint32_t q = x->f.gbuf.prim[j];
+            if (q == p) continue;
+            if (q == RS_GBUFFER_EMPTY || x->scene.tri_material[q] != x->scene.tri_material[p] ||
+                !(fabsf(x->f.gbuf.nrm_x[i] - x->f.gbuf.nrm_x[j]) < 1e-3f) ||
+                !(fabsf(x->f.gbuf.nrm_y[i] - x->f.gbuf.nrm_y[j]) < 1e-3f) ||
+                !(fabsf(x->f.gbuf.nrm_z[i] - x->f.gbuf.nrm_z[j]) < 1e-3f))
+                return 0;
+        }
+    return 1;
+}
+
 static void test_ir_converges_to_reference(void **state)
 {
     (void)state;
@@ -543,23 +566,7 @@ static void test_ir_converges_to_reference(void **state)
     for (int y = 1; y + 1 < H; y++)
         for (int xx = 1; xx + 1 < W; xx++) {
             size_t i = (size_t)y * W + (size_t)xx;
-            uint32_t p = x.f.gbuf.prim[i];
-            int edge = p == RS_GBUFFER_EMPTY;
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++) edge |= x.f.gbuf.prim[i + (size_t)(dy * W + dx)] != p;
-            /* the Cornell walls are quads of two triangles: same material, same plane */
-            if (edge) {
-                int same = p != RS_GBUFFER_EMPTY;
-                for (int dy = -1; dy <= 1 && same; dy++)
-                    for (int dx = -1; dx <= 1 && same; dx++) {
-                        uint32_t q = x.f.gbuf.prim[i + (size_t)(dy * W + dx)];
-                        same = q != RS_GBUFFER_EMPTY && x.scene.tri_material[q] == x.scene.tri_material[p] &&
-                               fabsf(x.f.gbuf.nrm_x[i] - x.f.gbuf.nrm_x[i + (size_t)(dy * W + dx)]) < 1e-3f &&
-                               fabsf(x.f.gbuf.nrm_y[i] - x.f.gbuf.nrm_y[i + (size_t)(dy * W + dx)]) < 1e-3f &&
-                               fabsf(x.f.gbuf.nrm_z[i] - x.f.gbuf.nrm_z[i + (size_t)(dy * W + dx)]) < 1e-3f;
-                    }
-                if (!same) continue;
-            }
+            if (!interior_pixel(&x, W, i)) continue;
             double a = 0.2126 * x.f.final[3 * i] + 0.7152 * x.f.final[3 * i + 1] + 0.0722 * x.f.final[3 * i + 2];
             double b = 0.2126 * ref[3 * i] + 0.7152 * ref[3 * i + 1] + 0.0722 * ref[3 * i + 2];
             if (!(b > 1e-5)) continue;
@@ -576,6 +583,59 @@ static void test_ir_converges_to_reference(void **state)
     fx_end(&x);
 }
 
+/* The clamped reference (Hedman 2017 Fig. 8's "clamped path tracing"):
+ * Instant Radiosity with a bounded geometry term b converges to the
+ * reference with the same bound on the x1 - x2 segment, not to the
+ * unclamped one. Cornell box, light 18 cm from every
+ * surface, 16384 VPLs seen through Embree rays, no interleaving, no filter;
+ * means over the pixels that see one surface (interior_pixel). */
+static void test_clamped_reference(void **state)
+{
+    (void)state;
+    enum { W = 32, H = 24 };
+    fx x;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&x.scene, CORNELL, NULL, &err), PF_OK);
+    x.scene.lights[0].position = pf_v3(0.278f, 0.35f, 0.15f);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.no_interleave = 1;
+    io.visibility_raytrace = 1;
+    io.vpls = 16384;
+    io.clamp = 20.0f; /* b = 20 / diagonal^2, a twentieth of the default: the bound reaches ~20 cm from the
+                         corners, so pixels that see one surface feel it (the default's ~1 cm band is
+                         mostly pixels that span a corner) */
+    io.filter = GI_FILTER_NONE;
+    fx_begin(&x, 2, W, H, &x.scene.cameras[0], &io);
+    x.f.show_direct = 0;
+    gi_frame_render_raster(&x.f);
+    static float ref[2][3 * W * H];
+    double mean[3] = {0, 0, 0};
+    for (int k = 0; k < 2; k++) {
+        gi_reference_options ro;
+        memset(&ro, 0, sizeof ro);
+        ro.spp = 2048;
+        ro.bounces = 3;
+        ro.indirect_only = 1;
+        ro.clamp_b = k ? x.f.ind.b : 0.0f;
+        assert_int_equal(gi_reference_render(ref[k], &x.scene, x.rt, x.jobs, &x.scene.cameras[0], W, H, &ro, &err),
+                         PF_OK);
+    }
+    for (int y = 1; y + 1 < H; y++)
+        for (int xx = 1; xx + 1 < W; xx++) {
+            size_t i = (size_t)y * W + (size_t)xx;
+            if (!interior_pixel(&x, W, i)) continue;
+            for (int c = 0; c < 3; c++)
+                mean[0] += x.f.final[3 * i + c], mean[1] += ref[0][3 * i + c], mean[2] += ref[1][3 * i + c];
+        }
+    print_message("clamped IR / clamped reference %.4f, / unclamped reference %.4f (clamped / unclamped "
+                  "reference %.4f)\n",
+                  mean[0] / mean[2], mean[0] / mean[1], mean[2] / mean[1]);
+    assert_true(fabs(mean[0] / mean[2] - 1.0) < 0.01);
+    assert_true(mean[2] / mean[1] < 0.99); /* the bound takes light away: not vacuous */
+    fx_end(&x);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -583,7 +643,8 @@ int main(void)
         cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
         cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
-        cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_bad_vpls_are_inert),
+        cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_clamped_reference),
+        cmocka_unit_test(test_bad_vpls_are_inert),
         cmocka_unit_test(test_vpl_at_pixel_position),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

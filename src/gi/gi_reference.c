@@ -71,6 +71,7 @@ typedef struct gi__ref_ctx {
     uint32_t width, height, spp, bounces;
     int indirect_only;
     int no_area_nee;            /* emitters only through BSDF-sampled hits */
+    float clamp_b;              /* > 0: the bounded geometry term of x1 - x2 */
     const gi_area_lights *area; /* the scene's emissive triangles */
     gi_reference_progress_fn progress;
     void *progress_user;
@@ -151,6 +152,22 @@ static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t
     }
 }
 
+/* clamp_b: P is at x1 (its p and turned ns), sf is x2. Scales the
+ * throughput carried on from x2 by min(1, b / G), the frame's bounded
+ * geometry term between the receiver x1 and a VPL at x2 (gi_indirect.c:
+ * cos1 = n1 . w, cos2 = -n2 . w, both normals shading normals facing each
+ * other's side, as the frame turns them). */
+static void gi__clamp_segment(const gi__ref_ctx *c, gi__path *P, const pf_surface *sf, int back)
+{
+    pf_vec3 d = pf_v3_sub(sf->p, P->p);
+    float r2 = pf_v3_dot(d, d);
+    if (!(r2 > 0.0f)) return;
+    pf_vec3 w = pf_v3_scale(d, 1.0f / sqrtf(r2));
+    pf_vec3 n2 = back ? pf_v3_scale(sf->ns, -1.0f) : sf->ns;
+    float G = fabsf(pf_v3_dot(P->ns, w)) * fabsf(pf_v3_dot(n2, w)) / r2;
+    if (G > c->clamp_b) P->T = pf_v3_scale(P->T, c->clamp_b / G);
+}
+
 /* One sample index for n <= 8 neighbouring pixels of row y: traces their paths
  * together and adds each path's radiance to acc. */
 static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint32_t n, uint32_t sample,
@@ -200,6 +217,7 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
             /* Two-sided shading, as the renderer: turn the normals to face the
              * incoming ray (decided by the geometric normal). */
             int back = pf_v3_dot(sf.ng, rays[j].dir) > 0.0f;
+            if (k == 2 && c->clamp_b > 0.0f) gi__clamp_segment(c, P, &sf, back);
             P->p = sf.p;
             P->ng = sf.ng;
             P->ng_front = back ? pf_v3_scale(sf.ng, -1.0f) : sf.ng;
@@ -297,6 +315,7 @@ static pf_result gi__reference_setup(gi__ref_ctx *c, gi_area_lights *area, float
     c->bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
     c->indirect_only = o.indirect_only;
     c->no_area_nee = o.no_area_nee;
+    c->clamp_b = o.clamp_b > 0.0f && isfinite(o.clamp_b) ? o.clamp_b : 0.0f;
     pf_result r = gi_area_lights_build(area, scene, err);
     if (r != PF_OK) return r;
     c->area = area;

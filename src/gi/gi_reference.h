@@ -56,7 +56,7 @@
  * No Russian roulette: paths stop after B bounces, when they leave the scene
  * or when the throughput is zero (a black surface). The estimate of the
  * truncated sum is unbiased and the work per path bounded by B + 1.
- * Nothing is clamped either, so a punctual light close to a surface (the
+ * Nothing is clamped either (unless clamp_b: below), so a punctual light close to a surface (the
  * Cornell box's, 1 cm under the ceiling: E ~ I / r^2 = 10^4 I there) gives
  * fireflies at low spp when a bounce lands near it; they average out, slowly.
  *
@@ -107,6 +107,14 @@ typedef struct gi_reference_options {
     int direct_only;   /* B = 0: emission seen directly + direct light */
     int indirect_only; /* drop Le(x1) and the direct light at x1 */
     int no_area_nee;   /* emitters only by BSDF sampling (same expectation; for tests) */
+    /* Clamped path tracing (Hedman 2017 Fig. 8, "path tracing with simulated
+     * clamping"): > 0 bounds the geometry term of the segment x1 - x2 by
+     * clamp_b (1/m^2, the frame's b = --clamp / diagonal^2): the path's
+     * throughput from x2 on is scaled by min(1, clamp_b / G), G = cos1 cos2 /
+     * r^2 with the shading normals turned as the frame turns them, so the
+     * estimate is the one a VPL renderer with every VPL at x2 and its bounded
+     * geometry term converges to. 0: off. */
+    float clamp_b;
     gi_reference_progress_fn progress; /* may be NULL */
     void *progress_user;
 } gi_reference_options;

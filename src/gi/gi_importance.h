@@ -22,7 +22,9 @@
  * Sampling domain (Barak 2013 Fig. 2/3): the VPL description vector v =
  * (l, row, column) from three uniform numbers: l = floor(xi1 L) picks one
  * of the L maps, row = floor(xi2 rows_l), column = floor(xi3 cols_l) (a cube
- * map's 6 faces stacked as 6 size rows). That proposal has probability
+ * map's 6 faces stacked as 6 size rows, the area lights' map's K faces as
+ * K size rows: gi_rsm_area.h, one more "light" of the domain). That
+ * proposal has probability
  *   q(v) = 1 / (L rows_l cols_l)
  * per texel, uniform when all maps have as many texels, as in the paper.
  *

@@ -18,9 +18,13 @@
  *                       P=     camera points, default GI_IMPORTANCE_DEFAULT_P;
  *                       dims=  3 (default, the paper's r3: xi1 light, xi2
  *                              row, xi3 column) or 2 (r2: xi1 light and,
- *                              renormalised, row; xi2 column).
+ *                              renormalised, row; xi2 column);
+ *                       area_points= K, emitter points (faces) of the area
+ *                              lights' RSM, default GI_RSM_DEFAULT_AREA_POINTS.
  * VPL i keeps slot i and id i; moved = position or normal changed.
- * Only punctual lights have RSMs: area lights (gi_area.h) are ignored.
+ * Area lights (gi_area.h) have one RSM of K hemispherical faces after the
+ * punctual lights' (gi_rsm_area.h, beyond the paper): it is one more
+ * "light" of the sampling domain.
  *
  * Determinism: the CDF rows are summed in parallel, each row by one item in
  * texel order; the row and map prefix sums are serial; sampling is serial
@@ -180,11 +184,12 @@ static void gi__invtm_destroy(void *state)
 
 static pf_result gi__invtm_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"rsm", "P", "dims", NULL};
+    static const char *const known[] = {"rsm", "P", "dims", "area_points", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "invtm", known, err);
-    uint32_t size = GI_RSM_DEFAULT_SIZE, P = GI_IMPORTANCE_DEFAULT_P, dims = 3;
+    uint32_t size = GI_RSM_DEFAULT_SIZE, P = GI_IMPORTANCE_DEFAULT_P, dims = 3, K = GI_RSM_DEFAULT_AREA_POINTS;
     if (r == PF_OK) r = gi_param_u32(params, "rsm", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &size, err);
+    if (r == PF_OK) r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &K, err);
     if (r == PF_OK) r = gi_param_u32(params, "P", 1, 1u << 20, &P, err);
     if (r == PF_OK) r = gi_param_u32(params, "dims", 2, 3, &dims, err);
     if (r != PF_OK) return r;
@@ -192,6 +197,7 @@ static pf_result gi__invtm_create(void **state, const gi_params *params, pf_erro
     if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     s->dims = dims;
     gi_rsm_set_init(&s->rsm, size);
+    s->rsm.area_points = K;
     gi_importance_init(&s->imp, P);
     *state = s;
     return PF_OK;
@@ -217,7 +223,7 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
         return pf_error_set(err, PF_ERR_ARGUMENT, "--method invtm needs the frame's G-buffer (camera points)");
     if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method invtm needs a job system");
     pf_result r = gi_vpl_set_reserve(out, in->budget ? in->budget : 1, err);
-    if (r == PF_OK) r = gi_rsm_set_update(&s->rsm, in->scene, in->jobs, err);
+    if (r == PF_OK) r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
     float diag = pf_v3_length(pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min));
     if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->jobs, err);
     if (r == PF_OK) r = gi_invtm_build(&s->cdf, &s->imp.domain, s->imp.f, in->jobs, err);

@@ -10,7 +10,10 @@
  *                         the triangle's plane (barycentrics, clamped to the
  *                         triangle as rs_gbuffer_resolve does), the surface
  *                         (pf_scene_surface, texture LOD from the neighbour
- *                         texels' footprint) and the reflected flux. */
+ *                         texels' footprint) and the reflected flux.
+ * Once per scene (emitters do not move): the area lights' map (gi_rsm_area.h;
+ * laid out by gi_rsm_area_layout, traced and resolved by
+ * gi_rsm_area_render). */
 #include "gi_rsm.h"
 
 #include <math.h>
@@ -18,6 +21,7 @@
 #include <string.h>
 
 #include "gi_light.h"
+#include "gi_rsm_area.h"
 #include "pf_isa.h"
 #include "rs_shadow.h"
 
@@ -47,11 +51,17 @@ static void gi__rsm_free_planes(gi_rsm_set *s)
     free(s->prim);
     s->valid = NULL;
     s->prim = NULL;
-    for (uint32_t m = 0; m < s->count; m++) free(s->maps[m].solid_angle);
+    for (uint32_t m = 0; m < s->count; m++) {
+        free(s->maps[m].solid_angle);
+        free(s->maps[m].faces);
+    }
     free(s->maps);
     s->maps = NULL;
     s->count = 0;
+    s->punctual = 0;
     s->texel_count = 0;
+    s->area_ = NULL;
+    s->area_rendered_ = 0;
 }
 
 void gi_rsm_set_free(gi_rsm_set *set)
@@ -161,6 +171,7 @@ static void gi__rsm_layout(gi_rsm_map *m, const pf_scene *s, const pf_light *L)
 
 pf_vec3 gi_rsm_light_power(const gi_rsm_map *m, const pf_light *L)
 {
+    if (m->kind == GI_RSM_AREA) return m->power;
     pf_vec3 c = pf_v3_scale(L->color, L->intensity);
     if (m->kind == GI_RSM_ORTHO) return pf_v3_scale(c, 4.0f * m->half_w * m->half_h);
     if (L->type == PF_LIGHT_POINT) return pf_v3_scale(c, 4.0f * PF_PI);
@@ -176,15 +187,17 @@ pf_vec3 gi_rsm_light_power(const gi_rsm_map *m, const pf_light *L)
     return pf_v3_scale(c, (float)(2.0 * PF_PI * integral));
 }
 
-/* Allocates the planes for the scene's lights (called when the layout
- * changes: the light count or a light's kind). */
-static pf_result gi__rsm_allocate(gi_rsm_set *s, const pf_scene *scene, pf_error *err)
+/* Allocates the planes for the scene's lights and, when `area` has
+ * emitters, the area lights' map after them (called when the layout
+ * changes: the light count, a light's kind or the emitters). */
+static pf_result gi__rsm_allocate(gi_rsm_set *s, const pf_scene *scene, const gi_area_lights *area, pf_error *err)
 {
     gi__rsm_free_planes(s);
-    uint32_t n = scene->light_count;
-    s->maps = calloc(n ? n : 1, sizeof *s->maps);
+    uint32_t n = scene->light_count, with_area = area && area->count > 0;
+    s->maps = calloc((n + with_area) ? (n + with_area) : 1, sizeof *s->maps);
     if (!s->maps) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for RSMs");
-    s->count = n;
+    s->count = n + with_area;
+    s->punctual = n;
     uint64_t total = 0;
     for (uint32_t l = 0; l < n; l++) {
         gi_rsm_map *m = &s->maps[l];
@@ -194,6 +207,14 @@ static pf_result gi__rsm_allocate(gi_rsm_set *s, const pf_scene *scene, pf_error
         m->first = (uint32_t)total;
         m->texel_count = m->face_count * s->size * s->size;
         total += m->texel_count;
+    }
+    if (with_area) {
+        gi_rsm_map *m = &s->maps[n];
+        pf_result r = gi_rsm_area_layout(m, area, s->area_points, s->size, err);
+        if (r != PF_OK) return r;
+        m->first = (uint32_t)total;
+        total += m->texel_count;
+        s->area_ = area;
     }
     if (total > 0x7fffffffu) return pf_error_set(err, PF_ERR_ARGUMENT, "RSMs of %llu texels are too large",
                                                  (unsigned long long)total);
@@ -356,12 +377,16 @@ static int gi__light_same(const pf_light *a, const pf_light *b)
            a->inner_cone == b->inner_cone && a->outer_cone == b->outer_cone;
 }
 
-pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs, pf_error *err)
+/* Fails on an RSM size or area point count out of range, a non-finite
+ * light, or a spot/directional light without a direction. */
+static pf_result gi__rsm_check(const gi_rsm_set *s, const pf_scene *scene, pf_error *err)
 {
-    s->changed = 0;
     if (s->size < GI_RSM_MIN_SIZE || s->size > GI_RSM_MAX_SIZE)
         return pf_error_set(err, PF_ERR_ARGUMENT, "RSM size %u is outside [%u, %u]", s->size, GI_RSM_MIN_SIZE,
                             GI_RSM_MAX_SIZE);
+    if (s->area_points < 1 || s->area_points > GI_RSM_MAX_AREA_POINTS)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "RSM area points %u are outside [1, %u]", s->area_points,
+                            GI_RSM_MAX_AREA_POINTS);
     for (uint32_t l = 0; l < scene->light_count; l++) {
         const pf_light *L = &scene->lights[l];
         if (!pf_v3_is_finite(L->position) || !pf_v3_is_finite(L->direction) || !isfinite(L->intensity) ||
@@ -370,7 +395,47 @@ pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs,
         if (L->type != PF_LIGHT_POINT && pf_v3_length(L->direction) == 0.0f)
             return pf_error_set(err, PF_ERR_ARGUMENT, "light %u (%s) has no direction", l, L->name);
     }
+    return PF_OK;
+}
+
+/* 1 when the set's area map is the one `area` asks for (none, or laid out
+ * for these emitters with the set's point count). */
+static int gi__rsm_area_same(const gi_rsm_set *s, const gi_area_lights *area)
+{
+    int want = area && area->count > 0, have = s->maps && s->count > s->punctual;
+    if (!want || !have) return want == have;
+    return s->area_ == area && s->maps[s->punctual].face_count == s->area_points;
+}
+
+/* Renders the punctual lights' maps for scene->lights (their layout is
+ * current). */
+static pf_result gi__rsm_render_punctual(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs, pf_error *err)
+{
     pf_result r;
+    for (uint32_t m = 0; m < s->punctual; m++) {
+        gi_rsm_map *mp = &s->maps[m];
+        float old_tan = mp->tan_half;
+        gi__rsm_layout(mp, scene, &scene->lights[m]);
+        if (mp->kind != GI_RSM_ORTHO && (!mp->solid_angle || old_tan != mp->tan_half) &&
+            (r = gi__rsm_solid_angles(mp, err)) != PF_OK)
+            return r;
+    }
+    for (uint32_t m = 0; m < s->punctual; m++) {
+        gi__rsm_rasterize(s, &s->maps[m]);
+        gi__rsm_resolve(s, scene, jobs, m);
+    }
+    return PF_OK;
+}
+
+pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, const gi_area_lights *area, const pf_rt *rt,
+                            pf_jobs *jobs, pf_error *err)
+{
+    s->changed = 0;
+    if (!s->area_points) s->area_points = GI_RSM_DEFAULT_AREA_POINTS;
+    pf_result r = gi__rsm_check(s, scene, err);
+    if (r != PF_OK) return r;
+    int with_area = area && area->count > 0;
+    if (with_area && !rt) return pf_error_set(err, PF_ERR_ARGUMENT, "the area lights' RSM needs the ray tracer");
     if (!s->raster_ || s->raster_scene_ != scene || s->raster_jobs_ != jobs) {
         if (s->raster_) rs_context_destroy(s->raster_);
         s->raster_ = NULL;
@@ -382,13 +447,15 @@ pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs,
         s->lights_ = NULL;
         gi__rsm_free_planes(s);
     }
-    int same = s->lights_ && s->count == scene->light_count;
+    int same = s->lights_ && s->punctual == scene->light_count;
     for (uint32_t l = 0; same && l < scene->light_count; l++) same = gi__light_same(&s->lights_[l], &scene->lights[l]);
-    if (same) return PF_OK;
+    int area_same = gi__rsm_area_same(s, area);
+    if (same && area_same && (!with_area || s->area_rendered_)) return PF_OK;
     /* The planes are reallocated only when the layout changes (light
-     * count or a map's kind); otherwise a moved light re-lays out its
-     * matrices in place, so moving lights do not allocate per frame. */
-    int relayout = !s->maps || !s->lights_ || s->count != scene->light_count;
+     * count, a map's kind or the emitters); otherwise a moved light
+     * re-lays out its matrices in place, so moving lights do not allocate
+     * per frame. */
+    int relayout = !s->maps || !s->lights_ || s->punctual != scene->light_count || !area_same;
     for (uint32_t l = 0; !relayout && l < scene->light_count; l++) {
         gi_rsm_map probe;
         memset(&probe, 0, sizeof probe);
@@ -396,29 +463,25 @@ pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, pf_jobs *jobs,
         relayout = probe.kind != s->maps[l].kind;
     }
     if (relayout) {
-        r = gi__rsm_allocate(s, scene, err);
+        r = gi__rsm_allocate(s, scene, with_area ? area : NULL, err);
         if (r != PF_OK) return r;
         free(s->lights_);
         s->lights_ = malloc((scene->light_count ? scene->light_count : 1) * sizeof(pf_light));
         if (!s->lights_) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for RSMs");
+        same = 0;
     }
-    /* until the maps are complete, remember no light (a failure below must
-     * not leave maps that look current) */
-    memset(s->lights_, 0xff, (scene->light_count ? scene->light_count : 1) * sizeof(pf_light));
-    for (uint32_t m = 0; m < s->count; m++) {
-        gi_rsm_map *mp = &s->maps[m];
-        float old_tan = mp->tan_half;
-        gi__rsm_layout(mp, scene, &scene->lights[m]);
-        if (mp->kind != GI_RSM_ORTHO && (!mp->solid_angle || old_tan != mp->tan_half) &&
-            (r = gi__rsm_solid_angles(mp, err)) != PF_OK)
-            return r;
+    if (!same) {
+        /* until the maps are complete, remember no light (a failure below
+         * must not leave maps that look current) */
+        memset(s->lights_, 0xff, (scene->light_count ? scene->light_count : 1) * sizeof(pf_light));
+        if ((r = gi__rsm_render_punctual(s, scene, jobs, err)) != PF_OK) return r;
+        if (scene->light_count) /* lights may be NULL when there are none: memcpy's source must not be */
+            memcpy(s->lights_, scene->lights, scene->light_count * sizeof(pf_light));
     }
-    for (uint32_t m = 0; m < s->count; m++) {
-        gi__rsm_rasterize(s, &s->maps[m]);
-        gi__rsm_resolve(s, scene, jobs, m);
+    if (with_area && !s->area_rendered_) { /* emitters do not move: traced once */
+        gi_rsm_area_render(s, s->punctual, rt, jobs);
+        s->area_rendered_ = 1;
     }
-    if (scene->light_count) /* lights may be NULL when there are none: memcpy's source must not be */
-        memcpy(s->lights_, scene->lights, scene->light_count * sizeof(pf_light));
     s->changed = 1;
     s->updates++;
     return PF_OK;

@@ -67,9 +67,16 @@
  *   contribution would be halved, i.e. the two bounces averaged instead of
  *   added.
  * - Only the RSM of the first punctual light in the scene is sampled ("the
- *   main light source"); further lights and emissive triangles get no
- *   VPLs. Point lights (the paper's main light is a spot or the sun) get
- *   gi_rsm's cube map, its six faces sampled as one tall image.
+ *   main light source"); further punctual lights get no VPLs. Point lights
+ *   (the paper's main light is a spot or the sun) get gi_rsm's cube map,
+ *   its six faces sampled as one tall image.
+ * - Beyond the paper: emissive triangles (gi_area.h) get the area lights'
+ *   RSM (gi_rsm_area.h: K hemispherical faces from power-weighted emitter
+ *   points, every texel the same projected solid angle). It is the main
+ *   light of a scene without punctual lights; in a scene with both it is
+ *   stacked below the main light's map and sampled as part of one image
+ *   (--param area_points=K, default GI_RSM_DEFAULT_AREA_POINTS). A scene
+ *   without emitters gives the VPLs it gave before.
  * - The cluster maps hold each texel's hit (a visibility buffer); the
  *   surface (position, normal, albedo) and the flux of a texel
  *   (J(w_t) dOmega_t above) are evaluated when a sample reads it: the flux
@@ -116,7 +123,7 @@ typedef struct gi__ssvp_map {
 
 typedef struct gi__ssvp_state {
     /* options */
-    uint32_t clusters, first, second, map_res, rsm_res, iters, lazy_maps;
+    uint32_t clusters, first, second, map_res, rsm_res, iters, lazy_maps, area_points;
     int first_set, second_set;
     /* k-means state kept between frames */
     pf_vec3 cpos[GI__SSVP_MAX_CLUSTERS], cnrm[GI__SSVP_MAX_CLUSTERS];
@@ -161,7 +168,8 @@ static int gi__has(const gi_params *p, const char *key)
 
 static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"clusters", "first", "second", "map_res", "rsm_res", "iters", "lazy_maps", NULL};
+    static const char *const known[] = {"clusters", "first",     "second",      "map_res", "rsm_res",
+                                        "iters",    "lazy_maps", "area_points", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "ssvp", known, err);
     if (r != PF_OK) return r;
@@ -173,13 +181,15 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->map_res = 256;      /* Sec. III-C: "a resolution of 256^2 pixels is sufficient" */
     s->rsm_res = 256;      /* not given by the paper */
     s->iters = GI_KMEANS_MAX_ITER;
+    s->area_points = GI_RSM_DEFAULT_AREA_POINTS;
     if ((r = gi_param_u32(params, "clusters", 1, GI__SSVP_MAX_CLUSTERS, &s->clusters, err)) != PF_OK ||
         (r = gi_param_u32(params, "first", 1, GI__SSVP_MAX_SAMPLES, &s->first, err)) != PF_OK ||
         (r = gi_param_u32(params, "second", 0, GI__SSVP_MAX_SAMPLES, &s->second, err)) != PF_OK ||
         (r = gi_param_u32(params, "map_res", 8, 2048, &s->map_res, err)) != PF_OK ||
         (r = gi_param_u32(params, "rsm_res", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &s->rsm_res, err)) != PF_OK ||
         (r = gi_param_u32(params, "iters", 1, 100, &s->iters, err)) != PF_OK ||
-        (r = gi_param_u32(params, "lazy_maps", 0, 1, &s->lazy_maps, err)) != PF_OK) {
+        (r = gi_param_u32(params, "lazy_maps", 0, 1, &s->lazy_maps, err)) != PF_OK ||
+        (r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &s->area_points, err)) != PF_OK) {
         gi__ssvp_destroy(s);
         return r;
     }
@@ -190,6 +200,7 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->assign = calloc(s->first, sizeof(uint32_t));
     s->kscratch = calloc(s->first, sizeof(float));
     gi_rsm_set_init(&s->rsm, s->rsm_res);
+    s->rsm.area_points = s->area_points;
     if (!s->fpos || !s->fnrm || !s->assign || !s->kscratch) {
         gi__ssvp_destroy(s);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
@@ -236,17 +247,24 @@ static void gi__site(const pf_rt *rt, const pf_hit *h, pf_vec3 dir, pf_vec3 *pos
 
 /* Returns the number of first-bounce VPLs appended to out (their sites are
  * also kept in s->fpos/fnrm for clustering). The light's RSM (gi_rsm.h) is
- * re-rendered by gi_rsm_set_update only when a light changed. Texel t of
- * the map, picked with probability 1 / T (T texels: the Hammersley point
- * (u, v) addresses column floor(u size), row floor(v rows), a cube map's six
- * faces stacked as rows), gives a VPL of intensity flux_t T / (pi n)
- * (flux_t is the flux the texel's surface reflects, albedo included). */
+ * re-rendered by gi_rsm_set_update only when a light changed. The sampled
+ * image: the main light's map (maps[0]: the first punctual light, or the
+ * area lights' map when the scene has no punctual light) with, in a scene
+ * that has both, the area lights' map stacked below it (gi_rsm_area.h).
+ * Texel t of that image, picked with probability 1 / T (T texels: the
+ * Hammersley point (u, v) addresses column floor(u size), row floor(v rows),
+ * the faces of a cube or area map stacked as rows), gives a VPL of intensity
+ * flux_t T / (pi n) (flux_t is the flux the texel's surface reflects,
+ * albedo included). */
 static uint32_t gi_ssvp_first_bounce(gi__ssvp_state *s, uint32_t n, gi_vpl_set *out)
 {
     const gi_rsm_set *R = &s->rsm;
     const gi_rsm_map *mp = &R->maps[0]; /* "the main light source" */
-    const uint32_t cols = mp->size, rows = mp->size * mp->face_count;
-    const float scale = (float)mp->texel_count / (float)n * PF_INV_PI;
+    const gi_rsm_map *am = R->punctual > 0 && R->count > R->punctual ? &R->maps[R->punctual] : NULL;
+    const uint32_t cols = mp->size, rows0 = mp->size * mp->face_count;
+    const uint32_t rows = rows0 + (am ? am->size * am->face_count : 0);
+    const uint32_t T = mp->texel_count + (am ? am->texel_count : 0);
+    const float scale = (float)T / (float)n * PF_INV_PI;
     uint32_t c = 0;
     for (uint32_t k = 0; k < n; k++) {
         float u, v;
@@ -254,7 +272,7 @@ static uint32_t gi_ssvp_first_bounce(gi__ssvp_state *s, uint32_t n, gi_vpl_set *
         uint32_t x = (uint32_t)(u * (float)cols), y = (uint32_t)(v * (float)rows);
         if (x >= cols) x = cols - 1;
         if (y >= rows) y = rows - 1;
-        uint32_t t = mp->first + y * cols + x;
+        uint32_t t = y < rows0 ? mp->first + y * cols + x : am->first + (y - rows0) * cols + x;
         if (!R->valid[t]) continue; /* nothing seen, or outside a spot's cone */
         pf_vec3 p = pf_v3(R->pos_x[t], R->pos_y[t], R->pos_z[t]);
         pf_vec3 ng = pf_v3(R->ng_x[t], R->ng_y[t], R->ng_z[t]);
@@ -441,7 +459,7 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     if (r != PF_OK) return r;
     s->maps_rendered = 0;
     if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method ssvp: needs the job system (inputs.jobs)");
-    if ((r = gi_rsm_set_update(&s->rsm, in->scene, in->jobs, err)) != PF_OK) return r;
+    if ((r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err)) != PF_OK) return r;
     if (s->rsm.count > 0 && n1) {
         uint32_t nf = gi_ssvp_first_bounce(s, n1, out);
         gi_ssvp_cluster(s, in->scene, nf);

@@ -43,10 +43,14 @@
  * Parameters (--param): M=   chain length, default 16 (Hedman 2017 Sec. 5.1
  *                            ran TCAS with 16);
  *                       rsm= RSM texels per side (per cube face);
- *                       P=   camera points.
+ *                       P=   camera points;
+ *                       area_points= K, emitter points (faces) of the area
+ *                            lights' RSM, default GI_RSM_DEFAULT_AREA_POINTS.
  * A chain whose M samples all have f = 0 yields a VPL of zero intensity
  * (it keeps its slot, at last frame's position when it had one).
- * Only punctual lights have RSMs: area lights (gi_area.h) are ignored.
+ * Area lights (gi_area.h) have one RSM of K hemispherical faces after the
+ * punctual lights' (gi_rsm_area.h, beyond the paper): it is one more
+ * "light" of the sampling domain.
  * VPL j keeps slot j and id j; moved = position or normal changed.
  * Determinism: chains are independent and each writes only its own slot. */
 #include <math.h>
@@ -141,18 +145,21 @@ static void gi__tcas_destroy(void *state)
 
 static pf_result gi__tcas_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"M", "rsm", "P", NULL};
+    static const char *const known[] = {"M", "rsm", "P", "area_points", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "tcas", known, err);
     uint32_t M = GI_TCAS_DEFAULT_M, size = GI_RSM_DEFAULT_SIZE, P = GI_IMPORTANCE_DEFAULT_P;
+    uint32_t K = GI_RSM_DEFAULT_AREA_POINTS;
     if (r == PF_OK) r = gi_param_u32(params, "M", 1, 4096, &M, err);
     if (r == PF_OK) r = gi_param_u32(params, "rsm", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &size, err);
     if (r == PF_OK) r = gi_param_u32(params, "P", 1, 1u << 20, &P, err);
+    if (r == PF_OK) r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &K, err);
     if (r != PF_OK) return r;
     gi__tcas_state *s = calloc(1, sizeof *s);
     if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     s->M = M;
     gi_rsm_set_init(&s->rsm, size);
+    s->rsm.area_points = K;
     gi_importance_init(&s->imp, P);
     *state = s;
     return PF_OK;
@@ -218,7 +225,7 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
         s->cap = s->texel && s->w && s->fv ? N : 0;
         if (!s->cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u chains", N);
     }
-    r = gi_rsm_set_update(&s->rsm, in->scene, in->jobs, err);
+    r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
     float diag = pf_v3_length(pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min));
     if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->jobs, err);
     if (r != PF_OK) return r;

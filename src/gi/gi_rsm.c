@@ -22,6 +22,7 @@
 
 #include "gi_light.h"
 #include "gi_rsm_area.h"
+#include "gi_vpl.h"
 #include "pf_isa.h"
 #include "rs_shadow.h"
 
@@ -345,7 +346,8 @@ static void gi__rsm_resolve_row(void *p, uint32_t row, uint32_t worker)
             v /= sum;
         }
         pf_surface sf;
-        pf_scene_surface(sc, prim, u, v, lod, &sf);
+        /* a texel is a VPL site: at least gi_vpl.h's blurred level */
+        pf_scene_surface(sc, prim, u, v, lod > GI_VPL_ALBEDO_LOD ? lod : GI_VPL_ALBEDO_LOD, &sf);
         /* two-sided: both normals face the light */
         pf_vec3 ng = sf.ng, ns = sf.ns;
         if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);

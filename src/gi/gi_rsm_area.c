@@ -93,7 +93,7 @@ static void gi__area_texel(gi_rsm_set *s, size_t i, const pf_rt *rt, const pf_hi
     s->prim[i] = RS_NO_PRIM;
     if (h->prim == PF_RT_MISS) return; /* the flux leaves the scene */
     pf_surface sf;
-    pf_rt_surface(rt, h, 0.0f, &sf);
+    pf_rt_surface(rt, h, GI_VPL_ALBEDO_LOD, &sf); /* a texel is a VPL site: gi_vpl.h's albedo rule */
     /* two-sided: both normals face the emitter point */
     pf_vec3 ng = sf.ng, ns = sf.ns;
     if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);

@@ -236,7 +236,7 @@ static void gi__hammersley(uint32_t k, uint32_t n, float *u, float *v)
 static void gi__site(const pf_rt *rt, const pf_hit *h, pf_vec3 dir, pf_vec3 *pos, pf_vec3 *nrm, pf_vec3 *alb)
 {
     pf_surface sf;
-    pf_rt_surface(rt, h, 0.0f, &sf);
+    pf_rt_surface(rt, h, GI_VPL_ALBEDO_LOD, &sf); /* gi_vpl.h's albedo rule */
     pf_vec3 n = sf.ns, ng = sf.ng;
     if (pf_v3_dot(ng, dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
     if (pf_v3_dot(n, ng) < 0.0f) n = pf_v3_scale(n, -1.0f);

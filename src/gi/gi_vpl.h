@@ -33,9 +33,11 @@
  * texture, Hedman 2017 Sec. 5 "average material colours": a VPL stands for
  * a patch of surface, not a point, and a full-resolution texel would make
  * the VPL's colour flicker with the texel it happens to land on. Used by
- * IR and MIR (gi_lightpath.c), SMC and IIR (the default of its --param
- * albedoLod). Surfaces seen by the camera, the path tracer's vertices and
- * the radiosity estimates keep mip 0. */
+ * IR and MIR (gi_lightpath.c), SMC, IIR (the default of its --param
+ * albedoLod), SSVP's second-bounce sites and the reflective shadow maps
+ * (gi_rsm.c: the larger of this level and the texel's footprint level;
+ * gi_rsm_area.c). Surfaces seen by the camera, the path tracer's vertices
+ * and the radiosity estimates keep mip 0. */
 #define GI_VPL_ALBEDO_LOD 4.0f
 
 typedef struct gi_vpl {

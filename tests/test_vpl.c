@@ -19,6 +19,7 @@
 #include <math.h>
 
 #include "gi_frame.h"
+#include "gi_lightpath.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
@@ -636,6 +637,39 @@ static void test_clamped_reference(void **state)
     fx_end(&x);
 }
 
+/* One albedo rule for VPLs (gi_vpl.h, GI_VPL_ALBEDO_LOD): a light path's
+ * VPL on a mipmapped 2x2 checker takes the blurred texture (mip 4 clamps to
+ * the 1x1 top level, the checker's average), not the texel under it. */
+static void test_vpl_albedo_rule(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, SOFTGI_TEST_DATA "/gltf/texture_datauri.gltf", NULL, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt = NULL;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    /* the plane z = 3 holds material 3, "linear_mips" (tools/make_test_gltf.py) */
+    pf_ray ray = {pf_v3(0.2f, 0.3f, 3.5f), 0.0f, pf_v3(0, 0, -1), INFINITY};
+    pf_hit h = pf_rt_intersect1(rt, ray);
+    assert_true(h.prim != PF_RT_MISS);
+    pf_surface sf;
+    pf_rt_surface(rt, &h, 0.0f, &sf);
+    assert_int_equal(s.materials[sf.material].base_color_texture >= 0, 1);
+    float texel[4], mean[4];
+    pf_material_sample(&s, sf.material, sf.uv, 0.0f, texel);
+    pf_material_sample(&s, sf.material, sf.uv, 16.0f, mean);
+    assert_true(fabsf(texel[0] - mean[0]) > 0.1f); /* not vacuous: the texel is not the average */
+    gi_vpl v;
+    pf_vec3 albedo;
+    assert_true(gi_lightpath_hit(rt, ray, pf_v3(1, 1, 1), &v, &albedo));
+    assert_float_equal(albedo.x, mean[0], 1e-6f);
+    assert_float_equal(albedo.y, mean[1], 1e-6f);
+    assert_float_equal(albedo.z, mean[2], 1e-6f);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -644,6 +678,7 @@ int main(void)
         cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_ir_static),
         cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
         cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_clamped_reference),
+        cmocka_unit_test(test_vpl_albedo_rule),
         cmocka_unit_test(test_bad_vpls_are_inert),
         cmocka_unit_test(test_vpl_at_pixel_position),
     };

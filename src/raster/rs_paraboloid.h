@@ -74,7 +74,12 @@
  * packets): Sibenik 1.14 ms (AVX-512) / 1.26 ms (AVX2) / 2.8 ms (scalar)
  * vs Embree 2.3 ms (AVX-512) / 2.45 ms (AVX2); conference room 0.81 / 0.92 /
  * 2.4 ms vs 2.0 / 2.3 ms. The SIMD paths are 2-2.5x faster than Embree at
- * the same ISA; the scalar reference is 1.2x slower than Embree.
+ * the same ISA; the scalar reference is 1.2x slower than Embree. That
+ * Embree side goes through pf_rt (8-wide packets and softgi's exact
+ * double-precision hits); against Embree used directly (16-wide coherent
+ * packets, `softgi bench raster`, docs/perf.md) these maps are 2.4-2.9x
+ * SLOWER (provisional, loaded machine): the real-time issue's target (2x
+ * faster) is open.
  *
  * Geometry: all triangles are two-sided occluders, alpha masks are ignored
  * (shadow geometry only; the Embree reference honours them, so compare on

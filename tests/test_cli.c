@@ -1,6 +1,10 @@
 /* test_cli: the softgi program as a user meets it.
  * - bad input of every kind gives a one-line message and a non-zero exit
  *   (2 for bad usage, 1 for a bad scene or file), never a crash;
+ * - one help text per command: `softgi COMMAND --help` lists exactly the
+ *   options the parser accepts for COMMAND (every option against every
+ *   command, in process), `softgi --help` the commands; an option a command
+ *   does not take exits 2 with one line naming both;
  * - `softgi render` writes its PNG and PFM, and the same render with
  *   --threads 1 and --threads 2 prints the same --hash;
  * - the PFM it writes holds exactly the hashed data. */
@@ -11,6 +15,7 @@
 
 #include <cmocka.h>
 
+#include "pf_cli.h"
 #include "pf_imageio.h"
 #include "test_util.h"
 
@@ -22,6 +27,7 @@ static void test_usage_errors(void **state)
 {
     (void)state;
     tu_softgi_expect("--help", 0, "usage: softgi render");
+    tu_softgi_expect("-h", 0, "commands:");
     tu_softgi_expect("--version", 0, "softgi ");
     tu_softgi_expect("", 2, "no command given");
     tu_softgi_expect("frobnicate", 2, "unknown command 'frobnicate'");
@@ -132,6 +138,180 @@ static void test_render_outputs_and_threads(void **state)
     assert_int_equal(tu_softgi_run(args, out3, sizeof out3), 0);
 }
 
+/* ---------------------------------------------------------------- help and options per command */
+
+/* The commands pf_cli parses: argv after "softgi", and the command's bit. */
+static const struct {
+    const char *args[2]; /* command [subject] */
+    uint32_t bit;
+} k_cmds[] = {
+    {{"render", NULL}, PF_CLI_RENDER},         {{"view", NULL}, PF_CLI_VIEW},
+    {{"reference", NULL}, PF_CLI_REFERENCE},   {{"sequence", "x.seq.json"}, PF_CLI_SEQUENCE},
+    {{"bench", "raster"}, PF_CLI_BENCH_RASTER}, {{"bench", "frame"}, PF_CLI_BENCH_FRAME},
+};
+
+/* A valid value for every option (NULL: a flag) and what it needs beside it. */
+static const struct {
+    const char *name, *value, *needs[4];
+} k_samples[] = {
+    {"--output", "x.png", {0}},        {"--hdr", "x.exr", {0}},          {"--size", "8x8", {0}},
+    {"--threads", "1", {0}},           {"--isa", "sse2", {0}},           {"--exposure", "1", {0}},
+    {"--camera", "0,0,1:0,0,0:40", {0}}, {"--light", "point:0,0,0:1,1,1:1", {0}},
+    {"--shadow-size", "64", {0}},      {"--max-memory", "1G", {0}},      {"--area-strata", "2", {0}},
+    {"--area-points", "4", {0}},       {"--indirect-only", NULL, {0}},   {"--direct-only", NULL, {0}},
+    {"--vpls", "8", {0}},              {"--method", "ir", {0}},          {"--bounces", "1", {0}},
+    {"--tiles", "2x2", {0}},           {"--no-interleave", NULL, {0}},   {"--clamp", "1", {0}},
+    {"--filter", "box", {0}},          {"--visibility", "raytrace", {0}}, {"--ism-res", "64", {0}},
+    {"--ism-points", "1000", {0}},     {"--ism-bias", "2", {0}},         {"--param", "a=1", {0}},
+    {"--dump-stages", "d", {0}},       {"--dump-format", "exr", {"--dump-stages", "d"}},
+    {"--pipeline", "on", {0}},         {"--spp", "4", {0}},              {"--reference", NULL, {0}},
+    {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},
+    {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
+    {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},
+    {"--moving-light", NULL, {0}},
+};
+
+/* `softgi CMD --help` as text (pf_cli_usage_command). */
+static void help_of(int c, char *buf, size_t size)
+{
+    FILE *m = fmemopen(buf, size, "w");
+    assert_non_null(m);
+    pf_error err;
+    assert_int_equal(pf_cli_usage_command(m, k_cmds[c].args[0], k_cmds[c].args[1], &err), PF_OK);
+    fclose(m);
+}
+
+/* 1 when a row of the help lists `name` ("  --spp N   ..." or "  -o, --output FILE   ..."), not only
+ * mentions it in another option's text. */
+static int help_lists(const char *help, const char *name)
+{
+    for (const char *line = help; line && *line; line = strchr(line, '\n'), line = line ? line + 1 : NULL) {
+        if (strncmp(line, "  -", 3) != 0) continue;
+        const char *p = line + 2, *end = strstr(p, "  "), *nl = strchr(p, '\n');
+        if (!end || (nl && nl < end)) end = nl ? nl : p + strlen(p);
+        size_t n = strlen(name);
+        for (const char *q = p; q + n <= end; q++)
+            if (!strncmp(q, name, n) && (q == p || q[-1] == ' ') && (q + n == end || q[n] == ' ' || q[n] == ','))
+                return 1;
+    }
+    return 0;
+}
+
+/* Parses `softgi CMD OPTION [VALUE] [NEEDS...]` in process. */
+static pf_result parse_with(int c, int s, pf_options *o, pf_error *err)
+{
+    char *argv[12];
+    int argc = 0;
+    argv[argc++] = "softgi";
+    for (int k = 0; k < 2; k++)
+        if (k_cmds[c].args[k]) argv[argc++] = (char *)k_cmds[c].args[k];
+    argv[argc++] = (char *)k_samples[s].name;
+    if (k_samples[s].value) argv[argc++] = (char *)k_samples[s].value;
+    for (int k = 0; k < 4 && k_samples[s].needs[k]; k++) argv[argc++] = (char *)k_samples[s].needs[k];
+    argv[argc] = NULL;
+    return pf_cli_parse(o, argc, argv, err);
+}
+
+static void test_help_matches_parser(void **state)
+{
+    (void)state;
+    /* every option has a sample here (a new option must be added to k_samples) */
+    for (uint32_t i = 0; pf_cli_option_name(i); i++) {
+        const char *name = pf_cli_option_name(i);
+        int found = !strcmp(name, "--help") || !strcmp(name, "--version");
+        for (size_t s = 0; s < sizeof k_samples / sizeof k_samples[0]; s++) found |= !strcmp(k_samples[s].name, name);
+        if (!found) fail_msg("option %s has no sample value in test_cli.c", name);
+    }
+    static char help[16384];
+    for (int c = 0; c < (int)(sizeof k_cmds / sizeof k_cmds[0]); c++) {
+        help_of(c, help, sizeof help);
+        assert_true(help_lists(help, "--help"));
+        for (int s = 0; s < (int)(sizeof k_samples / sizeof k_samples[0]); s++) {
+            pf_options o;
+            pf_error err;
+            pf_result r = parse_with(c, s, &o, &err);
+            int listed = help_lists(help, k_samples[s].name);
+            int takes = (pf_cli_option_commands(k_samples[s].name) & k_cmds[c].bit) != 0;
+            if ((r == PF_OK) != listed || takes != listed)
+                fail_msg("softgi %s %s %s: parse %s (%s), help %s it", k_cmds[c].args[0],
+                         k_cmds[c].args[1] ? k_cmds[c].args[1] : "", k_samples[s].name, r == PF_OK ? "accepts" : "refuses",
+                         r == PF_OK ? "" : err.message, listed ? "lists" : "does not list");
+            if (r != PF_OK) {
+                assert_int_equal(r, PF_ERR_ARGUMENT);
+                assert_int_equal(pf_result_exit_code(r), 2);
+                if (!k_samples[s].needs[0]) { /* the message names the option and the command */
+                    char want[128];
+                    snprintf(want, sizeof want, "%s does not apply to %s%s%s", k_samples[s].name, k_cmds[c].args[0],
+                             k_cmds[c].bit & (PF_CLI_BENCH_RASTER | PF_CLI_BENCH_FRAME) ? " " : "",
+                             k_cmds[c].bit & (PF_CLI_BENCH_RASTER | PF_CLI_BENCH_FRAME) ? k_cmds[c].args[1] : "");
+                    if (!strstr(err.message, want)) fail_msg("'%s' does not say '%s'", err.message, want);
+                }
+            }
+        }
+    }
+}
+
+static void test_help_per_command(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *args, *has[4], *not[4];
+    } k[] = {
+        {"render --help", {"usage: softgi render", "--hdr", "--dump-format", "--raytrace"},
+         {"--spp", "--screenshot", "--scenes", "--reference"}},
+        {"view --help", {"usage: softgi view", "--screenshot", "--frames", "--dump-stages"},
+         {"--output", "--hdr", "--hash", "--spp"}},
+        {"reference --help", {"usage: softgi reference", "--spp", "--bounces", "--hdr"},
+         {"--method", "--vpls", "--shadow-size", "--raytrace"}},
+        {"sequence --help", {"usage: softgi sequence", "--reference", "--track-spp", "--method"},
+         {"--hdr", "--screenshot", "--dump-stages", "--scenes"}},
+        {"bench --help", {"usage: softgi bench raster", "usage: softgi bench frame", "--scenes", "--moving-light"},
+         {"--size", "--output", "--camera", "--hash"}},
+        {"bench frame --help", {"usage: softgi bench frame", "--moving-light", "--vpls", "--pipeline"},
+         {"usage: softgi bench raster", "--size", "--camera", "--spp"}},
+    };
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {
+        char out[16384];
+        int st = tu_softgi_run(k[i].args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", k[i].args, st, out);
+        for (int j = 0; j < 4; j++) {
+            if (k[i].has[j] && !strstr(out, k[i].has[j])) fail_msg("softgi %s lacks %s:\n%s", k[i].args, k[i].has[j], out);
+            if (k[i].not[j] && help_lists(out, k[i].not[j]))
+                fail_msg("softgi %s lists %s:\n%s", k[i].args, k[i].not[j], out);
+            if (k[i].not[j] && !strncmp(k[i].not[j], "usage", 5) && strstr(out, k[i].not[j]))
+                fail_msg("softgi %s shows %s", k[i].args, k[i].not[j]);
+        }
+    }
+    /* the command list, and the commands that parse their own options */
+    tu_softgi_expect("--help", 0, "softgi COMMAND --help");
+    tu_softgi_expect("compare --help", 0, "usage: softgi compare");
+    tu_softgi_expect("evaluate --help", 0, "usage: softgi evaluate");
+    tu_softgi_expect("frobnicate --help", 2, "unknown command 'frobnicate'");
+    tu_softgi_expect("-q compare a b", 2, "compare parses its own options");
+}
+
+static void test_wrong_command_options(void **state)
+{
+    (void)state;
+    tu_softgi_expect("render --spp 64", 2, "--spp does not apply to render (--spp: only reference and sequence take it");
+    tu_softgi_expect("reference --method iir", 2, "--method does not apply to reference");
+    tu_softgi_expect("reference --vpls 8", 2, "--vpls does not apply to reference");
+    tu_softgi_expect("view -o x.png", 2, "-o does not apply to view");
+    tu_softgi_expect("view --hash", 2, "--hash does not apply to view");
+    tu_softgi_expect("sequence x.seq.json --hdr x.exr", 2, "--hdr does not apply to sequence");
+    tu_softgi_expect("sequence x.seq.json --screenshot s.png", 2, "--screenshot does not apply to sequence");
+    tu_softgi_expect("bench raster --vpls 8", 2, "--vpls does not apply to bench raster");
+    tu_softgi_expect("bench frame -q", 2, "-q does not apply to bench frame");
+    tu_softgi_expect("render --scenes d", 2, "see softgi render --help");
+    /* options that need another */
+    tu_softgi_expect("render --dump-format exr", 2, "--dump-format: only with --dump-stages");
+    tu_softgi_expect("render --dump-format tiff --dump-stages d", 2, "--dump-format 'tiff': expected png, exr or both");
+    /* -o and --hdr by extension (details in test_output.c) */
+    tu_softgi_expect("render -o x.jpg", 2, "-o 'x.jpg': unsupported output format '.jpg' (supported: .png");
+    tu_softgi_expect("reference -o x.tiff", 2, "unsupported output format '.tiff'");
+    tu_softgi_expect("render --hdr x.hdr", 2, "--hdr 'x.hdr': unsupported linear format '.hdr' (supported: .exr and .pfm)");
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -148,6 +328,9 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_usage_errors),
+        cmocka_unit_test(test_help_matches_parser),
+        cmocka_unit_test(test_help_per_command),
+        cmocka_unit_test(test_wrong_command_options),
         cmocka_unit_test(test_bad_scenes),
         cmocka_unit_test(test_render_outputs_and_threads),
     };

@@ -8,8 +8,13 @@
  *   the other file of the pair fails;
  * - a successful render, dump and sequence leave no temporary file;
  * - -o NAME.pfm writes exactly that PFM and leaves NAME.png alone; other
- *   extensions, --hdr without .pfm and two outputs naming one file are
- *   refused with exit 2 before anything is rendered;
+ *   extensions, --hdr without .pfm or .exr and two outputs naming one file
+ *   are refused with exit 2 before anything is rendered;
+ * - every format written is read back and compared with the rendered
+ *   floats: .pfm and .exr (through tinyexr, pf_exr.h) bit for bit against
+ *   the --hash of the render, the PNG byte for byte against the display
+ *   transform of those floats; the float stage dumps (--dump-format exr and
+ *   both), and compare reading .exr (and refusing broken ones);
  * - the writers refuse NaN, infinite and negative values (count and first
  *   pixel in the message, no file); depth planes may hold +inf;
  * - compare refuses a PFM with NaN instead of printing "RMSE nan"; the PFM
@@ -30,11 +35,14 @@
 #include <math.h>
 #include <unistd.h>
 
+#include "pf_decode.h"
 #include "pf_imageio.h"
 #include "pf_sequence.h"
 #include "test_util.h"
 
 #define FAST "--size 32x24 --direct-only --shadow-size 64 --threads 1 -q"
+/* reference draws no shadow maps: it refuses --shadow-size (pf_cli.h) */
+#define FAST_REF "--size 32x24 --direct-only --threads 1 -q"
 
 static char g_tmp[256];
 
@@ -275,7 +283,7 @@ static void test_pfm_output_keeps_png(void **state)
     assert_int_equal(w * h, 32 * 24);
     free(rgb);
     /* the same for reference, and an upper-case .PNG is a PNG */
-    snprintf(args, sizeof args, "reference " FAST " --spp 1 --bounces 1 -o '%s/r.pfm'", dir);
+    snprintf(args, sizeof args, "reference " FAST_REF " --spp 1 --bounces 1 -o '%s/r.pfm'", dir);
     tu_softgi_expect(args, 0, NULL);
     snprintf(args, sizeof args, "render " FAST " -o '%s/U.PNG'", dir);
     tu_softgi_expect(args, 0, NULL);
@@ -294,14 +302,22 @@ static void test_unsupported_names(void **state)
     static const struct {
         const char *opts, *needle;
     } bad[] = {
-        {"-o '%s/x.exr'", "unsupported output format '.exr' (supported: .png, which also writes the linear .pfm"},
+        {"-o '%s/x.tif'", "unsupported output format '.tif' (supported: .png (with the linear .pfm beside it, or "
+                          "--hdr NAME.exr|NAME.pfm), .exr or .pfm)"},
         {"-o '%s/x.jpg'", "unsupported output format '.jpg'"},
+        {"-o '%s/x.exr.gz'", "unsupported output format '.gz'"},
         {"-o '%s/x'", "unsupported output format (no extension)"},
         {"-o '%s/'", "unsupported output format (no extension)"},
         {"-o '%s/.png'", "unsupported output format"},
-        {"-o '%s/x.png' --hdr '%s/x.exr'", "--hdr '"},
-        {"-o '%s/x.pfm' --hdr '%s/y.pfm'", "already writes the linear PFM"},
+        {"-o '%s/x.png' --hdr '%s/x.tif'", "unsupported linear format '.tif' (supported: .exr and .pfm)"},
+        {"-o '%s/x.png' --hdr '%s/x.png'", "unsupported linear format '.png'"},
+        {"-o '%s/x.pfm' --hdr '%s/y.pfm'", "already writes the linear image"},
+        {"-o '%s/x.exr' --hdr '%s/y.exr'", "already writes the linear image"},
         {"-o '%s/d/14-final.png' --dump-stages '%s/d'", "is also a --dump-stages file"},
+        {"-o '%s/d/14-final.exr' --dump-stages '%s/d' --dump-format exr", "is also a --dump-stages file"},
+        {"-o '%s/d/06-direct.png' --dump-stages '%s/d' --dump-format both", "is also a --dump-stages file"},
+        {"-o '%s/d/x.png' --hdr '%s/d/00-depth.exr' --dump-stages '%s/d' --dump-format both",
+         "is also a --dump-stages file"},
         {"-o '%s/a.png' --hdr '%s/./e/../a.pfm' --dump-stages '%s'", NULL}, /* distinct: accepted */
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -309,8 +325,7 @@ static void test_unsupported_names(void **state)
         snprintf(opts, sizeof opts, bad[i].opts, dir, dir, dir);
         for (int cmd = 0; cmd < 2; cmd++) {
             if (cmd == 1 && strstr(opts, "dump")) continue; /* reference has no --dump-stages */
-            snprintf(args, sizeof args, "%s " FAST " %s %s", cmd ? "reference" : "render", cmd ? "--spp 1" : "",
-                     opts);
+            snprintf(args, sizeof args, "%s %s %s", cmd ? "reference " FAST_REF " --spp 1" : "render " FAST, opts, "");
             tu_softgi_expect(args, bad[i].needle ? 2 : 0, bad[i].needle);
         }
     }
@@ -337,6 +352,288 @@ static void test_unsupported_names(void **state)
     snprintf(args, sizeof args, "compare --reference '%s' --name a:'%s' --table '%s/t.svg' --plot '%s/alias/t.svg'",
              dir, dir, dir, dir);
     tu_softgi_expect(args, 2, "name the same file");
+}
+
+/* ---------------------------------------------------------------- formats read back */
+
+/* The whole file, malloc'ed (NUL-terminated beyond *size). */
+static char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("cannot open %s", path);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = 0;
+    fclose(f);
+    *size = (size_t)n;
+    return buf;
+}
+
+/* The first `needle` (n bytes) in data[0..size), or NULL (memmem is a GNU extension). */
+static const char *find_bytes(const char *data, size_t size, const char *needle, size_t n)
+{
+    for (size_t i = 0; i + n <= size; i++)
+        if (!memcmp(data + i, needle, n)) return data + i;
+    return NULL;
+}
+
+/* The hash line `softgi ... --hash` printed, as a number. */
+static uint64_t printed_hash(const char *out)
+{
+    const char *h = strstr(out, "hash ");
+    if (!h) fail_msg("no hash in:\n%s", out);
+    return strtoull(h + 5, NULL, 16);
+}
+
+/* A linear file (.pfm or .exr) read back: exactly the floats whose hash the render printed; *rgb keeps them. */
+static void expect_linear(const char *path, uint64_t hash, uint32_t w, uint32_t h, float **rgb)
+{
+    uint32_t fw, fh;
+    pf_error err;
+    if (pf_imageio_read_image(path, PF_IMAGEIO_RADIANCE, rgb, &fw, &fh, &err) != PF_OK) fail_msg("%s", err.message);
+    assert_int_equal(fw, w);
+    assert_int_equal(fh, h);
+    if (pf_imageio_hash(*rgb, 3ull * w * h) != hash) fail_msg("%s does not hold the rendered floats", path);
+}
+
+/* A PNG read back (libspng, pf_decode): byte for byte the display transform of the floats. */
+static void expect_png(const char *path, const float *rgb, uint32_t w, uint32_t h, float exposure)
+{
+    size_t n;
+    char *png = read_all(path, &n);
+    uint8_t *px = NULL;
+    uint32_t pw, ph;
+    pf_error err;
+    if (pf_decode_rgba8(png, n, NULL, &px, &pw, &ph, &err) != PF_OK) fail_msg("%s: %s", path, err.message);
+    assert_int_equal(pw, w);
+    assert_int_equal(ph, h);
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        for (int c = 0; c < 3; c++)
+            if (px[4 * i + c] != pf_imageio_display(rgb[3 * i + c], exp2f(exposure)))
+                fail_msg("%s: pixel %zu channel %d is %u, not the display transform of %g", path, i, c, px[4 * i + c],
+                         (double)rgb[3 * i + c]);
+    free(px);
+    free(png);
+}
+
+/* 1 when the file is an OpenEXR file of 32-bit float channels and ZIP compression, as pf_exr.h promises. */
+static int exr_is_float_zip(const char *path)
+{
+    size_t n;
+    char *d = read_all(path, &n);
+    int ok = n > 8 && !memcmp(d, "\x76\x2f\x31\x01", 4);
+    /* chlist entries: name \0, pixel type (2 = FLOAT) as a 4-byte int; compression 3 = ZIP */
+    const char *ch = find_bytes(d, n, "chlist", 7);
+    ok = ok && ch && ch[7 + 4 + 2] == 2;
+    const char *cp = find_bytes(d, n, "compression\0compression", 24);
+    ok = ok && cp && cp[24 + 4] == 3;
+    free(d);
+    return ok;
+}
+
+static void test_formats_read_back(void **state)
+{
+    (void)state;
+    char dir[512], args[2048], out[16384], p[700], q[700];
+    make_dir("%s/formats%s", "", dir, sizeof dir);
+    static const struct {
+        const char *cmd, *opts, *png, *linear;
+    } runs[] = {
+        {"render " FAST " --exposure 1.5", "-o '%s/a.png'", "a.png", "a.pfm"},
+        {"render " FAST " --exposure 1.5", "-o '%s/b.png' --hdr '%s/b.exr'", "b.png", "b.exr"},
+        {"render " FAST " --exposure 1.5", "-o '%s/c.exr'", NULL, "c.exr"},
+        {"render " FAST " --exposure 1.5", "-o '%s/d.pfm'", NULL, "d.pfm"},
+        {"render " FAST " --exposure 1.5", "-o '%s/E.EXR'", NULL, "E.EXR"},
+        {"reference " FAST_REF " --spp 2 --bounces 1 --exposure 1.5", "-o '%s/r.png' --hdr '%s/r.exr'", "r.png", "r.exr"},
+        {"reference " FAST_REF " --spp 2 --bounces 1 --exposure 1.5", "-o '%s/s.exr'", NULL, "s.exr"},
+    };
+    uint64_t render_hash = 0;
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
+        char opts[1600];
+        snprintf(opts, sizeof opts, runs[i].opts, dir, dir);
+        snprintf(args, sizeof args, "%s --hash %s", runs[i].cmd, opts);
+        int st = tu_softgi_run(args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+        uint64_t hash = printed_hash(out);
+        if (!strncmp(runs[i].cmd, "render", 6)) { /* the same render each time, whatever the format */
+            if (render_hash && hash != render_hash) fail_msg("softgi %s: another hash", args);
+            render_hash = hash;
+        }
+        float *rgb = NULL;
+        snprintf(p, sizeof p, "%s/%s", dir, runs[i].linear);
+        expect_linear(p, hash, 32, 24, &rgb);
+        if (strstr(runs[i].linear, "xr") || strstr(runs[i].linear, "XR")) assert_true(exr_is_float_zip(p));
+        if (runs[i].png) {
+            snprintf(q, sizeof q, "%s/%s", dir, runs[i].png);
+            expect_png(q, rgb, 32, 24, 1.5f);
+        }
+        free(rgb);
+    }
+    expect_no_temps(dir);
+    /* -o NAME.exr writes only the EXR; NAME.png stays absent */
+    snprintf(p, sizeof p, "%s/c.png", dir);
+    assert_false(tu_file_exists(p));
+    /* one render's files agree across formats: compare reads both */
+    snprintf(args, sizeof args, "compare '%s/c.exr' '%s/a.pfm'", dir, dir);
+    tu_softgi_expect(args, 0, "RMSE       0\n");
+
+    /* a full device behind a link named .exr: the error names it, nothing is left */
+    snprintf(p, sizeof p, "%s/full.exr", dir);
+    assert_int_equal(symlink("/dev/full", p), 0);
+    snprintf(args, sizeof args, "render " FAST " -o '%s'", p);
+    tu_softgi_expect(args, 1, "full.exr: write failed: No space left on device");
+    expect_no_temps(dir);
+}
+
+static void test_exr_stage_dumps(void **state)
+{
+    (void)state;
+    char dir[512], args[2048], out[16384], p[800];
+    make_dir("%s/dumps%s", "", dir, sizeof dir);
+    static const char *const formats[3] = {"", "--dump-format both", "--dump-format exr"};
+    static const char *const exrs[] = {"00-depth", "01-position", "02-normal", "03-albedo", "06-direct",
+                                       "10-split", "11-accumulated", "12-combined", "13-filtered", "14-final"};
+    const int nexr = (int)(sizeof exrs / sizeof exrs[0]);
+    uint64_t hash = 0;
+    for (int k = 0; k < 3; k++) {
+        snprintf(args, sizeof args,
+                 "render --size 32x24 --vpls 16 --shadow-size 64 --threads 1 -q --hash -o '%s/f%d.png' "
+                 "--dump-stages '%s/d%d' %s",
+                 dir, k, dir, k, formats[k]);
+        int st = tu_softgi_run(args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+        hash = printed_hash(out);
+        snprintf(p, sizeof p, "%s/d%d", dir, k);
+        int temps, files = count_entries(p, &temps);
+        assert_int_equal(temps, 0);
+        /* 15 pictures (png), 10 float files (exr), captions.txt */
+        assert_int_equal(files, (k < 2 ? 15 : 0) + (k > 0 ? nexr : 0) + 1);
+        size_t n;
+        snprintf(p, sizeof p, "%s/d%d/captions.txt", dir, k);
+        char *captions = read_all(p, &n);
+        assert_int_equal(strstr(captions, ".exr: ") != NULL, k > 0);
+        assert_int_equal(strstr(captions, ".png: ") != NULL, k < 2);
+        free(captions);
+        for (int e = 0; k > 0 && e < nexr; e++) {
+            snprintf(p, sizeof p, "%s/d%d/%s.exr", dir, k, exrs[e]);
+            assert_true(exr_is_float_zip(p));
+            float *rgb = NULL;
+            uint32_t w, h;
+            pf_error err;
+            if (pf_imageio_read_image(p, PF_IMAGEIO_DATA, &rgb, &w, &h, &err) != PF_OK) fail_msg("%s", err.message);
+            assert_int_equal(w, 32);
+            assert_int_equal(h, 24);
+            if (e == 0) /* depth: one channel Y, read as R = G = B; +inf where no surface */
+                for (size_t i = 0; i < 32 * 24; i++) assert_true(rgb[3 * i] == rgb[3 * i + 1] && rgb[3 * i] >= 0.0f);
+            if (e == nexr - 1 && pf_imageio_hash(rgb, 3ull * w * h) != hash)
+                fail_msg("%s is not the rendered image", p);
+            free(rgb);
+        }
+    }
+    /* the pictures are the same bytes with or without the float files */
+    size_t n0, n1;
+    snprintf(p, sizeof p, "%s/d0/14-final.png", dir);
+    char *a = read_all(p, &n0);
+    snprintf(p, sizeof p, "%s/d1/14-final.png", dir);
+    char *b = read_all(p, &n1);
+    assert_true(n0 == n1 && !memcmp(a, b, n0));
+    free(a);
+    free(b);
+}
+
+static void test_exr_input(void **state)
+{
+    (void)state;
+    char dir[512], p[700], args[2048];
+    make_dir("%s/exrin%s", "", dir, sizeof dir);
+    pf_error err;
+    float *back = NULL;
+    uint32_t w, h;
+    /* 1 (Y), 3 (RGB) and 4 (RGBA) channels written and read back (Y as grey, A dropped) */
+    enum { W = 5, H = 3 };
+    float px[W * H * 4];
+    for (int i = 0; i < W * H * 4; i++) px[i] = 0.125f * (float)i;
+    for (uint32_t c = 1; c <= 4; c++) {
+        if (c == 2) continue;
+        snprintf(p, sizeof p, "%s/c%u.exr", dir, c);
+        /* c3.exr without a comment: its offset table follows screenWindowWidth (below) */
+        assert_int_equal(pf_imageio_write_exr(p, px, W, H, c, PF_IMAGEIO_RADIANCE, c == 3 ? NULL : "a note", &err),
+                         PF_OK);
+        if (pf_imageio_read_image(p, PF_IMAGEIO_RADIANCE, &back, &w, &h, &err) != PF_OK) fail_msg("%s", err.message);
+        assert_int_equal(w * h, W * H);
+        for (int i = 0; i < W * H; i++)
+            for (int k = 0; k < 3; k++) assert_true(back[3 * i + k] == px[c * i + (c == 1 ? 0 : k)]);
+        free(back);
+    }
+    /* the writers' value rules: NaN refused (no file), signed data and inf only where allowed */
+    px[7] = NAN;
+    snprintf(p, sizeof p, "%s/nan.exr", dir);
+    assert_int_equal(pf_imageio_write_exr(p, px, W, H, 3, PF_IMAGEIO_DATA, NULL, &err), PF_ERR_NONFINITE);
+    assert_non_null(strstr(err.message, "nan.exr: 1 pixel is NaN (first: pixel (2, 0) channel G = nan); nothing written"));
+    assert_false(tu_file_exists(p));
+    px[7] = -INFINITY;
+    assert_int_equal(pf_imageio_write_exr(p, px, W, H, 3, PF_IMAGEIO_RADIANCE, NULL, &err), PF_ERR_NONFINITE);
+    assert_int_equal(pf_imageio_write_exr(p, px, W, H, 3, PF_IMAGEIO_DATA, NULL, &err), PF_OK);
+    assert_int_equal(pf_imageio_read_image(p, PF_IMAGEIO_RADIANCE, &back, &w, &h, &err), PF_ERR_NONFINITE);
+    assert_null(back);
+    assert_non_null(strstr(err.message, "nan.exr: 1 pixel is NaN, infinite or negative"));
+    /* compare reads what it is handed, and refuses broken files with one line */
+    size_t n;
+    snprintf(p, sizeof p, "%s/c3.exr", dir);
+    char *good = read_all(p, &n);
+    snprintf(p, sizeof p, "%s/cut.exr", dir);
+    write_bytes(p, good, n / 2);
+    snprintf(args, sizeof args, "compare '%s' '%s/c3.exr'", p, dir);
+    tu_softgi_expect(args, 1, "cut.exr: ");
+    snprintf(p, sizeof p, "%s/magic.exr", dir);
+    write_bytes(p, good, 40);
+    snprintf(args, sizeof args, "compare '%s/c3.exr' '%s'", dir, p);
+    tu_softgi_expect(args, 1, "magic.exr: bad OpenEXR");
+    snprintf(p, sizeof p, "%s/text.exr", dir);
+    write_text(p, "not an image at all");
+    snprintf(args, sizeof args, "compare '%s' '%s/c3.exr'", p, dir);
+    tu_softgi_expect(args, 1, "text.exr: not a 3-channel PFM file or an OpenEXR file");
+    /* a block that does not hold its own scanline (tinyexr would leave lines unset): refused */
+    const char *sw = find_bytes(good, n, "screenWindowWidth", 18);
+    assert_non_null(sw);
+    size_t table = (size_t)(sw - good) + 18 + 6 + 4 + 4 + 1; /* name, "float", size, value, end of header */
+    uint64_t off;
+    memcpy(&off, good + table, 8);
+    assert_true(off + 8 <= n);
+    good[off] = 1; /* scanline 1 in block 0 */
+    assert_int_equal(pf_imageio_read_exr_memory(good, n, "moved.exr", PF_IMAGEIO_DATA, 1u << 30, &back, &w, &h, &err),
+                     PF_ERR_PARSE);
+    assert_non_null(strstr(err.message, "moved.exr: OpenEXR block 0 starts at scanline 1, expected 0"));
+    good[off] = 0;
+    /* the memory budget is asked before anything is decoded */
+    assert_int_equal(pf_imageio_read_exr_memory(good, n, "big.exr", PF_IMAGEIO_DATA, 100, &back, &w, &h, &err),
+                     PF_ERR_OUT_OF_MEMORY);
+    assert_non_null(strstr(err.message, "big.exr: decoding this 5x3 OpenEXR image of 3 channels needs"));
+    assert_int_equal(pf_imageio_read_exr_memory(good, n, "ok.exr", PF_IMAGEIO_DATA, 1u << 30, &back, &w, &h, &err),
+                     PF_OK);
+    free(back);
+    free(good);
+    /* files from the OpenEXR library: every compression softgi reads, and those it refuses */
+    static const struct {
+        const char *file, *needle;
+    } lib[] = {
+        {"openexr-zip-half.exr", NULL},
+        {"openexr-piz-float.exr", "OpenEXR compression PIZ (4) is not supported"},
+        {"openexr-rle-float.exr", NULL},
+        {"openexr-tiled.exr", "tiled OpenEXR files are not supported"},
+        {"openexr-multipart.exr", "multi-part and deep OpenEXR files are not supported"},
+        {"openexr-zip-float-decy.exr", "line order 1 is not supported"},
+        {"openexr-b44-half.exr", "bad OpenEXR header"},
+    };
+    for (size_t i = 0; i < sizeof lib / sizeof lib[0]; i++) {
+        snprintf(args, sizeof args, "compare '%s/tests/fuzz/regress/exr/%s' '%s/tests/fuzz/regress/exr/%s'",
+                 SOFTGI_SOURCE_DIR, lib[i].file, SOFTGI_SOURCE_DIR, lib[i].file);
+        tu_softgi_expect(args, lib[i].needle ? 1 : 0, lib[i].needle ? lib[i].needle : "RMSE       0\n");
+    }
 }
 
 /* ---------------------------------------------------------------- values */
@@ -636,7 +933,8 @@ static void test_sequence_deletes_nothing(void **state)
     tu_softgi_expect(args, 1, "not a softgi-frames 1 manifest");
     /* --reuse-frames refuses a folder whose manifest is of another run */
     write_text(p, "softgi-frames 1\nframes 7\nstate complete\n");
-    snprintf(args, sizeof args, "sequence '%s' -o '%s' --reference --spp 1 --reuse-frames " FAST, seq, d2);
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' --reference --spp 1 --track-spp 2 --reuse-frames " FAST, seq,
+             d2);
     tu_softgi_expect(args, 2, "--reuse-frames:");
 }
 
@@ -660,6 +958,9 @@ int main(void)
         cmocka_unit_test(test_success_leaves_no_temps),
         cmocka_unit_test(test_pfm_output_keeps_png),
         cmocka_unit_test(test_unsupported_names),
+        cmocka_unit_test(test_formats_read_back),
+        cmocka_unit_test(test_exr_stage_dumps),
+        cmocka_unit_test(test_exr_input),
         cmocka_unit_test(test_writers_refuse_bad_values),
         cmocka_unit_test(test_compare_refuses_nan),
         cmocka_unit_test(test_pfm_parser),

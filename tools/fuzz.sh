@@ -12,7 +12,8 @@
 # Per target NAME (fuzz_NAME):
 #   corpus      build-fuzz/corpus/fuzz_NAME/ (kept across runs; the fuzzer
 #               adds to it), read together with the seeds, which stay
-#               read-only: tests/fuzz/seeds/NAME/, plus tests/data/gltf for
+#               read-only: tests/fuzz/seeds/NAME/ and tests/fuzz/regress/NAME/
+#               (earlier findings are good starting points), plus tests/data/gltf for
 #               gltf, plus (for texture) the PNG and JPEG files under
 #               ../shared/scenes when present, copied into
 #               build-fuzz/seeds-extra/texture/, never into the repository
@@ -31,7 +32,8 @@
 #   build-fuzz/tests/fuzz/fuzz_NAME FILE
 # then copy FILE to the module's test data and add a case to its test.
 #
-# Environment: FUZZ_JOBS (targets run in parallel, default 1), JOBS
+# Environment: FUZZ_BUILD (the build folder, default build-fuzz; relative
+# paths are under the repository), FUZZ_JOBS (targets run in parallel, default 1), JOBS
 # (parallel build jobs, default nproc), FUZZ_WORKERS (libFuzzer -fork
 # workers per target, default 1), ASAN_OPTIONS / UBSAN_OPTIONS (override the
 # defaults below).
@@ -68,7 +70,8 @@ for a in "$@"; do
 done
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-BUILD="$ROOT/build-fuzz"
+BUILD=${FUZZ_BUILD:-build-fuzz}
+case "$BUILD" in /*) ;; *) BUILD="$ROOT/$BUILD" ;; esac
 JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
 PAR=${FUZZ_JOBS:-1}
 WORKERS=${FUZZ_WORKERS:-1}
@@ -86,6 +89,8 @@ command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
 [ -f /usr/include/nlohmann/json.hpp ] || missing+=(nlohmann-json3-dev)
 [ -f /usr/include/tiny_gltf.h ] || missing+=(libtinygltf-dev)
 [ -f /usr/include/stb/stb_image.h ] || missing+=(libstb-dev)
+[ -f /usr/include/tinyexr.h ] || missing+=(libtinyexr-dev) # compiled into the fuzz build (fuzz_exr)
+[ -f /usr/include/zlib.h ] || missing+=(zlib1g-dev)
 if command -v pkg-config >/dev/null 2>&1; then
     pkg-config --exists spng || missing+=(libspng-dev)
     pkg-config --exists libturbojpeg || missing+=(libturbojpeg0-dev)
@@ -174,6 +179,7 @@ run_target() {
     mkdir -p "$corpus" "$art"
     local dirs=("$corpus")
     [ -d "$ROOT/tests/fuzz/seeds/$name" ] && dirs+=("$ROOT/tests/fuzz/seeds/$name")
+    [ -d "$ROOT/tests/fuzz/regress/$name" ] && dirs+=("$ROOT/tests/fuzz/regress/$name")
     [ "$name" = gltf ] && [ -d "$ROOT/tests/data/gltf" ] && dirs+=("$ROOT/tests/data/gltf")
     if [ "$name" = texture ] && [ -d "$ROOT/../shared/scenes" ]; then
         # real textures, at most 64 of at most 1 MiB, smallest first: copies in the build folder only
@@ -246,7 +252,7 @@ echo "fuzz.sh: ${SECONDS_TO_RUN}s per target, ${PAR} at a time: ${BUILT[*]:-none
 pids=()
 for t in "${BUILT[@]}"; do
     while [ "$(jobs -rp | wc -l)" -ge "$PAR" ]; do sleep 1; done
-    echo "fuzz.sh: running $t (log: build-fuzz/logs/$t.log)"
+    echo "fuzz.sh: running $t (log: $BUILD/logs/$t.log)"
     run_target "$t" &
     pids+=($!)
 done

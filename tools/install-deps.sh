@@ -15,6 +15,7 @@ pkgs=(build-essential cmake pkg-config
       libcmocka-dev      # cmocka: the test framework
       libspng-dev        # libspng: PNG textures (untrusted input; maintained and fuzzed for it)
       libturbojpeg0-dev  # libjpeg-turbo (TurboJPEG API): JPEG textures (likewise)
+      libtinyexr-dev     # tinyexr: OpenEXR output (-o/--hdr NAME.exr, float stage dumps) and compare's .exr input
       clang libclang-rt-14-dev nlohmann-json3-dev)  # the fuzz build (libFuzzer; tinygltf's JSON parser instrumented)
 missing=()
 for p in "${pkgs[@]}"; do

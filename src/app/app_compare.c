@@ -1,7 +1,10 @@
 /* app_compare: `softgi compare`, the metrics of issue 4 (gi_metrics.h).
  *
- *   softgi compare IMAGE.pfm REFERENCE.pfm
- *     RMSE and MAE over linear RGB, and |E| over all pixels.
+ *   softgi compare IMAGE REFERENCE
+ *     RMSE and MAE over linear RGB, and |E| over all pixels; each image a
+ *     PFM or an OpenEXR file (pf_imageio_read_image: told apart by their
+ *     first bytes; untrusted input, read within size limits and the memory
+ *     budget).
  *   softgi compare --reference REFDIR --name NAME:DIR [--name NAME:DIR ...]
  *     A Markdown table of |E| and |E'| (Hedman 2017 Table 1, Eq. 10) over the
  *     tracked pixels, TID (Barak 2013 Sec. 6.2) and the mean RMSE per method,
@@ -62,7 +65,7 @@ typedef struct cmp__args {
 
 static void cmp__usage(FILE *f)
 {
-    fputs("usage: softgi compare IMAGE.pfm REFERENCE.pfm [--exposure EV]\n"
+    fputs("usage: softgi compare IMAGE REFERENCE [--exposure EV]      (each .pfm or .exr)\n"
           "       softgi compare --reference REFDIR --name NAME:DIR [--name NAME:DIR ...]\n"
           "                      [--track X,Y ...] [--tracked K] [--plot OUT.svg] [--table OUT.md]\n"
           "                      [--exposure EV] [--depth-tolerance F] [--tid-tonemapped]\n"
@@ -206,8 +209,9 @@ static int cmp__parse(cmp__args *a, int argc, char **argv, int *help)
         }
     }
     if (a->positional_count > 0 && (a->reference || a->series_count > 1))
-        return cmp__fail(2, "give either IMAGE.pfm REFERENCE.pfm or --reference/--name, not both");
-    if (a->positional_count == 1) return cmp__fail(2, "missing REFERENCE.pfm (usage: softgi compare IMAGE.pfm REFERENCE.pfm)");
+        return cmp__fail(2, "give either IMAGE REFERENCE or --reference/--name, not both");
+    if (a->positional_count == 1)
+        return cmp__fail(2, "missing REFERENCE.pfm or .exr (usage: softgi compare IMAGE REFERENCE)");
     if (a->positional_count == 0) {
         if (!a->reference && a->series_count == 1)
             return cmp__fail(2, "nothing to compare (see softgi compare --help)");
@@ -230,8 +234,8 @@ static int cmp__images(const cmp__args *a)
     float *img = NULL, *ref = NULL;
     uint32_t w, h, rw, rh;
     int status = 1;
-    if (pf_imageio_read_pfm(a->positional[0], &img, &w, &h, &err) != PF_OK ||
-        pf_imageio_read_pfm(a->positional[1], &ref, &rw, &rh, &err) != PF_OK) {
+    if (pf_imageio_read_image(a->positional[0], PF_IMAGEIO_RADIANCE, &img, &w, &h, &err) != PF_OK ||
+        pf_imageio_read_image(a->positional[1], PF_IMAGEIO_RADIANCE, &ref, &rw, &rh, &err) != PF_OK) {
         fprintf(stderr, "softgi compare: %s\n", err.message);
         goto done;
     }

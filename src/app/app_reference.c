@@ -3,11 +3,12 @@
  *
  * load scene -> apply --camera/--light overrides (exactly as `softgi render`,
  * app_render.c) -> build the Embree scene -> path trace (--spp, --bounces,
- * --indirect-only, --direct-only) with a progress bar -> write PNG + PFM
- * (default out/<scene>-reference.png and .pfm), printing the time of every
- * step and, with --hash, the hash of the linear image. -o and --hdr follow
- * render's rules (app_render.c, pf_imageio_output_paths): checked before
- * the path tracing starts, both files complete or neither replaced.
+ * --indirect-only, --direct-only) with a progress bar -> write the PNG and
+ * the linear image (default out/<scene>-reference.png and .pfm), printing
+ * the time of every step and, with --hash, the hash of the linear image. -o
+ * and --hdr follow render's rules (app_render.c, pf_imageio_outputs_resolve:
+ * .png, .exr or .pfm by extension): checked before the path tracing starts,
+ * both files complete or neither replaced.
  *
  * The progress bar goes to stderr, only when stderr is a terminal and not
  * --quiet; gi_reference calls it on this thread only (after every row this
@@ -72,8 +73,8 @@ int app_reference(const pf_options *o)
     }
 
     /* -o / --hdr: usage errors before any work */
-    char png[4096], pfm[4096];
-    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, "out/scene-reference.png", png, pfm, &err);
+    pf_imageio_outputs out;
+    pf_result r = pf_imageio_outputs_resolve(&out, o->out_path, o->hdr_path, "out/scene-reference.png", &err);
     if (r != PF_OK) return app_fail(&err);
 
     /* Scene, Embree, jobs (as app_render.c), the image */
@@ -106,8 +107,9 @@ int app_reference(const pf_options *o)
         double t0 = pf_time_now();
         char def[4096];
         snprintf(def, sizeof def, "out/%s-reference.png", su.stem);
-        r = app_write_image(o, def, image, width, height, png, pfm, &err);
-        pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
+        r = pf_imageio_outputs_resolve(&out, o->out_path, o->hdr_path, def, &err);
+        if (r == PF_OK) r = pf_imageio_outputs_write(&out, image, width, height, o->exposure, &err);
+        pf_stage_add(&t, "write images", (pf_time_now() - t0) * 1e3);
     }
     int status = 0;
     if (r != PF_OK) status = app_fail(&err);
@@ -119,8 +121,8 @@ int app_reference(const pf_options *o)
                    ro.indirect_only ? " (indirect only)" : (ro.direct_only ? " (direct only)" : ""), su.threads,
                    pf_isa_name(su.isa));
             pf_stage_print(&t, stdout);
-            if (png[0]) printf("wrote %s and %s\n", png, pfm);
-            else printf("wrote %s\n", pfm);
+            if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
+            else printf("wrote %s\n", out.linear);
         }
         if (o->print_hash)
             printf("hash %016llx (isa %s)\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3),

@@ -1,16 +1,18 @@
 /* app_render: `softgi render` (see pf_cli.h for the options).
  *
  * load scene -> apply --camera/--light overrides -> build the Embree scene ->
- * render the frame (gi_frame_render_raytraced) -> write PNG + PFM, printing
- * the time of every step.
+ * render the frame (gi_frame_render_raster, or gi_frame_render_raytraced
+ * with --raytrace) -> write the images, printing the time of every step.
  *
- * Outputs (pf_imageio.h): -o NAME.png writes the PNG and NAME.pfm (or
- * --hdr FILE.pfm); -o NAME.pfm writes only the PFM, at exactly that name;
- * any other extension, and two outputs naming the same file (with
- * --dump-stages too), are refused before anything is rendered (exit 2).
- * Every file is written to a temporary file and renamed over its target
- * when complete; an image with a NaN, infinite or negative value is not
- * written (exit 1).
+ * Outputs (pf_imageio.h, by extension): -o NAME.png writes the PNG and the
+ * linear image NAME.pfm (or --hdr FILE.exr / FILE.pfm); -o NAME.exr or
+ * NAME.pfm writes only that linear image, at exactly that name; any other
+ * extension, and two outputs naming the same file (with the --dump-stages
+ * files too), are refused before anything is rendered (exit 2). Every file
+ * is written to a temporary file and renamed over its target when
+ * complete; an image with a NaN, infinite or negative value is not written
+ * (exit 1). --dump-stages DIR writes the stages (gi_dump.h) as pictures,
+ * float OpenEXR data or both (--dump-format png|exr|both, default png).
  *
  * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
@@ -19,6 +21,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "gi_dump.h"
 #include "gi_frame.h"
 #include "gi_view.h"
 #include "pf_gltf.h"
@@ -27,21 +30,43 @@
 #include "pf_rt.h"
 #include "pf_timer.h"
 
-/* The files this render will write, checked before anything is rendered:
- * supported extensions, and no two outputs naming the same file. */
-static pf_result app__check_outputs(const pf_options *o, const char *default_png, pf_error *err)
+/* --dump-format as gi_dump's format (not given: the pictures). */
+static gi_dump_format app__dump_format(const pf_options *o)
 {
-    char png[4096], pfm[4096], dump[4200];
-    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, default_png, png, pfm, err);
-    for (int v = -1; r == PF_OK && o->dump_dir && v < GI_VIEW_COUNT; v++) {
-        if (v < 0) snprintf(dump, sizeof dump, "%s/captions.txt", o->dump_dir);
-        else snprintf(dump, sizeof dump, "%s/%02d-%s.png", o->dump_dir, v, gi_view_name((gi_view_id)v));
-        const char *same = png[0] && pf_imageio_same_output(png, dump) ? png
-                           : pf_imageio_same_output(pfm, dump)          ? pfm
-                                                                        : NULL;
-        if (same)
-            r = pf_error_set(err, PF_ERR_ARGUMENT, "'%s' is also a --dump-stages file (%s); give another -o or --hdr",
-                             same, dump);
+    return o->dump_format == (PF_CLI_DUMP_PNG | PF_CLI_DUMP_EXR) ? GI_DUMP_BOTH
+           : o->dump_format == PF_CLI_DUMP_EXR                   ? GI_DUMP_EXR
+                                                                 : GI_DUMP_PNG;
+}
+
+/* An output that is also the dump file `dump`: refused. */
+static pf_result app__not_dumped(const pf_imageio_outputs *out, const char *dump, pf_error *err)
+{
+    const char *same = out->png[0] && pf_imageio_same_output(out->png, dump) ? out->png
+                       : pf_imageio_same_output(out->linear, dump)          ? out->linear
+                                                                             : NULL;
+    if (!same) return PF_OK;
+    return pf_error_set(err, PF_ERR_ARGUMENT, "'%s' is also a --dump-stages file (%s); give another -o or --hdr", same,
+                        dump);
+}
+
+/* The files this render will write (into *out), checked before anything is
+ * rendered: supported extensions, and no two outputs naming the same file. */
+static pf_result app__check_outputs(const pf_options *o, const char *default_png, pf_imageio_outputs *out,
+                                    pf_error *err)
+{
+    char dump[4200];
+    const gi_dump_format fmt = app__dump_format(o);
+    pf_result r = pf_imageio_outputs_resolve(out, o->out_path, o->hdr_path, default_png, err);
+    if (r == PF_OK && o->dump_dir) {
+        snprintf(dump, sizeof dump, "%s/captions.txt", o->dump_dir);
+        r = app__not_dumped(out, dump, err);
+    }
+    for (int v = 0; r == PF_OK && o->dump_dir && v < GI_VIEW_COUNT; v++) {
+        const char *name = gi_view_name((gi_view_id)v);
+        snprintf(dump, sizeof dump, "%s/%02d-%s.png", o->dump_dir, v, name);
+        if (fmt & GI_DUMP_PNG) r = app__not_dumped(out, dump, err);
+        snprintf(dump, sizeof dump, "%s/%02d-%s.exr", o->dump_dir, v, name);
+        if (r == PF_OK && (fmt & GI_DUMP_EXR) && gi_dump_has_exr((gi_view_id)v)) r = app__not_dumped(out, dump, err);
     }
     return r;
 }
@@ -52,16 +77,17 @@ int app_render(const pf_options *o)
     pf_stage_times t;
     memset(&t, 0, sizeof t);
     /* -o / --hdr: usage errors before any work (the default name is always valid) */
-    pf_result r = app__check_outputs(o, "out/scene.png", &err);
+    pf_imageio_outputs out;
+    pf_result r = app__check_outputs(o, "out/scene.png", &out, &err);
     if (r != PF_OK) return app_fail(&err);
 
     /* Scene, Embree, jobs */
     app_setup su;
     r = app_setup_begin(o, &su, &t, &err);
     if (r != PF_OK) return app_fail(&err);
-    char png[4096], pfm[4096], def[4096];
+    char def[4096];
     snprintf(def, sizeof def, "out/%s.png", su.stem);
-    if ((r = app__check_outputs(o, def, &err)) != PF_OK) {
+    if ((r = app__check_outputs(o, def, &out, &err)) != PF_OK) {
         app_setup_end(&su);
         return app_fail(&err);
     }
@@ -88,12 +114,12 @@ int app_render(const pf_options *o)
 
     /* Output */
     double t0 = pf_time_now();
-    r = app_write_image(o, def, frame.final, width, height, png, pfm, &err);
+    r = pf_imageio_outputs_write(&out, frame.final, width, height, o->exposure, &err);
     if (r == PF_OK && o->dump_dir) {
         gi_view_settings vs = {o->exposure, 0}; /* the views `softgi view` shows at this exposure */
-        r = gi_view_dump(&frame, o->dump_dir, &vs, &err);
+        r = gi_dump_stages(&frame, o->dump_dir, &vs, app__dump_format(o), &err);
     }
-    pf_stage_add(&t, "write png + pfm", (pf_time_now() - t0) * 1e3);
+    pf_stage_add(&t, o->dump_dir ? "write images + dump" : "write images", (pf_time_now() - t0) * 1e3);
     int status = 0;
     if (r != PF_OK) status = app_fail(&err);
     else {
@@ -109,8 +135,8 @@ int app_render(const pf_options *o)
                        : frame.ind.para ? "paraboloid maps"
                                         : "Embree rays");
             pf_stage_print(&t, stdout);
-            if (png[0]) printf("wrote %s and %s\n", png, pfm);
-            else printf("wrote %s\n", pfm);
+            if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
+            else printf("wrote %s\n", out.linear);
         }
         if (o->print_hash)
             printf("hash %016llx (isa %s)\n",

@@ -1,6 +1,14 @@
-/* pf_cli: strict command-line parsing (see pf_cli.h). */
+/* pf_cli: strict command-line parsing (see pf_cli.h).
+ *
+ * One table (k_options) says, for every option, its value, the commands
+ * that take it and its help text; the per-command help and the refusal of
+ * an option a command does not take are both read from it, so they cannot
+ * disagree. An option may have several rows when its help differs by
+ * command (-o is a file for render and a folder for sequence); the rows of
+ * one name share its id and whether it takes a value. */
 #include "pf_cli.h"
 #include "pf_budget.h"
+#include "pf_imageio.h"
 
 #include <errno.h>
 #include <math.h>
@@ -8,78 +16,306 @@
 #include <string.h>
 #include <strings.h>
 
+/* ---------------------------------------------------------------- the tables */
+
+typedef enum pf__opt_id {
+    PF__OPT_OUTPUT, PF__OPT_HDR, PF__OPT_SIZE, PF__OPT_THREADS, PF__OPT_ISA, PF__OPT_EXPOSURE, PF__OPT_CAMERA,
+    PF__OPT_LIGHT, PF__OPT_SHADOW_SIZE, PF__OPT_MAX_MEMORY, PF__OPT_AREA_STRATA, PF__OPT_AREA_POINTS,
+    PF__OPT_INDIRECT_ONLY, PF__OPT_DIRECT_ONLY, PF__OPT_VPLS, PF__OPT_METHOD, PF__OPT_BOUNCES, PF__OPT_TILES,
+    PF__OPT_NO_INTERLEAVE, PF__OPT_CLAMP, PF__OPT_FILTER, PF__OPT_VISIBILITY, PF__OPT_ISM_RES, PF__OPT_ISM_POINTS,
+    PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
+    PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
+    PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_HELP, PF__OPT_VERSION,
+    PF__OPT_COUNT
+} pf__opt_id;
+
+typedef struct pf__opt {
+    pf__opt_id id;
+    const char *name;  /* "--size" */
+    const char *alias; /* "-o", or NULL */
+    const char *value; /* what follows it ("WxH"); NULL: a flag */
+    uint32_t commands; /* PF_CLI_* bits of the commands that take it */
+    const char *help;  /* lines separated by '\n' */
+    const char *note;  /* added to the refusal (may be NULL) */
+} pf__opt;
+
+#define R PF_CLI_RENDER
+#define V PF_CLI_VIEW
+#define F PF_CLI_REFERENCE
+#define S PF_CLI_SEQUENCE
+#define BR PF_CLI_BENCH_RASTER
+#define BF PF_CLI_BENCH_FRAME
+#define SCENE (R | V | F | S) /* the commands that load a scene and render it */
+#define FRAME (R | V | S)     /* the commands that build the many-light frame (app_frame_init) */
+#define ALL (SCENE | BR | BF)
+
+/* In help order. */
+static const pf__opt k_options[] = {
+    {PF__OPT_OUTPUT, "--output", "-o", "FILE", R,
+     "by extension: FILE.png writes the PNG and the linear image\nbeside it (FILE.pfm, or --hdr); FILE.exr or "
+     "FILE.pfm writes only\nthe linear image (default out/<scene>.png)",
+     NULL},
+    {PF__OPT_OUTPUT, "--output", "-o", "FILE", F,
+     "by extension: FILE.png writes the PNG and the linear image\nbeside it (FILE.pfm, or --hdr); FILE.exr or "
+     "FILE.pfm writes only\nthe linear image (default out/<scene>-reference.png)",
+     NULL},
+    {PF__OPT_OUTPUT, "--output", "-o", "DIR", S, "the frames' folder (default: the file's \"output\" under out/)",
+     NULL},
+    {PF__OPT_HDR, "--hdr", NULL, "FILE", R | F,
+     "the linear image beside -o NAME.png: FILE.exr or FILE.pfm\n(default: the PNG's name with .pfm)", NULL},
+    {PF__OPT_SIZE, "--size", NULL, "WxH", R | V | F, "image size (default 640x480)", NULL},
+    {PF__OPT_SIZE, "--size", NULL, "WxH", S, "image size (default: the file's \"size\", else 640x480)", NULL},
+    {PF__OPT_THREADS, "--threads", NULL, "N", SCENE, "worker threads incl. the main one (default: cores)", NULL},
+    {PF__OPT_THREADS, "--threads", NULL, "N", BR | BF, "measure only N threads (default: 1 and 2)", NULL},
+    {PF__OPT_ISA, "--isa", NULL, "auto|sse2|sse4.2|avx2|avx512", ALL, "pin Embree's and softgi's SIMD ISA (default auto)",
+     NULL},
+    {PF__OPT_EXPOSURE, "--exposure", NULL, "STOPS", SCENE, "PNG exposure, 2^STOPS before Reinhard (default 0)", NULL},
+    {PF__OPT_CAMERA, "--camera", NULL, "ex,ey,ez:tx,ty,tz:fovy_deg", SCENE, "the camera (replaces the scene's)", NULL},
+    {PF__OPT_LIGHT, "--light", NULL, "SPEC", SCENE,
+     "point:x,y,z:r,g,b:I (I: W/sr)\n"
+     "spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I\n"
+     "dir:dx,dy,dz:r,g,b:E (E: W/m^2)\n"
+     "repeatable; lights given replace the scene's lights",
+     NULL},
+    {PF__OPT_SHADOW_SIZE, "--shadow-size", NULL, "N", FRAME, "direct-light shadow map resolution (default 1024)", NULL},
+    {PF__OPT_MAX_MEMORY, "--max-memory", NULL, "SIZE", SCENE,
+     "memory budget, e.g. 8G or 512M (default: half of this\nmachine's memory); larger scenes and frames are refused",
+     NULL},
+    {PF__OPT_AREA_STRATA, "--area-strata", NULL, "N", FRAME,
+     "area lights, ray-traced direct light: N x N stratified\nsamples per pixel (1..16, default 4)", NULL},
+    {PF__OPT_AREA_POINTS, "--area-points", NULL, "K", FRAME,
+     "area lights, rasterized direct light: K emitter points,\neach with a paraboloid shadow map (1..1024, default 32)",
+     NULL},
+    {PF__OPT_INDIRECT_ONLY, "--indirect-only", NULL, NULL, SCENE, "only the indirect light (no emission, no direct)",
+     NULL},
+    {PF__OPT_DIRECT_ONLY, "--direct-only", NULL, NULL, SCENE, "only emission and direct light", NULL},
+    {PF__OPT_VPLS, "--vpls", NULL, "N", FRAME, "VPL budget (default 256)", NULL},
+    {PF__OPT_VPLS, "--vpls", NULL, "N", BF, "measure only N VPLs (default: 256 and 2048)", NULL},
+    {PF__OPT_METHOD, "--method", NULL, "NAME", FRAME | BF,
+     "VPL method (default ir): ir, iir, smc, mir, invtm, tcas, ssvp", NULL},
+    {PF__OPT_BOUNCES, "--bounces", NULL, "B", FRAME, "light bounces of the VPLs (default 3)", NULL},
+    {PF__OPT_BOUNCES, "--bounces", NULL, "B", F, "bounces of the reference's paths (default 3)", NULL},
+    {PF__OPT_TILES, "--tiles", NULL, "NxM", FRAME | BF, "interleaved tiles (default 4x4)", NULL},
+    {PF__OPT_NO_INTERLEAVE, "--no-interleave", NULL, NULL, FRAME, "every pixel sees every VPL", NULL},
+    {PF__OPT_CLAMP, "--clamp", NULL, "C", FRAME, "bounded geometry term b = C / diagonal^2 (default 400, 0 = off)",
+     NULL},
+    {PF__OPT_FILTER, "--filter", NULL, "box|bilateral|gaussian|none", FRAME,
+     "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian)",
+     NULL},
+    {PF__OPT_VISIBILITY, "--visibility", NULL, "paraboloid|ism|raytrace", FRAME | BF,
+     "VPL visibility (default: exact paraboloid maps)", NULL},
+    {PF__OPT_ISM_RES, "--ism-res", NULL, "N", FRAME | BF,
+     "--visibility ism: texels per ISM side, a power of two 8..512\n(default 64)", NULL},
+    {PF__OPT_ISM_POINTS, "--ism-points", NULL, "N", FRAME | BF,
+     "--visibility ism: points splatted per frame (default 1000000)", NULL},
+    {PF__OPT_ISM_BIAS, "--ism-bias", NULL, "S", FRAME | BF,
+     "--visibility ism: bias, x the exact maps' bias, 1..64 (default 2)", NULL},
+    {PF__OPT_PARAM, "--param", NULL, "KEY=VALUE", FRAME | BF, "a parameter of the VPL method (repeatable; see README)",
+     NULL},
+    {PF__OPT_DUMP_STAGES, "--dump-stages", NULL, "DIR", R | V,
+     "write every stage of the frame as an image, with captions.txt", NULL},
+    {PF__OPT_DUMP_FORMAT, "--dump-format", NULL, "png|exr|both", R,
+     "--dump-stages: the pictures (png, the default), the stages'\nfloat data as OpenEXR (exr), or both", NULL},
+    {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", FRAME,
+     "overlap the next frame's VPL update with this frame\n(one frame of VPL delay; default off)", NULL},
+    {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", BF, "measure only with or only without pipelining (default: both)",
+     NULL},
+    {PF__OPT_SPP, "--spp", NULL, "N", F, "samples per pixel (default 64)", NULL},
+    {PF__OPT_SPP, "--spp", NULL, "N", S, "--reference: samples per pixel (default 64)", NULL},
+    {PF__OPT_REFERENCE, "--reference", NULL, NULL, S, "path-trace every frame (the references evaluate uses)",
+     "softgi reference renders one image; --reference is an option of sequence"},
+    {PF__OPT_TRACK_SPP, "--track-spp", NULL, "N", S, "--reference: the tracked pixels with N samples", NULL},
+    {PF__OPT_REUSE_FRAMES, "--reuse-frames", NULL, NULL, S,
+     "--reference --track-spp: keep the folder's frames, redo only\nthe tracked pixels", NULL},
+    {PF__OPT_RAYTRACE, "--raytrace", NULL, NULL, FRAME,
+     "Embree primary rays and shadow rays (the reference path)\ninstead of the rasterized G-buffer and shadow maps", NULL},
+    {PF__OPT_HASH, "--hash", NULL, NULL, R | F | S,
+     "print a 64-bit hash of the linear output and the ISA used\n(the same on every ISA and processor)", NULL},
+    {PF__OPT_QUIET, "--quiet", "-q", NULL, SCENE, "no timing table", NULL},
+    {PF__OPT_FRAMES, "--frames", NULL, "N", V, "render N frames, then exit (after --screenshot)", NULL},
+    {PF__OPT_FRAMES, "--frames", NULL, "N", BR | BF, "repetitions per measurement (default 15)", NULL},
+    {PF__OPT_SCREENSHOT, "--screenshot", NULL, "FILE.png", V,
+     "save the window (without the HUD) after --frames N (default 1)", NULL},
+    {PF__OPT_SCENES, "--scenes", NULL, "DIR", BR | BF, "folder with sibenik/ and conference/ (default ../shared/scenes)",
+     NULL},
+    {PF__OPT_MOVING_LIGHT, "--moving-light", NULL, NULL, BF, "the light moves on a small circle every frame", NULL},
+    {PF__OPT_HELP, "--help", "-h", NULL, ALL, "this text", NULL},
+    {PF__OPT_VERSION, "--version", NULL, NULL, 0, "softgi's version (no command)", NULL},
+};
+#define PF__OPTIONS (sizeof k_options / sizeof k_options[0])
+
+typedef struct pf__cmd {
+    uint32_t bit;
+    const char *name;    /* as named in messages */
+    const char *usage;   /* the usage line */
+    const char *summary; /* one line for the command list */
+    const char *about;   /* the command's help, before its options */
+} pf__cmd;
+
+static const pf__cmd k_commands[] = {
+    {R, "render", "softgi render [SCENE.gltf|SCENE.glb] [options]",
+     "render SCENE (default: the embedded Cornell box) to a PNG and a linear .pfm/.exr",
+     "Renders SCENE (default: the embedded Cornell box) with softgi's many-light frame to a\n"
+     "PNG and a linear HDR image, printing per-stage timings."},
+    {V, "view", "softgi view [SCENE.gltf|SCENE.glb] [options]", "the interactive viewer and frame-stage stepper",
+     "Shows the frame of `softgi render` in a window, re-rendered every frame; P pauses and\n"
+     "N / B step through its stages (keys: H in the window)."},
+    {F, "reference", "softgi reference [SCENE.gltf|SCENE.glb] [options]", "the path-traced reference image",
+     "Path-traces SCENE (gi_reference: the ground truth the VPL methods are measured\n"
+     "against) to a PNG and a linear HDR image, with a progress bar."},
+    {S, "sequence", "softgi sequence SEQUENCE.json [options]", "render a camera/light sequence to a folder of frames",
+     "Renders the frames of a sequence file (scene, camera and light keyframes) to a folder,\n"
+     "keeping the VPL method's state from frame to frame."},
+    {BR, "bench raster", "softgi bench raster [options]", "the rasterizer's passes against Embree",
+     "Times the G-buffer pass, paraboloid maps and a cube shadow map against Embree on\n"
+     "Sibenik and the conference room (from --scenes)."},
+    {BF, "bench frame", "softgi bench frame [options]", "the whole many-light frame, stage by stage",
+     "Times every stage of the many-light frame on Sibenik and the conference room (from\n"
+     "--scenes), with and without pipelining."},
+};
+#define PF__COMMANDS (sizeof k_commands / sizeof k_commands[0])
+
+#undef R
+#undef V
+#undef F
+#undef S
+#undef BR
+#undef BF
+#undef SCENE
+#undef FRAME
+#undef ALL
+
+uint32_t pf_cli_command_bit(const char *command, const char *subject)
+{
+    if (!command) return 0;
+    if (!strcmp(command, "bench"))
+        return !subject ? 0 : !strcmp(subject, "raster") ? PF_CLI_BENCH_RASTER
+                          : !strcmp(subject, "frame")    ? PF_CLI_BENCH_FRAME
+                                                         : 0;
+    for (size_t c = 0; c < PF__COMMANDS; c++)
+        if (!strcmp(k_commands[c].name, command)) return k_commands[c].bit;
+    return 0;
+}
+
+/* The first row of an option by name or alias; NULL for none. */
+static const pf__opt *pf__find(const char *arg)
+{
+    for (size_t i = 0; i < PF__OPTIONS; i++)
+        if (!strcmp(arg, k_options[i].name) || (k_options[i].alias && !strcmp(arg, k_options[i].alias)))
+            return &k_options[i];
+    return NULL;
+}
+
+/* Every command that takes option `id` (the union of its rows). */
+static uint32_t pf__commands_of(pf__opt_id id)
+{
+    uint32_t set = 0;
+    for (size_t i = 0; i < PF__OPTIONS; i++)
+        if (k_options[i].id == id) set |= k_options[i].commands;
+    return set;
+}
+
+uint32_t pf_cli_option_commands(const char *option)
+{
+    const pf__opt *e = pf__find(option);
+    return e ? pf__commands_of(e->id) : 0;
+}
+
+const char *pf_cli_option_name(uint32_t i)
+{
+    /* the distinct names, in table order */
+    uint32_t k = 0;
+    for (size_t r = 0; r < PF__OPTIONS; r++) {
+        if (pf__find(k_options[r].name) != &k_options[r]) continue; /* a later row of a name */
+        if (k++ == i) return k_options[r].name;
+    }
+    return NULL;
+}
+
+/* "render, view and sequence" */
+static void pf__command_list(uint32_t set, char *buf, size_t size)
+{
+    size_t n = 0, count = 0, done = 0;
+    for (size_t c = 0; c < PF__COMMANDS; c++) count += (set & k_commands[c].bit) != 0;
+    buf[0] = 0;
+    for (size_t c = 0; c < PF__COMMANDS && n < size; c++) {
+        if (!(set & k_commands[c].bit)) continue;
+        const char *sep = done == 0 ? "" : done + 1 == count ? " and " : ", ";
+        int w = snprintf(buf + n, size - n, "%s%s", sep, k_commands[c].name);
+        if (w < 0) break;
+        n += (size_t)w;
+        done++;
+    }
+}
+
+/* ---------------------------------------------------------------- help */
+
+/* "  -o, --output FILE       first line of help" and its further lines,
+ * indented to the help column. */
+static void pf__print_option(FILE *out, const pf__opt *e)
+{
+    enum { HEAD = 22 };
+    char head[96];
+    snprintf(head, sizeof head, "%s%s%s%s%s", e->alias ? e->alias : "", e->alias ? ", " : "", e->name,
+             e->value ? " " : "", e->value ? e->value : "");
+    fprintf(out, "  %-*s", HEAD, head);
+    if (strlen(head) > HEAD) fprintf(out, "\n  %*s", HEAD, "");
+    for (const char *p = e->help; *p;) {
+        size_t n = strcspn(p, "\n");
+        fprintf(out, "  %.*s\n", (int)n, p);
+        p += n;
+        if (*p == '\n') {
+            p++;
+            fprintf(out, "  %*s", HEAD, "");
+        }
+    }
+}
+
+static void pf__print_command(FILE *out, const pf__cmd *c)
+{
+    fprintf(out, "usage: %s\n\n%s\n\noptions:\n", c->usage, c->about);
+    for (size_t i = 0; i < PF__OPTIONS; i++)
+        if (k_options[i].commands & c->bit) pf__print_option(out, &k_options[i]);
+}
+
 void pf_cli_usage(FILE *out)
 {
-    fputs("usage: softgi render [SCENE.gltf|SCENE.glb] [options]\n"
-          "       softgi reference [SCENE.gltf|SCENE.glb] [options]   (path-traced reference)\n"
-          "       softgi view [SCENE.gltf|SCENE.glb] [options]        (interactive viewer and stage stepper;\n"
-          "                                                           keys: H in the window)\n"
-          "       softgi sequence SEQUENCE.json [options]             (render a camera/light sequence)\n"
-          "       softgi bench frame [--threads N] [--frames N] [--scenes DIR] [--vpls N] [--tiles NxM]\n"
-          "       softgi compare ...                                  (softgi compare --help)\n"
-          "       softgi evaluate ...                                 (softgi evaluate --help)\n"
-          "       softgi bench raster [--threads N] [--frames N] [--scenes DIR] [--isa ISA]\n"
-          "\n"
-          "Renders SCENE (default: the embedded Cornell box) to a PNG and a linear\n"
-          "HDR .pfm, printing per-stage timings.\n"
-          "\n"
-          "options:\n"
-          "  -o, --output FILE       by extension: FILE.png writes the PNG and the linear PFM\n"
-          "                          beside it; FILE.pfm writes only the PFM; nothing else\n"
-          "                          (default out/<scene>.png). sequence: -o DIR, the frames' folder\n"
-          "  --hdr FILE.pfm          linear HDR output beside a PNG (default: the PNG path, .pfm)\n"
-          "  --size WxH              image size (default 640x480)\n"
-          "  --threads N             worker threads incl. the main one (default: cores)\n"
-          "  --isa auto|sse2|sse4.2|avx2|avx512\n"
-          "                          pin Embree's and softgi's SIMD ISA (default auto)\n"
-          "  --exposure STOPS        PNG exposure, 2^STOPS before Reinhard (default 0)\n"
-          "  --camera ex,ey,ez:tx,ty,tz:fovy_deg\n"
-          "  --light point:x,y,z:r,g,b:I           (I: W/sr)\n"
-          "  --light spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I\n"
-          "  --light dir:dx,dy,dz:r,g,b:E           (E: W/m^2)\n"
-          "                          lights given replace the scene's lights\n"
-          "  --shadow-size N         direct-light shadow map resolution (default 1024)\n"
-          "  --max-memory SIZE       memory budget, e.g. 8G or 512M (default: half of this\n"
-          "                          machine's memory); larger scenes and frames are refused\n"
-          "  --area-strata N         area lights, ray-traced direct light: N x N stratified\n"
-          "                          samples per pixel (1..16, default 4)\n"
-          "  --area-points K         area lights, rasterized direct light: K emitter points,\n"
-          "                          each with a paraboloid shadow map (1..1024, default 32)\n"
-          "  --indirect-only, --direct-only\n"
-          "  --vpls N                VPL budget (default 256)\n"
-          "  --method NAME           VPL method (default ir): ir, iir, smc, mir, invtm, tcas, ssvp\n"
-          "  --bounces B             light bounces for VPLs / reference paths (default 3)\n"
-          "  --tiles NxM             interleaved tiles (default 4x4)\n"
-          "  --no-interleave         every pixel sees every VPL\n"
-          "  --clamp C               bounded geometry term b = C / diagonal^2 (default 400, 0 = off)\n"
-          "  --filter box|bilateral|gaussian|none  indirect-light filter (default box, Laine 2007 Fig. 5;\n"
-          "                        gaussian: Aranha SSVP Sec. III-D edge-aware Gaussian)\n"
-          "  --visibility paraboloid|ism|raytrace  VPL visibility (default exact paraboloid maps)\n"
-          "  --ism-res N             --visibility ism: texels per ISM side, a power of two 8..512 (default 64)\n"
-          "  --ism-points N          --visibility ism: points splatted per frame (default 1000000)\n"
-          "  --ism-bias S            --visibility ism: bias, x the exact maps' bias, 1..64 (default 2)\n"
-          "  --param KEY=VALUE       a parameter of the VPL method (repeatable; see README)\n"
-          "  --dump-stages DIR       write every stage's buffer as an image\n"
-          "  --pipeline on|off       overlap the next frame's VPL update with this frame\n"
-          "                          (one frame of VPL delay; default off; bench frame: both)\n"
-          "  --spp N                 reference: samples per pixel (default 64)\n"
-          "  --reference             sequence: path-trace every frame (the references evaluate uses)\n"
-          "  --track-spp N           sequence --reference: the tracked pixels with N samples\n"
-          "  --reuse-frames          sequence --reference --track-spp: keep the folder's frames, redo\n"
-          "                          only the tracked pixels\n"
-          "  --raytrace              Embree primary rays and shadow rays (the reference\n"
-          "                          path) instead of the rasterized G-buffer and shadow maps\n"
-          "  --hash                  print a 64-bit hash of the linear output and the ISA used\n"
-          "                          (the same on every ISA and processor)\n"
-          "  -q, --quiet             no timing table\n"
-          "  --frames N              bench: repetitions per measurement (default 15)\n"
-          "                          view: render N frames, then exit (after --screenshot)\n"
-          "  --screenshot FILE.png   view: save the window (without the HUD) after --frames N (default 1)\n"
-          "  --scenes DIR            bench: folder with sibenik/ and conference/ (default ../shared/scenes)\n"
-          "  --moving-light          bench frame: the light moves on a small circle every frame\n"
-          "  -h, --help, --version\n",
+    fputs("softgi: a pure-CPU software-rasterizing renderer with VPL global illumination.\n\n", out);
+    for (size_t c = 0; c < PF__COMMANDS; c++)
+        fprintf(out, "%s %s\n", c == 0 ? "usage:" : "      ", k_commands[c].usage);
+    fputs("       softgi compare IMAGE REFERENCE | --reference DIR --name NAME:DIR ...\n"
+          "       softgi evaluate [options]\n"
+          "       softgi --version\n\ncommands:\n",
+          out);
+    for (size_t c = 0; c < PF__COMMANDS; c++) fprintf(out, "  %-13s %s\n", k_commands[c].name, k_commands[c].summary);
+    fputs("  compare       metrics between images (.pfm, .exr) or sequences (Hedman 2017 Table 1)\n"
+          "  evaluate      every VPL method against path-traced references on the shipped sequences\n"
+          "\n`softgi COMMAND --help` lists the options of COMMAND; a command refuses options it does not take.\n",
           out);
 }
+
+pf_result pf_cli_usage_command(FILE *out, const char *command, const char *subject, pf_error *err)
+{
+    if (!command) {
+        pf_cli_usage(out);
+        return PF_OK;
+    }
+    uint32_t bits = pf_cli_command_bit(command, subject);
+    if (!strcmp(command, "bench") && !bits) bits = PF_CLI_BENCH_RASTER | PF_CLI_BENCH_FRAME; /* both */
+    int printed = 0;
+    for (size_t c = 0; c < PF__COMMANDS; c++)
+        if (k_commands[c].bit & bits) {
+            if (printed++) fputc('\n', out);
+            pf__print_command(out, &k_commands[c]);
+        }
+    if (printed) return PF_OK;
+    return pf_error_set(err, PF_ERR_ARGUMENT,
+                        "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, compare, "
+                        "evaluate)",
+                        command);
+}
+
+/* ---------------------------------------------------------------- values */
 
 /* Parses exactly one finite float from [s, s+len). */
 static int pf__float(const char *s, size_t len, float *out)
@@ -223,6 +459,7 @@ pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err)
     }
     return pf_error_set(err, PF_ERR_ARGUMENT, "--light '%s': type must be point, spot or dir", spec);
 }
+/* ---------------------------------------------------------------- parsing */
 
 static pf_result pf__uint(const char *opt, const char *s, uint32_t lo, uint32_t hi, uint32_t *out, pf_error *err)
 {
@@ -235,168 +472,227 @@ static pf_result pf__uint(const char *opt, const char *s, uint32_t lo, uint32_t 
     return PF_OK;
 }
 
+/* "AxB" into *a and *b, each lo..hi; `example` for the message. */
+static pf_result pf__pair(const char *opt, const char *val, const char *example, uint32_t lo, uint32_t hi,
+                          uint32_t *a, uint32_t *b, pf_error *err)
+{
+    const char *x = strchr(val, 'x');
+    char abuf[16], name[48];
+    if (!x || (size_t)(x - val) >= sizeof abuf)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s': expected %s", opt, val, example);
+    memcpy(abuf, val, (size_t)(x - val));
+    abuf[x - val] = 0;
+    snprintf(name, sizeof name, "%s %s", opt, !strcmp(opt, "--size") ? "width" : "n");
+    pf_result r = pf__uint(name, abuf, lo, hi, a, err);
+    snprintf(name, sizeof name, "%s %s", opt, !strcmp(opt, "--size") ? "height" : "m");
+    return r == PF_OK ? pf__uint(name, x + 1, lo, hi, b, err) : r;
+}
+
+static pf_result pf__size(pf_options *o, const char *val, pf_error *err)
+{
+    pf_result r = pf__pair("--size", val, "WxH, e.g. 640x480", 1, 16384, &o->width, &o->height, err);
+    /* a frame keeps ~130 bytes a pixel (G-buffer, split buffers, irradiance): 8 GiB here */
+    if (r == PF_OK && (uint64_t)o->width * o->height > (uint64_t)1 << 26)
+        r = pf_error_set(err, PF_ERR_ARGUMENT, "--size %ux%u: at most 67108864 pixels (e.g. 8192x8192)", o->width,
+                         o->height);
+    return r;
+}
+
+static pf_result pf__float_option(const char *a, const char *val, float lo, float hi, const char *expected,
+                                  float *out, pf_error *err)
+{
+    if (!pf__float(val, strlen(val), out) || !(*out >= lo && *out <= hi))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s': expected %s", a, val, expected);
+    return PF_OK;
+}
+
+/* One of the words of `choices` ("png|exr|both"): its index, or -1. */
+static int pf__choice(const char *val, const char *choices)
+{
+    int k = 0;
+    for (const char *p = choices; *p; k++) {
+        size_t n = strcspn(p, "|");
+        if (strlen(val) == n && !strncmp(val, p, n)) return k;
+        p += n + (p[n] == '|');
+    }
+    return -1;
+}
+
+static pf_result pf__light(pf_options *o, const char *val, pf_error *err)
+{
+    if (o->light_count == PF_CLI_MAX_LIGHTS)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "at most %d --light options", PF_CLI_MAX_LIGHTS);
+    return pf_cli_parse_light(val, &o->lights[o->light_count++], err);
+}
+
+static pf_result pf__param(pf_options *o, const char *val, pf_error *err)
+{
+    if (o->param_count >= 32) return pf_error_set(err, PF_ERR_ARGUMENT, "--param: at most 32 parameters");
+    if (!strchr(val, '=') || val[0] == '=')
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--param '%s': expected KEY=VALUE", val);
+    o->params[o->param_count++] = val;
+    return PF_OK;
+}
+
+/* Option `id` (spelt `a`) with its value `val` (NULL for a flag) into *o. */
+static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const char *val, pf_error *err)
+{
+    pf_result r = PF_OK;
+    int k;
+    switch (id) {
+    case PF__OPT_OUTPUT: o->out_path = val; break;
+    case PF__OPT_HDR: o->hdr_path = val; break;
+    case PF__OPT_SIZE: r = pf__size(o, val, err); break;
+    case PF__OPT_THREADS: r = pf__uint(a, val, 1, 256, &o->threads, err); break;
+    case PF__OPT_ISA: r = pf_isa_parse(val, &o->isa, err); break;
+    case PF__OPT_EXPOSURE:
+        r = pf__float_option(a, val, -64.0f, 64.0f, "a number of stops in -64..64", &o->exposure, err);
+        break;
+    case PF__OPT_CAMERA:
+        r = pf_cli_parse_camera(val, &o->camera_eye, &o->camera_target, &o->camera_fovy_deg, err);
+        o->has_camera = 1;
+        break;
+    case PF__OPT_LIGHT: r = pf__light(o, val, err); break;
+    case PF__OPT_SHADOW_SIZE: r = pf__uint(a, val, 16, 8192, &o->shadow_size, err); break;
+    case PF__OPT_MAX_MEMORY: r = pf_budget_parse(val, &o->max_memory, err); break;
+    case PF__OPT_AREA_STRATA: r = pf__uint(a, val, 1, 16, &o->area_strata, err); break;
+    case PF__OPT_AREA_POINTS: r = pf__uint(a, val, 1, 1024, &o->area_points, err); break;
+    case PF__OPT_INDIRECT_ONLY: o->indirect_only = 1; break;
+    case PF__OPT_DIRECT_ONLY: o->direct_only = 1; break;
+    case PF__OPT_VPLS: r = pf__uint(a, val, 1, 1u << 20, &o->vpls, err); break;
+    case PF__OPT_METHOD: o->method = val; break;
+    case PF__OPT_BOUNCES: r = pf__uint(a, val, 1, 64, &o->bounces, err); break;
+    case PF__OPT_TILES: r = pf__pair("--tiles", val, "NxM, e.g. 4x4", 1, 16, &o->tiles_n, &o->tiles_m, err); break;
+    case PF__OPT_NO_INTERLEAVE: o->no_interleave = 1; break;
+    case PF__OPT_CLAMP:
+        r = pf__float_option(a, val, 0.0f, INFINITY, "a number >= 0 (0 = off)", &o->clamp, err);
+        o->clamp_set = 1;
+        break;
+    case PF__OPT_FILTER:
+        o->filter = val;
+        if (pf__choice(val, "box|bilateral|gaussian|none") < 0)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian or none", val);
+        break;
+    case PF__OPT_VISIBILITY:
+        k = pf__choice(val, "paraboloid|ism|raytrace");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid, ism or raytrace", val);
+        o->visibility_ism |= k == 1;
+        o->visibility_raytrace |= k == 2;
+        break;
+    case PF__OPT_ISM_RES:
+        r = pf__uint(a, val, 8, 512, &o->ism_res, err);
+        if (r == PF_OK && (o->ism_res & (o->ism_res - 1)))
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res '%s': expected a power of two in 8..512", val);
+        break;
+    case PF__OPT_ISM_POINTS: r = pf__uint(a, val, 1000, 100000000, &o->ism_points, err); break;
+    case PF__OPT_ISM_BIAS: r = pf__float_option(a, val, 1.0f, 64.0f, "a number in 1..64", &o->ism_bias, err); break;
+    case PF__OPT_PARAM: r = pf__param(o, val, err); break;
+    case PF__OPT_DUMP_STAGES: o->dump_dir = val; break;
+    case PF__OPT_DUMP_FORMAT:
+        k = pf__choice(val, "png|exr|both");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format '%s': expected png, exr or both", val);
+        o->dump_format = k == 0 ? PF_CLI_DUMP_PNG : k == 1 ? PF_CLI_DUMP_EXR : PF_CLI_DUMP_PNG | PF_CLI_DUMP_EXR;
+        break;
+    case PF__OPT_PIPELINE:
+        k = pf__choice(val, "off|on");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--pipeline '%s': expected on or off", val);
+        o->pipeline = k < 0 ? -1 : k;
+        break;
+    case PF__OPT_SPP: r = pf__uint(a, val, 1, 1u << 20, &o->spp, err); break;
+    case PF__OPT_REFERENCE: o->reference = 1; break;
+    case PF__OPT_TRACK_SPP: r = pf__uint(a, val, 1, 1u << 24, &o->track_spp, err); break;
+    case PF__OPT_REUSE_FRAMES: o->reuse_frames = 1; break;
+    case PF__OPT_RAYTRACE: o->raytrace = 1; break;
+    case PF__OPT_HASH: o->print_hash = 1; break;
+    case PF__OPT_QUIET: o->quiet = 1; break;
+    case PF__OPT_FRAMES: r = pf__uint(a, val, 1, 1000, &o->frames, err); break;
+    case PF__OPT_SCREENSHOT: {
+        size_t n = strlen(val);
+        o->screenshot_path = val;
+        if (n < 5 || strcasecmp(val + n - 4, ".png") != 0)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--screenshot '%.200s': the screenshot is a PNG (name it .png)",
+                             val);
+        break;
+    }
+    case PF__OPT_SCENES: o->scenes_dir = val; break;
+    case PF__OPT_MOVING_LIGHT: o->moving_light = 1; break;
+    case PF__OPT_HELP: o->help = 1; break;
+    case PF__OPT_VERSION: o->version = 1; break;
+    case PF__OPT_COUNT: break;
+    }
+    return r;
+}
+
+/* The command and its subject, then every option given against the
+ * commands that take it (k_options), then the options that need others. */
+static pf_result pf__check_command(const pf_options *o, const char *const given[PF__OPT_COUNT], pf_error *err)
+{
+    const char *cmd = o->command;
+    if (o->version || (o->help && !cmd)) return PF_OK;
+    if (!cmd) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
+    int bench = !strcmp(cmd, "bench");
+    if (!bench && !pf_cli_command_bit(cmd, NULL))
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, compare, "
+                            "evaluate)",
+                            cmd);
+    if (o->help) return PF_OK; /* `softgi bench --help` needs no subject */
+    uint32_t bit = pf_cli_command_bit(cmd, o->scene_path);
+    if (bench && !bit)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster, frame",
+                            o->scene_path ? o->scene_path : "");
+    if (!strcmp(cmd, "sequence") && !o->scene_path)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
+    for (int id = 0; id < PF__OPT_COUNT; id++) {
+        uint32_t takes = pf__commands_of((pf__opt_id)id);
+        if (!given[id] || (takes & bit)) continue;
+        const pf__opt *e = pf__find(given[id]);
+        char by[128], name[32];
+        pf__command_list(takes, by, sizeof by);
+        pf__command_list(bit, name, sizeof name);
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s does not apply to %s (%s: only %s take%s it%s%s; see softgi %s --help)",
+                            given[id], name, given[id], by, (takes & (takes - 1)) ? "" : "s", e->note ? "; " : "",
+                            e->note ? e->note : "", cmd);
+    }
+    if (o->reuse_frames && !o->track_spp)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--reuse-frames: only with sequence --reference --track-spp");
+    if (o->track_spp && !o->reference)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--track-spp: only with sequence --reference");
+    if (o->indirect_only && o->direct_only)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
+    if (o->dump_format && !o->dump_dir)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format: only with --dump-stages DIR");
+    return PF_OK;
+}
+
 pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
 {
     memset(o, 0, sizeof *o);
     o->pipeline = -1;
+    const char *given[PF__OPT_COUNT] = {0}; /* how each option given was spelt ("-o" or "--output") */
     pf_result r = PF_OK;
     for (int i = 1; i < argc && r == PF_OK; i++) {
         const char *a = argv[i];
-        /* options that take a value */
-        const char *val = NULL;
-        static const char *const with_value[] = {"-o",       "--output", "--hdr",      "--size",
-                                                 "--threads", "--isa",   "--camera",   "--light",
-                                                 "--exposure", "--frames", "--scenes", "--shadow-size", "--area-strata", "--area-points",
-                                                 "--vpls",     "--tiles",  "--clamp",  "--method",
-                                                 "--bounces",  "--filter", "--visibility", "--dump-stages",
-                                                 "--spp",      "--param",  "--screenshot", "--pipeline", "--track-spp",
-                                                 "--ism-res",  "--ism-points", "--ism-bias", "--max-memory"};
-        for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
-            if (strcmp(a, with_value[k]) == 0) {
+        const pf__opt *e = pf__find(a);
+        if (e) {
+            const char *val = NULL;
+            if (e->value) {
                 if (i + 1 >= argc) return pf_error_set(err, PF_ERR_ARGUMENT, "%s needs a value", a);
                 val = argv[++i];
             }
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) o->help = 1;
-        else if (!strcmp(a, "--version")) o->version = 1;
-        else if (!strcmp(a, "--hash")) o->print_hash = 1;
-        else if (!strcmp(a, "--raytrace")) o->raytrace = 1;
-        else if (!strcmp(a, "--reference")) o->reference = 1;
-        else if (!strcmp(a, "--reuse-frames")) o->reuse_frames = 1;
-        else if (!strcmp(a, "--moving-light")) o->moving_light = 1;
-        else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
-        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) o->out_path = val;
-        else if (!strcmp(a, "--hdr")) o->hdr_path = val;
-        else if (!strcmp(a, "--threads")) r = pf__uint(a, val, 1, 256, &o->threads, err);
-        else if (!strcmp(a, "--frames")) r = pf__uint(a, val, 1, 1000, &o->frames, err);
-        else if (!strcmp(a, "--shadow-size")) r = pf__uint(a, val, 16, 8192, &o->shadow_size, err);
-        else if (!strcmp(a, "--max-memory")) r = pf_budget_parse(val, &o->max_memory, err);
-        else if (!strcmp(a, "--area-strata")) r = pf__uint(a, val, 1, 16, &o->area_strata, err);
-        else if (!strcmp(a, "--area-points")) r = pf__uint(a, val, 1, 1024, &o->area_points, err);
-        else if (!strcmp(a, "--indirect-only")) o->indirect_only = 1;
-        else if (!strcmp(a, "--direct-only")) o->direct_only = 1;
-        else if (!strcmp(a, "--no-interleave")) o->no_interleave = 1;
-        else if (!strcmp(a, "--vpls")) r = pf__uint(a, val, 1, 1u << 20, &o->vpls, err);
-        else if (!strcmp(a, "--bounces")) r = pf__uint(a, val, 1, 64, &o->bounces, err);
-        else if (!strcmp(a, "--spp")) r = pf__uint(a, val, 1, 1u << 20, &o->spp, err);
-        else if (!strcmp(a, "--track-spp")) r = pf__uint(a, val, 1, 1u << 24, &o->track_spp, err);
-        else if (!strcmp(a, "--method")) o->method = val;
-        else if (!strcmp(a, "--param")) {
-            if (o->param_count >= 32) r = pf_error_set(err, PF_ERR_ARGUMENT, "--param: at most 32 parameters");
-            else if (!strchr(val, '=') || val[0] == '=')
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--param '%s': expected KEY=VALUE", val);
-            else o->params[o->param_count++] = val;
-        }
-        else if (!strcmp(a, "--ism-res")) {
-            r = pf__uint(a, val, 8, 512, &o->ism_res, err);
-            if (r == PF_OK && (o->ism_res & (o->ism_res - 1)))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res '%s': expected a power of two in 8..512", val);
-        } else if (!strcmp(a, "--ism-points")) r = pf__uint(a, val, 1000, 100000000, &o->ism_points, err);
-        else if (!strcmp(a, "--ism-bias")) {
-            if (!pf__float(val, strlen(val), &o->ism_bias) || !(o->ism_bias >= 1.0f && o->ism_bias <= 64.0f))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--ism-bias '%s': expected a number in 1..64", val);
-        }
-        else if (!strcmp(a, "--dump-stages")) o->dump_dir = val;
-        else if (!strcmp(a, "--screenshot")) {
-            size_t n = strlen(val);
-            o->screenshot_path = val;
-            if (n < 5 || strcasecmp(val + n - 4, ".png") != 0)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--screenshot '%.200s': the screenshot is a PNG (name it .png)",
-                                 val);
-        }
-        else if (!strcmp(a, "--pipeline")) {
-            if (!strcmp(val, "on")) o->pipeline = 1;
-            else if (!strcmp(val, "off")) o->pipeline = 0;
-            else r = pf_error_set(err, PF_ERR_ARGUMENT, "--pipeline '%s': expected on or off", val);
-        }
-        else if (!strcmp(a, "--filter")) {
-            o->filter = val;
-            if (strcmp(val, "box") && strcmp(val, "bilateral") && strcmp(val, "gaussian") && strcmp(val, "none"))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian or none", val);
-        } else if (!strcmp(a, "--visibility")) {
-            if (!strcmp(val, "raytrace")) o->visibility_raytrace = 1;
-            else if (!strcmp(val, "ism")) o->visibility_ism = 1;
-            else if (strcmp(val, "paraboloid"))
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid, ism or raytrace", val);
-        } else if (!strcmp(a, "--clamp")) {
-            if (!pf__float(val, strlen(val), &o->clamp) || o->clamp < 0.0f)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--clamp '%s': expected a number >= 0 (0 = off)", val);
-            o->clamp_set = 1;
-        } else if (!strcmp(a, "--tiles")) {
-            const char *x = strchr(val, 'x');
-            char nbuf[16];
-            if (!x || (size_t)(x - val) >= sizeof nbuf)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--tiles '%s': expected NxM, e.g. 4x4", val);
-            else {
-                memcpy(nbuf, val, (size_t)(x - val));
-                nbuf[x - val] = 0;
-                r = pf__uint("--tiles n", nbuf, 1, 16, &o->tiles_n, err);
-                if (r == PF_OK) r = pf__uint("--tiles m", x + 1, 1, 16, &o->tiles_m, err);
-            }
-        }
-        else if (!strcmp(a, "--scenes")) o->scenes_dir = val;
-        else if (!strcmp(a, "--isa")) r = pf_isa_parse(val, &o->isa, err);
-        else if (!strcmp(a, "--exposure")) {
-            if (!pf__float(val, strlen(val), &o->exposure) || fabsf(o->exposure) > 64.0f)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--exposure '%s': expected a number of stops in -64..64", val);
-        } else if (!strcmp(a, "--size")) {
-            const char *x = strchr(val, 'x');
-            char wbuf[16];
-            if (!x || (size_t)(x - val) >= sizeof wbuf)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "--size '%s': expected WxH, e.g. 640x480", val);
-            else {
-                memcpy(wbuf, val, (size_t)(x - val));
-                wbuf[x - val] = 0;
-                r = pf__uint("--size width", wbuf, 1, 16384, &o->width, err);
-                if (r == PF_OK) r = pf__uint("--size height", x + 1, 1, 16384, &o->height, err);
-                /* a frame keeps ~130 bytes a pixel (G-buffer, split buffers, irradiance): 8 GiB here */
-                if (r == PF_OK && (uint64_t)o->width * o->height > (uint64_t)1 << 26)
-                    r = pf_error_set(err, PF_ERR_ARGUMENT,
-                                     "--size %ux%u: at most 67108864 pixels (e.g. 8192x8192)", o->width, o->height);
-            }
-        } else if (!strcmp(a, "--camera")) {
-            r = pf_cli_parse_camera(val, &o->camera_eye, &o->camera_target, &o->camera_fovy_deg, err);
-            o->has_camera = 1;
-        } else if (!strcmp(a, "--light")) {
-            if (o->light_count == PF_CLI_MAX_LIGHTS)
-                r = pf_error_set(err, PF_ERR_ARGUMENT, "at most %d --light options", PF_CLI_MAX_LIGHTS);
-            else
-                r = pf_cli_parse_light(val, &o->lights[o->light_count++], err);
+            if (!given[e->id]) given[e->id] = a;
+            r = pf__apply(o, e->id, a, val, err);
         } else if (a[0] == '-' && a[1] != 0)
             r = pf_error_set(err, PF_ERR_ARGUMENT, "unknown option '%s' (see softgi --help)", a);
-        else if (!o->command)
+        else if (!o->command) {
             o->command = a;
-        else if (!o->scene_path)
+            if (!strcmp(a, "compare") || !strcmp(a, "evaluate")) /* main.c hands them argv when they come first */
+                return pf_error_set(err, PF_ERR_ARGUMENT,
+                                    "%s parses its own options: put them after it (softgi %s --help)", a, a);
+        } else if (!o->scene_path)
             o->scene_path = a;
         else
             r = pf_error_set(err, PF_ERR_ARGUMENT, "unexpected argument '%s'", a);
     }
-    if (r != PF_OK) return r;
-    if (!o->help && !o->version) {
-        if (!o->command) return pf_error_set(err, PF_ERR_ARGUMENT, "no command given (see softgi --help)");
-        if (strcmp(o->command, "render") != 0 && strcmp(o->command, "bench") != 0 &&
-            strcmp(o->command, "reference") != 0 && strcmp(o->command, "sequence") != 0 &&
-            strcmp(o->command, "view") != 0)
-            return pf_error_set(err, PF_ERR_ARGUMENT,
-                                "unknown command '%s' (softgi knows: render, view, reference, sequence, bench, "
-                                "compare, evaluate)",
-                                o->command);
-        if (o->reuse_frames && !o->track_spp)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--reuse-frames: only with sequence --reference --track-spp");
-        if (o->track_spp && !o->reference)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--track-spp: only with sequence --reference");
-        if (o->reference && strcmp(o->command, "sequence") != 0)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--reference is an option of sequence (softgi reference renders "
-                                                      "one image)");
-        if (!strcmp(o->command, "sequence") && !o->scene_path)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "sequence: give the sequence file (softgi sequence FILE.json)");
-        if (o->moving_light && (strcmp(o->command, "bench") != 0 || !o->scene_path || strcmp(o->scene_path, "frame")))
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--moving-light: only bench frame takes it");
-        if (o->indirect_only && o->direct_only)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
-        if (!strcmp(o->command, "bench") &&
-            (!o->scene_path || (strcmp(o->scene_path, "raster") != 0 && strcmp(o->scene_path, "frame") != 0)))
-            return pf_error_set(err, PF_ERR_ARGUMENT, "bench '%s': softgi can bench: raster, frame",
-                                o->scene_path ? o->scene_path : "");
-    }
-    return PF_OK;
+    return r == PF_OK ? pf__check_command(o, given, err) : r;
 }

@@ -4,6 +4,16 @@
  * a bad value gives PF_ERR_ARGUMENT with a message naming the option and
  * what was expected, and the program exits with status 2.
  *
+ * One help text per command: `softgi COMMAND --help` lists exactly the
+ * options COMMAND takes (pf_cli_usage_command), `softgi --help` the
+ * commands (pf_cli_usage). An option the command does not take is refused
+ * with one line naming the option, the command and the commands that take
+ * it, e.g. "--spp does not apply to render (--spp: only reference and
+ * sequence take it; see softgi render --help)" (exit 2). Both come from one
+ * table in pf_cli.c (option -> value, commands, help). `bench raster` and
+ * `bench frame` count as two commands. compare and evaluate parse their own
+ * options (app_compare.c, app_evaluate.c).
+ *
  * Scene overrides (for scenes that lack a camera or lights):
  *   --camera ex,ey,ez:tx,ty,tz:fovy_deg
  *   --light point:x,y,z:r,g,b:I                  (I in W/sr)
@@ -21,8 +31,22 @@
 
 #define PF_CLI_MAX_LIGHTS 64
 
+/* The commands pf_cli parses, as bits of the set of commands an option
+ * applies to. */
+#define PF_CLI_RENDER (1u << 0)
+#define PF_CLI_VIEW (1u << 1)
+#define PF_CLI_REFERENCE (1u << 2)
+#define PF_CLI_SEQUENCE (1u << 3)
+#define PF_CLI_BENCH_RASTER (1u << 4)
+#define PF_CLI_BENCH_FRAME (1u << 5)
+
+/* --dump-format bits (0: not given, the pictures only) */
+#define PF_CLI_DUMP_PNG 1u
+#define PF_CLI_DUMP_EXR 2u
+
 typedef struct pf_options {
-    const char *command;    /* "render", "reference" or "bench" ("compare" parses its own arguments) */
+    const char *command;    /* "render", "view", "reference", "sequence" or "bench" (compare and evaluate parse
+                               their own arguments) */
     const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench;
                                sequence: the sequence file */
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
@@ -48,6 +72,7 @@ typedef struct pf_options {
     uint32_t bounces;        /* light bounces (0: 3) */
     const char *filter;      /* "box" (default), "bilateral", "gaussian", "none" */
     const char *dump_dir;    /* --dump-stages DIR */
+    uint32_t dump_format;    /* --dump-format: PF_CLI_DUMP_* bits; 0: not given (png) */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
@@ -55,8 +80,9 @@ typedef struct pf_options {
     uint32_t track_spp;      /* sequence --reference --track-spp N: tracked pixels with N samples (0: --spp) */
     int reuse_frames;        /* sequence --reference --reuse-frames: keep the folder's images, redo tracked pixels */
     int reference;           /* sequence --reference: path-traced frames (gi_reference) instead of the VPL frame */
-    const char *out_path;   /* PNG path; NULL: out/<scene name>.png */
-    const char *hdr_path;   /* linear HDR (.pfm) path; NULL: PNG path with .pfm */
+    const char *out_path;   /* -o: .png, .exr or .pfm (pf_imageio_outputs_resolve); NULL: out/<scene name>.png;
+                               sequence: the frames' folder */
+    const char *hdr_path;   /* --hdr: the linear image (.exr or .pfm) beside a PNG; NULL: PNG path with .pfm */
     uint32_t width, height; /* 0: default 640x480 */
     uint32_t threads;       /* 0: number of cores */
     uint64_t max_memory;    /* --max-memory: memory budget in bytes (0: half the machine's; pf_budget.h) */
@@ -73,9 +99,23 @@ typedef struct pf_options {
     int help, version;
 } pf_options;
 
-/* Parses argv[1..argc). Zero-initialises *o first. */
+/* Parses argv[1..argc). Zero-initialises *o first. With --help or
+ * --version nothing but the values and the command name is checked. */
 pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err);
+/* `softgi --help`: the commands. */
 void pf_cli_usage(FILE *out);
+/* `softgi COMMAND --help`: COMMAND's usage and options (command NULL: the
+ * command list; bench without raster or frame: both). PF_ERR_ARGUMENT for
+ * an unknown command. */
+pf_result pf_cli_usage_command(FILE *out, const char *command, const char *subject, pf_error *err);
+
+/* The command bit of COMMAND [SUBJECT] ("bench", "frame"); 0 if none. */
+uint32_t pf_cli_command_bit(const char *command, const char *subject);
+/* The commands (PF_CLI_* bits) that take `option` ("--spp", "-o"); 0 for an
+ * unknown option. */
+uint32_t pf_cli_option_commands(const char *option);
+/* The i-th option's long name, i = 0, 1, ...; NULL past the last. */
+const char *pf_cli_option_name(uint32_t i);
 
 /* Parsers used by the CLI, exposed for tests. */
 pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err);

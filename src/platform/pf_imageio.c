@@ -1,5 +1,5 @@
-/* pf_imageio: checked, atomic output files; PNG/PFM output, PFM input and
- * the output hash (pf_imageio.h). */
+/* pf_imageio: checked, atomic output files; PNG/PFM/OpenEXR output, PFM and
+ * OpenEXR input and the output hash (pf_imageio.h). */
 #define _DEFAULT_SOURCE /* mkstemp, fsync, open_memstream, realpath, openat, mkdirat */
 #include "pf_imageio.h"
 
@@ -16,6 +16,8 @@
 
 #include <stb_image_write.h>
 
+#include "pf_budget.h"
+#include "pf_exr.h"
 #include "pf_scene.h" /* pf_linear_to_srgb */
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -345,28 +347,37 @@ pf_result pf_imageio_write_text(const char *path, int (*print)(FILE *f, void *us
 
 static int pf__bad_value(float v, pf_imageio_range range)
 {
+    if (range == PF_IMAGEIO_DATA) return isnan(v);
     if (range == PF_IMAGEIO_DEPTH) return !(v >= 0.0f); /* NaN, negative, -inf; +inf is "no surface" */
     return !(v >= 0.0f) || isinf(v);
 }
 
-/* The message of pf_imageio_check, with `tail` appended. */
-static pf_result pf__check(const char *name, const float *rgb, uint32_t w, uint32_t h, pf_imageio_range range,
-                           const char *tail, pf_error *err)
+/* The message of pf_imageio_check for `channels` floats a pixel (1: Y,
+ * 3: RGB, 4: RGBA), with `tail` appended. */
+static pf_result pf__check_n(const char *name, const float *px, uint32_t w, uint32_t h, uint32_t channels,
+                             pf_imageio_range range, const char *tail, pf_error *err)
 {
     size_t bad = 0, first = 0;
-    int first_c = 0;
+    uint32_t first_c = 0;
     for (size_t i = 0, n = (size_t)w * h; i < n; i++) {
         int b = 0;
-        for (int c = 0; c < 3; c++)
-            if (pf__bad_value(rgb[3 * i + c], range) && !b++ && !bad) first = i, first_c = c;
+        for (uint32_t c = 0; c < channels; c++)
+            if (pf__bad_value(px[channels * i + c], range) && !b++ && !bad) first = i, first_c = c;
         bad += b != 0;
     }
     if (!bad) return PF_OK;
+    const char *what = range == PF_IMAGEIO_DEPTH  ? "NaN or negative depth"
+                       : range == PF_IMAGEIO_DATA ? "NaN"
+                                                  : "NaN, infinite or negative";
     return pf_error_set(err, PF_ERR_NONFINITE, "%s: %zu pixel%s %s (first: pixel (%u, %u) channel %c = %g)%s", name,
-                        bad, bad == 1 ? " is" : "s are",
-                        range == PF_IMAGEIO_DEPTH ? "NaN or negative depth" : "NaN, infinite or negative",
-                        (unsigned)(first % w), (unsigned)(first / w), "RGB"[first_c], (double)rgb[3 * first + first_c],
-                        tail);
+                        bad, bad == 1 ? " is" : "s are", what, (unsigned)(first % w), (unsigned)(first / w),
+                        (channels == 1 ? "Y" : "RGBA")[first_c], (double)px[channels * first + first_c], tail);
+}
+
+static pf_result pf__check(const char *name, const float *rgb, uint32_t w, uint32_t h, pf_imageio_range range,
+                           const char *tail, pf_error *err)
+{
+    return pf__check_n(name, rgb, w, h, 3, range, tail, err);
 }
 
 pf_result pf_imageio_check(const char *name, const float *rgb, uint32_t w, uint32_t h, pf_imageio_range range,
@@ -394,41 +405,86 @@ static int pf__has_ext(const char *path, const char *ext)
     return n > e && strcasecmp(base + n - e, ext) == 0;
 }
 
+pf_imageio_format pf_imageio_format_of(const char *path)
+{
+    return pf__has_ext(path, ".png")   ? PF_IMAGEIO_PNG
+           : pf__has_ext(path, ".pfm") ? PF_IMAGEIO_PFM
+           : pf__has_ext(path, ".exr") ? PF_IMAGEIO_EXR
+                                       : PF_IMAGEIO_UNKNOWN;
+}
+
+/* "'.jpg'" or "(no extension)" for messages */
+static void pf__ext_words(const char *path, char *buf, size_t size)
+{
+    const char *base = pf__basename(path), *dot = strrchr(base, '.');
+    if (dot && dot != base) snprintf(buf, size, "'%.32s'", dot);
+    else snprintf(buf, size, "(no extension)");
+}
+
+pf_result pf_imageio_outputs_resolve(pf_imageio_outputs *o, const char *output, const char *hdr,
+                                     const char *default_png, pf_error *err)
+{
+    o->png[0] = o->linear[0] = 0;
+    const char *out = output ? output : default_png;
+    const char *opt = output ? "-o" : "the default output";
+    char ext[48];
+    if (strlen(out) >= PF_IMAGEIO_PATH_MAX - 8 || (hdr && strlen(hdr) >= PF_IMAGEIO_PATH_MAX))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s: path too long", opt);
+    pf_imageio_format hf = hdr ? pf_imageio_format_of(hdr) : PF_IMAGEIO_UNKNOWN;
+    if (hdr && hf != PF_IMAGEIO_PFM && hf != PF_IMAGEIO_EXR) {
+        pf__ext_words(hdr, ext, sizeof ext);
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "--hdr '%s': unsupported linear format %s (supported: .exr and .pfm)", hdr, ext);
+    }
+    switch (pf_imageio_format_of(out)) {
+    case PF_IMAGEIO_PNG:
+        snprintf(o->png, PF_IMAGEIO_PATH_MAX, "%s", out);
+        if (hdr) snprintf(o->linear, PF_IMAGEIO_PATH_MAX, "%s", hdr);
+        else snprintf(o->linear, PF_IMAGEIO_PATH_MAX, "%.*s.pfm", (int)(strlen(out) - 4), out);
+        if (pf_imageio_same_output(o->png, o->linear))
+            return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s' and --hdr '%s' name the same file", opt, o->png,
+                                o->linear);
+        return PF_OK;
+    case PF_IMAGEIO_PFM:
+    case PF_IMAGEIO_EXR:
+        if (hdr)
+            return pf_error_set(err, PF_ERR_ARGUMENT,
+                                "--hdr '%s': -o '%s' already writes the linear image (--hdr goes with -o NAME.png)",
+                                hdr, out);
+        snprintf(o->linear, PF_IMAGEIO_PATH_MAX, "%s", out);
+        return PF_OK;
+    default:
+        pf__ext_words(out, ext, sizeof ext);
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s': unsupported output format %s (supported: %s)", opt, out,
+                            ext, PF_IMAGEIO_OUTPUT_HELP);
+    }
+}
+
 pf_result pf_imageio_output_paths(const char *output, const char *hdr, const char *default_png,
                                   char png[PF_IMAGEIO_PATH_MAX], char pfm[PF_IMAGEIO_PATH_MAX], pf_error *err)
 {
-    png[0] = pfm[0] = 0;
-    const char *out = output ? output : default_png;
-    const char *opt = output ? "-o" : "the default output";
-    if (strlen(out) >= PF_IMAGEIO_PATH_MAX - 8 || (hdr && strlen(hdr) >= PF_IMAGEIO_PATH_MAX))
-        return pf_error_set(err, PF_ERR_ARGUMENT, "%s: path too long", opt);
-    if (hdr && !pf__has_ext(hdr, ".pfm"))
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--hdr '%s': the linear output is PFM; name it NAME.pfm", hdr);
-    if (pf__has_ext(out, ".png")) {
-        snprintf(png, PF_IMAGEIO_PATH_MAX, "%s", out);
-        if (hdr) snprintf(pfm, PF_IMAGEIO_PATH_MAX, "%s", hdr);
-        else {
-            size_t n = strlen(out) - 4;
-            snprintf(pfm, PF_IMAGEIO_PATH_MAX, "%.*s.pfm", (int)n, out);
-        }
-        if (pf_imageio_same_output(png, pfm))
-            return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s' and --hdr '%s' name the same file", opt, png, pfm);
-        return PF_OK;
-    }
-    if (pf__has_ext(out, ".pfm")) {
-        if (hdr)
-            return pf_error_set(err, PF_ERR_ARGUMENT,
-                                "--hdr '%s': -o '%s' already writes the linear PFM (--hdr goes with -o NAME.png)", hdr,
-                                out);
-        snprintf(pfm, PF_IMAGEIO_PATH_MAX, "%s", out);
-        return PF_OK;
-    }
-    const char *base = pf__basename(out), *dot = strrchr(base, '.');
-    return pf_error_set(err, PF_ERR_ARGUMENT,
-                        "%s '%s': unsupported output format %s%s%s (supported: .png, which also writes the linear "
-                        ".pfm beside it, and .pfm)",
-                        opt, out, dot && dot != base ? "'" : "", dot && dot != base ? dot : "(no extension)",
-                        dot && dot != base ? "'" : "");
+    pf_imageio_outputs o;
+    pf_result r = pf_imageio_outputs_resolve(&o, output, hdr, default_png, err);
+    memcpy(png, o.png, PF_IMAGEIO_PATH_MAX);
+    memcpy(pfm, o.linear, PF_IMAGEIO_PATH_MAX);
+    if (r != PF_OK) png[0] = pfm[0] = 0;
+    return r;
+}
+
+pf_result pf_imageio_outputs_write(const pf_imageio_outputs *o, const float *rgb, uint32_t w, uint32_t h,
+                                   float exposure, pf_error *err)
+{
+    pf_file fpng, flin;
+    memset(&fpng, 0, sizeof fpng);
+    memset(&flin, 0, sizeof flin);
+    pf_result r = PF_OK;
+    if (o->png[0]) r = pf_imageio_stage_png(&fpng, o->png, rgb, w, h, exposure, err);
+    if (r == PF_OK) r = pf_imageio_stage_linear(&flin, o->linear, rgb, w, h, err);
+    if (r == PF_OK && o->png[0]) r = pf_file_commit(&fpng, err);
+    if (r == PF_OK) r = pf_file_commit(&flin, err);
+    pf_file_abort(&fpng); /* no-ops after a commit or a failure */
+    pf_file_abort(&flin);
+    return r;
 }
 
 /* ---------------------------------------------------------------- PNG */
@@ -538,6 +594,47 @@ pf_result pf_imageio_write_pfm_range(const char *path, const float *rgb, uint32_
 pf_result pf_imageio_write_pfm(const char *path, const float *rgb, uint32_t w, uint32_t h, pf_error *err)
 {
     return pf_imageio_write_pfm_range(path, rgb, w, h, PF_IMAGEIO_RADIANCE, err);
+}
+
+/* ---------------------------------------------------------------- OpenEXR output */
+
+pf_result pf_imageio_stage_exr(pf_file *f, const char *path, const float *px, uint32_t w, uint32_t h,
+                               uint32_t channels, pf_imageio_range range, const char *comment, pf_error *err)
+{
+    memset(f, 0, sizeof *f);
+    pf_result r = pf__check_size(path, w, h, err);
+    if (r == PF_OK) r = pf__check_n(path, px, w, h, channels, range, "; nothing written", err);
+    if (r != PF_OK) return r;
+    /* encoded in memory (pf_exr.h), then written like every other file */
+    uint8_t *bytes = NULL;
+    size_t size = 0;
+    pf_error e;
+    if ((r = pf_exr_encode(px, w, h, channels, comment, &bytes, &size, &e)) != PF_OK)
+        return pf_error_set(err, r, "%s: %s", path, e.message);
+    r = pf_file_begin(f, path, err);
+    if (r == PF_OK) r = pf_file_write(f, bytes, size, err);
+    pf_exr_free(bytes);
+    return r;
+}
+
+pf_result pf_imageio_write_exr(const char *path, const float *px, uint32_t w, uint32_t h, uint32_t channels,
+                               pf_imageio_range range, const char *comment, pf_error *err)
+{
+    pf_file f;
+    pf_result r = pf_imageio_stage_exr(&f, path, px, w, h, channels, range, comment, err);
+    return r == PF_OK ? pf_file_commit(&f, err) : r;
+}
+
+pf_result pf_imageio_stage_linear(pf_file *f, const char *path, const float *rgb, uint32_t w, uint32_t h,
+                                  pf_error *err)
+{
+    memset(f, 0, sizeof *f);
+    switch (pf_imageio_format_of(path)) {
+    case PF_IMAGEIO_EXR: return pf_imageio_stage_exr(f, path, rgb, w, h, 3, PF_IMAGEIO_RADIANCE, NULL, err);
+    case PF_IMAGEIO_PFM: return pf_imageio_stage_pfm(f, path, rgb, w, h, PF_IMAGEIO_RADIANCE, err);
+    default:
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s: the linear image is written as .exr or .pfm", path);
+    }
 }
 
 /* ---------------------------------------------------------------- PFM input */
@@ -708,6 +805,46 @@ pf_result pf_imageio_read_pfm_range(const char *path, float **out, uint32_t *w, 
 pf_result pf_imageio_read_pfm(const char *path, float **out, uint32_t *w, uint32_t *h, pf_error *err)
 {
     return pf_imageio_read_pfm_range(path, out, w, h, PF_IMAGEIO_RADIANCE, err);
+}
+
+/* ---------------------------------------------------------------- OpenEXR input, any image */
+
+pf_result pf_imageio_read_exr_memory(const void *data, size_t size, const char *name, pf_imageio_range range,
+                                     uint64_t max_bytes, float **rgb, uint32_t *w, uint32_t *h, pf_error *err)
+{
+    pf_exr_read_desc desc = {name ? name : "OpenEXR data", PF_IMAGEIO_MAX_SIDE, PF_IMAGEIO_MAX_PIXELS, max_bytes};
+    pf_result r = pf_exr_decode(data, size, &desc, rgb, w, h, err);
+    if (r == PF_OK && (r = pf__check(desc.name, *rgb, *w, *h, range, "", err)) != PF_OK) {
+        free(*rgb);
+        *rgb = NULL;
+        *w = *h = 0;
+    }
+    return r;
+}
+
+pf_result pf_imageio_read_image(const char *path, pf_imageio_range range, float **rgb, uint32_t *w, uint32_t *h,
+                                pf_error *err)
+{
+    *rgb = NULL;
+    *w = *h = 0;
+    /* the file and its decoding come out of one budget (pf_budget.h) */
+    pf_budget b;
+    pf_budget_init(&b, 0);
+    char *buf;
+    size_t n;
+    pf_result r = pf_imageio_read_file(path, b.limit, "image", &buf, &n, err);
+    if (r != PF_OK) return r;
+    if (pf_exr_is_exr(buf, n))
+        r = pf_imageio_read_exr_memory(buf, n, path, range, b.limit - n, rgb, w, h, err);
+    else if (n >= 2 && buf[0] == 'P' && (buf[1] == 'F' || buf[1] == 'f'))
+        r = pf_imageio_read_pfm_memory_ex(buf, n, path, range, rgb, w, h, err);
+    else
+        r = pf_error_set(err, PF_ERR_PARSE,
+                         "%s: not a 3-channel PFM file or an OpenEXR file (they start with PF or Pf, and with the "
+                         "bytes 76 2f 31 01)",
+                         path);
+    free(buf);
+    return r;
 }
 
 uint64_t pf_imageio_hash(const float *data, uint64_t count)

@@ -49,6 +49,20 @@
  * Depth planes (gi_metrics.h) use PF_IMAGEIO_DEPTH: >= 0 or +inf (no
  * surface). Readers apply the same rules to what they read.
  *
+ * - OpenEXR (pf_exr.h: tinyexr; single-part scanline, 32-bit FLOAT
+ *   channels, ZIP): the linear HDR output like the PFM, bit-exact floats,
+ *   read back bit for bit; also the float stage dumps (RGB, RGBA or Y).
+ *
+ * Output names: the format is the file's extension (case-insensitive),
+ * PF_IMAGEIO_OUTPUT_HELP lists them: -o NAME.png writes the PNG and the
+ * linear image beside it (NAME.pfm, or --hdr NAME.exr / NAME.pfm); -o
+ * NAME.exr and -o NAME.pfm write only that linear image; any other name is
+ * refused with the list (pf_imageio_outputs_resolve).
+ *
+ * Input (`softgi compare IMAGE REFERENCE`): pf_imageio_read_image
+ * reads a PFM or an OpenEXR file, told apart by their first bytes, within
+ * the same size limits and the memory budget (pf_budget.h).
+ *
  * PFM input limits: "PF" (RGB) or "Pf" (grey, read into R = G = B); width
  * and height 1..PF_IMAGEIO_MAX_SIDE, at most PF_IMAGEIO_MAX_PIXELS pixels;
  * the scale a finite non-zero number (its sign is the byte order, its
@@ -73,7 +87,23 @@
 typedef enum pf_imageio_range {
     PF_IMAGEIO_RADIANCE = 0, /* finite and >= 0: every image (the default of the plain functions) */
     PF_IMAGEIO_DEPTH,        /* >= 0 or +inf (no surface): view-depth planes */
+    PF_IMAGEIO_DATA,         /* anything but NaN: stage dumps (positions, normals, depth with +inf) */
 } pf_imageio_range;
+
+/* Image file formats, by extension (pf_imageio_format_of). */
+typedef enum pf_imageio_format {
+    PF_IMAGEIO_UNKNOWN = 0,
+    PF_IMAGEIO_PNG, /* 8-bit sRGB, tone mapped */
+    PF_IMAGEIO_PFM, /* linear float */
+    PF_IMAGEIO_EXR, /* linear float, OpenEXR */
+} pf_imageio_format;
+
+/* The accepted output names, for help texts and messages. */
+#define PF_IMAGEIO_OUTPUT_HELP \
+    ".png (with the linear .pfm beside it, or --hdr NAME.exr|NAME.pfm), .exr or .pfm"
+
+/* The format the name of `path` asks for (case-insensitive extension). */
+pf_imageio_format pf_imageio_format_of(const char *path);
 
 /* ---------------------------------------------------------------- files */
 
@@ -121,12 +151,29 @@ int pf_imageio_same_output(const char *a, const char *b);
 
 /* ---------------------------------------------------------------- images */
 
-/* The image files of one render from -o/--output and --hdr
- * (`output` NULL: default_png), extensions case-insensitive:
- *   NAME.png  -> png = NAME.png, pfm = --hdr or NAME.pfm
- *   NAME.pfm  -> only the PFM, at exactly NAME.pfm (png = ""); --hdr refused
- *   other     -> PF_ERR_ARGUMENT naming the supported extensions
- * --hdr must end in .pfm; two outputs naming the same file are refused. */
+/* The image files of one render. */
+typedef struct pf_imageio_outputs {
+    char png[PF_IMAGEIO_PATH_MAX];    /* the display PNG; "" when none */
+    char linear[PF_IMAGEIO_PATH_MAX]; /* the linear image: a .pfm or an .exr */
+} pf_imageio_outputs;
+
+/* The files of -o/--output and --hdr (`output` NULL: default_png),
+ * extensions case-insensitive:
+ *   NAME.png            -> png = NAME.png, linear = --hdr or NAME.pfm
+ *   NAME.exr, NAME.pfm  -> only that linear image (png = ""); --hdr refused
+ *   other               -> PF_ERR_ARGUMENT naming PF_IMAGEIO_OUTPUT_HELP
+ * --hdr must end in .exr or .pfm; two outputs naming the same file are
+ * refused. */
+pf_result pf_imageio_outputs_resolve(pf_imageio_outputs *out, const char *output, const char *hdr,
+                                     const char *default_png, pf_error *err);
+/* Writes the files of `out` (rgb: w x h linear RGB): every one to its
+ * temporary file first, then all renamed, so either all are replaced or
+ * none. */
+pf_result pf_imageio_outputs_write(const pf_imageio_outputs *out, const float *rgb, uint32_t w, uint32_t h,
+                                   float exposure, pf_error *err);
+/* The same resolution as two arrays (pfm: the linear image, .pfm or .exr),
+ * kept for callers that write the pair themselves: they must write `pfm`
+ * with pf_imageio_stage_linear, which follows its extension. */
 pf_result pf_imageio_output_paths(const char *output, const char *hdr, const char *default_png,
                                   char png[PF_IMAGEIO_PATH_MAX], char pfm[PF_IMAGEIO_PATH_MAX], pf_error *err);
 
@@ -151,6 +198,19 @@ pf_result pf_imageio_stage_png(pf_file *f, const char *path, const float *rgb, u
 pf_result pf_imageio_stage_pfm(pf_file *f, const char *path, const float *rgb, uint32_t w, uint32_t h,
                                pf_imageio_range range, pf_error *err);
 
+/* OpenEXR (pf_exr.h): w x h pixels of `channels` (1: Y, 3: RGB, 4: RGBA)
+ * interleaved floats, top row first, as 32-bit FLOAT channels; the values
+ * must be within `range` (every channel). `comment` (may be NULL) goes into
+ * the file's "comments" attribute. */
+pf_result pf_imageio_stage_exr(pf_file *f, const char *path, const float *px, uint32_t w, uint32_t h,
+                               uint32_t channels, pf_imageio_range range, const char *comment, pf_error *err);
+pf_result pf_imageio_write_exr(const char *path, const float *px, uint32_t w, uint32_t h, uint32_t channels,
+                               pf_imageio_range range, const char *comment, pf_error *err);
+/* A linear RGB radiance image as its extension says: .exr or .pfm (anything
+ * else: PF_ERR_ARGUMENT). */
+pf_result pf_imageio_stage_linear(pf_file *f, const char *path, const float *rgb, uint32_t w, uint32_t h,
+                                  pf_error *err);
+
 /* Reads a PFM written by any tool (either endianness, "PF" or "Pf"); *rgb
  * is malloc'ed, 3 floats a pixel, top row first. Values must be within
  * `range` (the plain functions: PF_IMAGEIO_RADIANCE). On failure *rgb is
@@ -162,6 +222,15 @@ pf_result pf_imageio_read_pfm_memory(const void *data, size_t size, float **rgb,
                                      pf_error *err);
 pf_result pf_imageio_read_pfm_memory_ex(const void *data, size_t size, const char *name, pf_imageio_range range,
                                         float **rgb, uint32_t *w, uint32_t *h, pf_error *err);
+
+/* Reads an OpenEXR file (pf_exr.h's rules) into *rgb as pf_imageio_read_pfm
+ * does; `max_bytes` bounds the decoder's memory. */
+pf_result pf_imageio_read_exr_memory(const void *data, size_t size, const char *name, pf_imageio_range range,
+                                     uint64_t max_bytes, float **rgb, uint32_t *w, uint32_t *h, pf_error *err);
+/* A PFM or an OpenEXR file, told apart by its first bytes, within the size
+ * limits above and the default memory budget (pf_budget.h). */
+pf_result pf_imageio_read_image(const char *path, pf_imageio_range range, float **rgb, uint32_t *w, uint32_t *h,
+                                pf_error *err);
 
 uint64_t pf_imageio_hash(const float *data, uint64_t count);
 /* The display transform of one linear value (shared with the viewer). */

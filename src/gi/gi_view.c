@@ -644,6 +644,133 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
     return 1;
 }
 
+/* ------------------------------------------------------------ pixels of a view */
+
+static int gi__mosaic_view(gi_view_id id) { return id == GI_VIEW_SPLIT || id == GI_VIEW_ACCUMULATED; }
+
+static int gi__image_layout_view(gi_view_id id)
+{
+    return id != GI_VIEW_SHADOW_MAP && id != GI_VIEW_VPL_OVERHEAD && id != GI_VIEW_VPL_MAP && !gi__mosaic_view(id) &&
+           (unsigned)id < GI_VIEW_COUNT;
+}
+
+int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v, uint32_t *x, uint32_t *y)
+{
+    if (u >= f->width || v >= f->height || !gi_view_available(f, id)) return 0;
+    if (gi__image_layout_view(id)) {
+        *x = u, *y = v;
+        return 1;
+    }
+    if (!gi__mosaic_view(id)) return 0;
+    /* gi__view_mosaic: tile (i, j) at (i w0, j h0), its pixel (a, b) is frame pixel (a n + i, b m + j) */
+    const gi_indirect *ind = &f->ind;
+    uint32_t i = u / ind->tile_w[0], a = u % ind->tile_w[0], j = v / ind->tile_h[0], b = v % ind->tile_h[0];
+    if (i >= ind->n || j >= ind->m) return 0;
+    uint32_t t = j * ind->n + i;
+    if (a >= ind->tile_w[t] || b >= ind->tile_h[t]) return 0;
+    *x = a * ind->n + i, *y = b * ind->m + j;
+    return *x < f->width && *y < f->height;
+}
+
+int gi_view_view_pixel(const gi_frame *f, gi_view_id id, uint32_t x, uint32_t y, uint32_t *u, uint32_t *v)
+{
+    if (x >= f->width || y >= f->height || !gi_view_available(f, id)) return 0;
+    if (gi__image_layout_view(id)) {
+        *u = x, *v = y;
+        return 1;
+    }
+    if (!gi__mosaic_view(id)) return 0;
+    const gi_indirect *ind = &f->ind;
+    *u = (x % ind->n) * ind->tile_w[0] + x / ind->n;
+    *v = (y % ind->m) * ind->tile_h[0] + y / ind->m;
+    return *u < f->width && *v < f->height;
+}
+
+/* ------------------------------------------------------------ zoom and pan */
+
+void gi_view_zoom_reset(gi_view_zoom *z, uint32_t sw, uint32_t sh)
+{
+    z->zoom = 1.0f;
+    z->cx = 0.5f * (float)sw, z->cy = 0.5f * (float)sh;
+}
+
+float gi_view_zoom_scale(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh)
+{
+    float fx = (float)dw / (float)sw, fy = (float)dh / (float)sh;
+    return (fx < fy ? fx : fy) * z->zoom;
+}
+
+int gi_view_zoom_to_view(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float wx, float wy,
+                         uint32_t *u, uint32_t *v)
+{
+    float s = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    float fu = floorf(z->cx + (wx - 0.5f * (float)dw) / s), fv = floorf(z->cy + (wy - 0.5f * (float)dh) / s);
+    if (!(fu >= 0.0f && fu < (float)sw && fv >= 0.0f && fv < (float)sh)) return 0;
+    *u = (uint32_t)fu, *v = (uint32_t)fv;
+    return 1;
+}
+
+void gi_view_zoom_to_window(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float u, float v,
+                            float *wx, float *wy)
+{
+    float s = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    *wx = 0.5f * (float)dw + (u - z->cx) * s;
+    *wy = 0.5f * (float)dh + (v - z->cy) * s;
+}
+
+static void gi__zoom_clamp_centre(gi_view_zoom *z, uint32_t sw, uint32_t sh)
+{
+    z->cx = pf_clampf(z->cx, 0.0f, (float)sw);
+    z->cy = pf_clampf(z->cy, 0.0f, (float)sh);
+}
+
+void gi_view_zoom_at(gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float wx, float wy,
+                     float factor)
+{
+    if (dw == 0 || dh == 0) return; /* a minimised window */
+    /* the view point under the cursor, before and after, stays the same:
+     * c' = p - (w - d/2) / s' with p = c + (w - d/2) / s */
+    float s0 = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    float px = z->cx + (wx - 0.5f * (float)dw) / s0, py = z->cy + (wy - 0.5f * (float)dh) / s0;
+    z->zoom = pf_clampf(z->zoom * factor, 1.0f, GI_VIEW_ZOOM_MAX);
+    float s1 = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    z->cx = px - (wx - 0.5f * (float)dw) / s1;
+    z->cy = py - (wy - 0.5f * (float)dh) / s1;
+    if (z->zoom == 1.0f) gi_view_zoom_reset(z, sw, sh); /* fitted is centred */
+    gi__zoom_clamp_centre(z, sw, sh);
+}
+
+void gi_view_zoom_pan(gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float dx, float dy)
+{
+    if (dw == 0 || dh == 0) return;
+    float s = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    z->cx -= dx / s, z->cy -= dy / s;
+    gi__zoom_clamp_centre(z, sw, sh);
+}
+
+void gi_view_blit(uint8_t *dst, uint32_t dw, uint32_t dh, const uint8_t *src, uint32_t sw, uint32_t sh,
+                  const gi_view_zoom *z)
+{
+    /* the same expression as gi_view_zoom_to_view at the pixel centres, so
+     * a click picks exactly the view pixel drawn under the cursor */
+    float s = gi_view_zoom_scale(z, sw, sh, dw, dh);
+    for (uint32_t Y = 0; Y < dh; Y++) {
+        float fv = floorf(z->cy + ((float)Y + 0.5f - 0.5f * (float)dh) / s);
+        uint8_t *o = dst + (size_t)Y * dw * 3;
+        int row_in = fv >= 0.0f && fv < (float)sh;
+        const uint8_t *row = row_in ? src + (size_t)fv * sw * 3 : NULL;
+        for (uint32_t X = 0; X < dw; X++, o += 3) {
+            float fu = floorf(z->cx + ((float)X + 0.5f - 0.5f * (float)dw) / s);
+            if (!row_in || !(fu >= 0.0f && fu < (float)sw)) {
+                o[0] = o[1] = o[2] = 16;
+                continue;
+            }
+            const uint8_t *p = row + (size_t)fu * 3;
+            o[0] = p[0], o[1] = p[1], o[2] = p[2];
+        }
+    }
+}
+
 pf_result gi_view_write_png(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h, pf_error *err)
 {
     return pf_imageio_write_png_rgb8(path, rgb, w, h, err); /* temporary file + rename (pf_imageio.h) */

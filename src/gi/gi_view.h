@@ -14,6 +14,12 @@
  * one-line caption (gi_view_caption) saying what the stage does and which
  * paper section it implements.
  *
+ * For the viewer's inspector, gi_view_frame_pixel / gi_view_view_pixel map
+ * a view's pixels to the frame's and back (the identity for views in image
+ * layout, the tile mosaic for split and accumulated), and gi_view_zoom
+ * fits, zooms and pans a view into a window (nearest neighbour) with the
+ * inverse a click needs.
+ *
  * Display transforms: radiance and irradiance views go through the PNG
  * writer's transform (pf_imageio_display: 2^exposure, Reinhard, sRGB), so
  * the final view is byte for byte the PNG `softgi render` writes; data views
@@ -64,6 +70,16 @@ int gi_view_available(const gi_frame *f, gi_view_id id);
  * view's rays; deterministic for any thread count. */
 int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s, uint8_t *rgb);
 
+/* Which frame pixel (x, y) view `id` draws at its pixel (u, v): the same
+ * pixel for the views in image layout, the mosaic's inverse for the split
+ * and accumulated views (tile (i, j) drawn at (i w0, j h0)). Returns 0 for
+ * the views that are maps or drawings (shadow map, overhead, paraboloid
+ * map), outside the view, and on a mosaic pixel no tile covers. */
+int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v, uint32_t *x, uint32_t *y);
+/* The inverse: where view `id` draws frame pixel (x, y); 0 where it does
+ * not draw it. */
+int gi_view_view_pixel(const gi_frame *f, gi_view_id id, uint32_t x, uint32_t y, uint32_t *u, uint32_t *v);
+
 /* Every available view as `DIR/NN-name.png` (NN = the view id) plus
  * `DIR/captions.txt`, one "NN-name.png: caption" line per image. */
 pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_settings *s, pf_error *err);
@@ -71,6 +87,41 @@ pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_setting
 /* Writes an RGB8 image (top row first) as a PNG, creating parent folders;
  * the same encoder and settings as pf_imageio_write_png. */
 pf_result gi_view_write_png(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h, pf_error *err);
+
+/* Zoom and pan: a view of sw x sh pixels shown in a window of dw x dh
+ * pixels, fitted (aspect kept, centred) and then magnified `zoom` times
+ * about the view point (cx, cy), which appears at the window's centre.
+ * Nearest neighbour: zoomed in, every view pixel is a visible block, so a
+ * learner can see (and click) single texels. Window coordinates are
+ * continuous, y down: pixel (X, Y) covers [X, X+1) x [Y, Y+1). */
+typedef struct gi_view_zoom {
+    float zoom;   /* 1 (fitted) .. GI_VIEW_ZOOM_MAX */
+    float cx, cy; /* view coordinates at the window's centre */
+} gi_view_zoom;
+#define GI_VIEW_ZOOM_MAX 64.0f
+
+/* Fitted and centred. */
+void gi_view_zoom_reset(gi_view_zoom *z, uint32_t sw, uint32_t sh);
+/* Window pixels per view pixel. */
+float gi_view_zoom_scale(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh);
+/* Window point (wx, wy) -> the view pixel under it; 0 outside the view. */
+int gi_view_zoom_to_view(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float wx, float wy,
+                         uint32_t *u, uint32_t *v);
+/* View point (u, v) (continuous) -> window point. */
+void gi_view_zoom_to_window(const gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float u, float v,
+                            float *wx, float *wy);
+/* Zooms by `factor` (clamped to 1 .. GI_VIEW_ZOOM_MAX) keeping the view
+ * point under window point (wx, wy) where it is. */
+void gi_view_zoom_at(gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float wx, float wy,
+                     float factor);
+/* Moves the view with the cursor by (dx, dy) window pixels; its centre
+ * stays inside the view. */
+void gi_view_zoom_pan(gi_view_zoom *z, uint32_t sw, uint32_t sh, uint32_t dw, uint32_t dh, float dx, float dy);
+/* Draws the RGB8 view src (sw x sh) into dst (dw x dh) through the zoom;
+ * window pixels outside the view are dark grey. Unzoomed, with dw = sw and
+ * dh = sh, dst is a copy of src. */
+void gi_view_blit(uint8_t *dst, uint32_t dw, uint32_t dh, const uint8_t *src, uint32_t sw, uint32_t sh,
+                  const gi_view_zoom *z);
 
 /* Built-in 5x7 bitmap font (ASCII 32..126; lower case with one descender
  * row), each glyph cell 6 x 9 pixels times `scale`. Draws `text` with its top-left

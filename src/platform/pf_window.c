@@ -5,6 +5,7 @@
 #endif
 #include "pf_window.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,9 +20,13 @@ struct pf_window {
     GLFWwindow *glfw;
     GLuint tex;
     uint32_t tex_w, tex_h;
-    pf_input pending; /* key events queued by the callback */
+    pf_input pending; /* key, click and wheel events queued by the callbacks */
     double last_x, last_y;
     int have_last;
+    /* a button held: where it went down and how far the cursor went since
+     * (framebuffer pixels), for telling a click from a drag */
+    int held[3];
+    double press_x[3], press_y[3], wander[3];
 };
 
 static char pf__glfw_error[512];
@@ -41,6 +46,60 @@ static void pf__on_key(GLFWwindow *w, int key, int scancode, int action, int mod
     in->key[in->key_count] = key;
     in->mods[in->key_count] = mods;
     in->key_count++;
+}
+
+/* Screen coordinates (GLFW's cursor) -> framebuffer pixels. */
+static void pf__to_framebuffer(GLFWwindow *w, double *x, double *y)
+{
+    int ww, wh, fw, fh;
+    glfwGetWindowSize(w, &ww, &wh);
+    glfwGetFramebufferSize(w, &fw, &fh);
+    if (ww > 0 && wh > 0) *x *= (double)fw / ww, *y *= (double)fh / wh;
+}
+
+static void pf__on_button(GLFWwindow *w, int button, int action, int mods)
+{
+    (void)mods;
+    pf_window *win = glfwGetWindowUserPointer(w);
+    int b = button == GLFW_MOUSE_BUTTON_LEFT ? PF_MOUSE_LEFT
+            : button == GLFW_MOUSE_BUTTON_RIGHT ? PF_MOUSE_RIGHT
+            : button == GLFW_MOUSE_BUTTON_MIDDLE ? PF_MOUSE_MIDDLE
+                                                 : -1;
+    if (!win || b < 0) return;
+    double x, y;
+    glfwGetCursorPos(w, &x, &y);
+    pf__to_framebuffer(w, &x, &y);
+    if (action == GLFW_PRESS) {
+        win->held[b] = 1, win->press_x[b] = x, win->press_y[b] = y, win->wander[b] = 0.0;
+        return;
+    }
+    if (action != GLFW_RELEASE || !win->held[b]) return;
+    win->held[b] = 0;
+    pf_input *in = &win->pending;
+    if (win->wander[b] > PF_WINDOW_CLICK_SLOP || in->click_count >= PF_WINDOW_MAX_CLICKS) return;
+    in->click_button[in->click_count] = b;
+    in->click_x[in->click_count] = win->press_x[b];
+    in->click_y[in->click_count] = win->press_y[b];
+    in->click_count++;
+}
+
+static void pf__on_cursor(GLFWwindow *w, double x, double y)
+{
+    pf_window *win = glfwGetWindowUserPointer(w);
+    if (!win) return;
+    pf__to_framebuffer(w, &x, &y);
+    for (int b = 0; b < 3; b++)
+        if (win->held[b]) {
+            double dx = x - win->press_x[b], dy = y - win->press_y[b], d = dx * dx + dy * dy;
+            if (d > win->wander[b] * win->wander[b]) win->wander[b] = sqrt(d);
+        }
+}
+
+static void pf__on_scroll(GLFWwindow *w, double dx, double dy)
+{
+    (void)dx;
+    pf_window *win = glfwGetWindowUserPointer(w);
+    if (win) win->pending.scroll += dy;
 }
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -89,6 +148,9 @@ pf_result pf_window_open(pf_window **out, uint32_t width, uint32_t height, const
     }
     glfwSetWindowUserPointer(win->glfw, win);
     glfwSetKeyCallback(win->glfw, pf__on_key);
+    glfwSetMouseButtonCallback(win->glfw, pf__on_button);
+    glfwSetCursorPosCallback(win->glfw, pf__on_cursor);
+    glfwSetScrollCallback(win->glfw, pf__on_scroll);
     glfwMakeContextCurrent(win->glfw);
     glfwSwapInterval(0); /* the CPU renderer sets the pace, not the display */
     glGenTextures(1, &win->tex);
@@ -123,15 +185,28 @@ void pf_window_poll(pf_window *win, pf_input *in, double wait_s)
     *in = win->pending;
     double x, y;
     glfwGetCursorPos(win->glfw, &x, &y);
-    if (glfwGetMouseButton(win->glfw, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && win->have_last) {
-        in->mouse_dx = x - win->last_x;
-        in->mouse_dy = y - win->last_y;
+    pf__to_framebuffer(win->glfw, &x, &y);
+    if (win->have_last) {
+        double dx = x - win->last_x, dy = y - win->last_y;
+        if (glfwGetMouseButton(win->glfw, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) in->mouse_dx = dx, in->mouse_dy = dy;
+        if (glfwGetMouseButton(win->glfw, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+            glfwGetMouseButton(win->glfw, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS)
+            in->pan_dx = dx, in->pan_dy = dy;
     }
     win->last_x = x, win->last_y = y, win->have_last = 1;
+    in->cursor_x = x, in->cursor_y = y;
+    pf_window_framebuffer_size(win, &in->fb_w, &in->fb_h);
     in->close = glfwWindowShouldClose(win->glfw);
 }
 
 int pf_window_key_down(const pf_window *win, int key) { return glfwGetKey(win->glfw, key) == GLFW_PRESS; }
+
+void pf_window_framebuffer_size(const pf_window *win, uint32_t *w, uint32_t *h)
+{
+    int fw, fh;
+    glfwGetFramebufferSize(win->glfw, &fw, &fh);
+    *w = fw > 0 ? (uint32_t)fw : 0, *h = fh > 0 ? (uint32_t)fh : 0;
+}
 
 /* Uploads the image and draws it as a quad at (x, y) of size (qw, qh)
  * window pixels (y down). */

@@ -5,7 +5,14 @@
  * under Xvfb too). Nothing of the renderer depends on this module.
  *
  * Key codes are GLFW's (letters and digits are their upper-case ASCII
- * codes); the few special keys the viewer uses are named here. */
+ * codes); the few special keys the viewer uses are named here.
+ *
+ * Mouse: a left-button drag is reported as motion (look around), a right-
+ * or middle-button drag as pan motion, the wheel as steps, and a button
+ * pressed and released within PF_WINDOW_CLICK_SLOP pixels as a click at
+ * the press position. Positions are framebuffer pixels, y down (on a HiDPI
+ * screen the framebuffer has more pixels than the window has screen
+ * coordinates; the viewer draws framebuffer pixels 1:1). */
 #ifndef PF_WINDOW_H
 #define PF_WINDOW_H
 
@@ -33,7 +40,11 @@ enum {
 };
 #define PF_MOD_SHIFT 1
 
+enum { PF_MOUSE_LEFT = 0, PF_MOUSE_RIGHT = 1, PF_MOUSE_MIDDLE = 2 };
+
 #define PF_WINDOW_MAX_EVENTS 64
+#define PF_WINDOW_MAX_CLICKS 8
+#define PF_WINDOW_CLICK_SLOP 3.0 /* framebuffer pixels a click may wander */
 
 /* What happened since the last poll. */
 typedef struct pf_input {
@@ -41,6 +52,13 @@ typedef struct pf_input {
     int key[PF_WINDOW_MAX_EVENTS];  /* key presses (and auto-repeats), in order */
     int mods[PF_WINDOW_MAX_EVENTS]; /* PF_MOD_SHIFT, ... */
     double mouse_dx, mouse_dy;      /* cursor motion in pixels while the left button is held */
+    double pan_dx, pan_dy;          /* cursor motion while the right or middle button is held */
+    double scroll;                  /* wheel steps, away from the user positive */
+    double cursor_x, cursor_y;      /* the cursor, framebuffer pixels */
+    uint32_t click_count;
+    int click_button[PF_WINDOW_MAX_CLICKS]; /* PF_MOUSE_LEFT, ... */
+    double click_x[PF_WINDOW_MAX_CLICKS], click_y[PF_WINDOW_MAX_CLICKS]; /* where it was pressed */
+    uint32_t fb_w, fb_h;            /* the framebuffer's size now (0 x 0 when minimised) */
     int close;                      /* the window was asked to close */
 } pf_input;
 
@@ -54,6 +72,9 @@ void pf_window_close(pf_window *win);
  * event arrives or wait_s seconds pass (an idle, paused viewer). */
 void pf_window_poll(pf_window *win, pf_input *in, double wait_s);
 int pf_window_key_down(const pf_window *win, int key);
+/* The framebuffer's size in pixels (what pf_window_present fills 1:1 when
+ * handed an image of this size). */
+void pf_window_framebuffer_size(const pf_window *win, uint32_t *w, uint32_t *h);
 /* Draws an RGB8 image (top row first) fitted to the window, aspect kept,
  * and shows it. */
 void pf_window_present(pf_window *win, const uint8_t *rgb, uint32_t w, uint32_t h);

@@ -618,7 +618,7 @@ static void test_clamped_reference(void **state)
         ro.spp = 2048;
         ro.bounces = 3;
         ro.indirect_only = 1;
-        ro.clamp_b = k ? x.f.ind.b : 0.0f;
+        ro.clamp = k ? 20.0f : 0.0f; /* the frame's --clamp 20 */
         assert_int_equal(gi_reference_render(ref[k], &x.scene, x.rt, x.jobs, &x.scene.cameras[0], W, H, &ro, &err),
                          PF_OK);
     }

@@ -94,6 +94,7 @@ void app_reference_options(const pf_options *o, gi_reference_options *ro)
     ro->bounces = o->bounces ? o->bounces : GI_REFERENCE_DEFAULT_BOUNCES;
     ro->direct_only = o->direct_only;
     ro->indirect_only = o->indirect_only;
+    ro->clamp = o->clamp_set ? o->clamp : 0.0f; /* reference --clamp: clamped path tracing */
 }
 
 pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)

@@ -44,7 +44,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->bias_scale = 1.0f;
     const pf_scene *s = f->scene;
     float diag = pf_v3_length(pf_v3_sub(s->bounds_max, s->bounds_min));
-    ind->b = o.clamp > 0.0f ? o.clamp / (diag * diag) : INFINITY;
+    ind->b = gi_clamp_bound(s, o.clamp);
     ind->alpha = o.alpha_rel * diag;
     ind->n = o.tiles_n;
     ind->m = o.tiles_m;
@@ -128,6 +128,12 @@ void gi_indirect_free(gi_indirect *ind)
     free(ind->split_nx), free(ind->split_ny), free(ind->split_nz), free(ind->split_valid);
     free(ind->split_e), free(ind->combined), free(ind->filtered);
     memset(ind, 0, sizeof *ind);
+}
+
+float gi_clamp_bound(const pf_scene *scene, float clamp)
+{
+    float diag = pf_v3_length(pf_v3_sub(scene->bounds_max, scene->bounds_min));
+    return clamp > 0.0f ? clamp / (diag * diag) : INFINITY;
 }
 
 uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint32_t y)

@@ -159,6 +159,11 @@ void gi_stage_accumulate(struct gi_frame *f);
 void gi_stage_combine(struct gi_frame *f);
 void gi_stage_filter(struct gi_frame *f);
 
+/* The bounded geometry term's bound b = clamp / diagonal^2 (1/m^2) of the
+ * scene's bounding box (INFINITY for clamp <= 0): the frame's and the
+ * clamped reference's (gi_reference.h). */
+float gi_clamp_bound(const pf_scene *scene, float clamp);
+
 /* Pixel (x, y) of the image -> index in the split layout. */
 uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint32_t y);
 

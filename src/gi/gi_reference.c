@@ -17,6 +17,7 @@
 #include "gi_area.h"
 #include "gi_light.h"
 #include "gi_reference.h"
+#include "gi_indirect.h"
 
 /* ---------------------------------------------------------------- random numbers */
 
@@ -315,7 +316,7 @@ static pf_result gi__reference_setup(gi__ref_ctx *c, gi_area_lights *area, float
     c->bounces = o.direct_only ? 0u : (o.bounces ? o.bounces : GI_REFERENCE_DEFAULT_BOUNCES);
     c->indirect_only = o.indirect_only;
     c->no_area_nee = o.no_area_nee;
-    c->clamp_b = o.clamp_b > 0.0f && isfinite(o.clamp_b) ? o.clamp_b : 0.0f;
+    c->clamp_b = o.clamp > 0.0f && isfinite(o.clamp) ? gi_clamp_bound(scene, o.clamp) : 0.0f;
     pf_result r = gi_area_lights_build(area, scene, err);
     if (r != PF_OK) return r;
     c->area = area;

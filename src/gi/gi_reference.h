@@ -108,13 +108,13 @@ typedef struct gi_reference_options {
     int indirect_only; /* drop Le(x1) and the direct light at x1 */
     int no_area_nee;   /* emitters only by BSDF sampling (same expectation; for tests) */
     /* Clamped path tracing (Hedman 2017 Fig. 8, "path tracing with simulated
-     * clamping"): > 0 bounds the geometry term of the segment x1 - x2 by
-     * clamp_b (1/m^2, the frame's b = --clamp / diagonal^2): the path's
-     * throughput from x2 on is scaled by min(1, clamp_b / G), G = cos1 cos2 /
-     * r^2 with the shading normals turned as the frame turns them, so the
-     * estimate is the one a VPL renderer with every VPL at x2 and its bounded
-     * geometry term converges to. 0: off. */
-    float clamp_b;
+     * clamping", `softgi reference --clamp C`): C > 0 bounds the geometry
+     * term of the segment x1 - x2 by the frame's b = C / diagonal^2
+     * (gi_clamp_bound): the path's throughput from x2 on is scaled by
+     * min(1, b / G), G = cos1 cos2 / r^2 with the shading normals turned as
+     * the frame turns them, so the estimate is the one a VPL renderer with
+     * every VPL at x2 and the same --clamp converges to. 0: off. */
+    float clamp;
     gi_reference_progress_fn progress; /* may be NULL */
     void *progress_user;
 } gi_reference_options;

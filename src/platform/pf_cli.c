@@ -99,6 +99,10 @@ static const pf__opt k_options[] = {
     {PF__OPT_NO_INTERLEAVE, "--no-interleave", NULL, NULL, FRAME, "every pixel sees every VPL", NULL},
     {PF__OPT_CLAMP, "--clamp", NULL, "C", FRAME, "bounded geometry term b = C / diagonal^2 (default 400, 0 = off)",
      NULL},
+    {PF__OPT_CLAMP, "--clamp", NULL, "C", F,
+     "clamped path tracing (Hedman 2017 Fig. 8): the first bounce's geometry\nterm bounded as the frame's --clamp C "
+     "bounds it (default 0 = off)",
+     NULL},
     {PF__OPT_FILTER, "--filter", NULL, "box|bilateral|gaussian|none", FRAME,
      "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian)",
      NULL},

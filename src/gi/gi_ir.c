@@ -32,10 +32,6 @@
 #include "gi_lightpath.h"
 #include "gi_vpl.h"
 
-static const uint32_t gi__primes[] = {2,  3,  5,  7,  11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59,
-                                      61, 67, 71, 73, 79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131,
-                                      137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199};
-#define GI__DIMS (sizeof gi__primes / sizeof gi__primes[0])
 
 typedef struct gi__ir_state {
     gi_vpl_set prev; /* last frame's set, for the moved flags */
@@ -83,41 +79,12 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     for (uint32_t path = 0; out->count < budget && path < max_paths; path++) {
         paths++;
         uint32_t hi = start + path;
-        gi_lightpath_numbers u;
-        memset(&u, 0, sizeof u);
-        u.choice = gi_halton(hi, 2);
-        u.u1 = (float)gi_halton(hi, 3);
-        u.u2 = (float)gi_halton(hi, 5);
-        double lo, hi_cdf;
-        uint32_t dim0 = 3; /* first bounce dimension */
-        if (gi_lightpath_choose(&c, u.choice, &lo, &hi_cdf) == c.np) {
-            /* an area light: the triangle from the choice's position inside
-             * the area lights' CDF range, the direction from two more primes */
-            double ua = (u.choice * c.total - lo) / (hi_cdf - lo);
-            if (!(ua < 1.0)) ua = 0x1.fffffffffffffp-1;
-            if (!(ua >= 0.0)) ua = 0.0;
-            u.area = ua;
-            u.a1 = (float)gi_halton(hi, gi__primes[3]);
-            u.a2 = (float)gi_halton(hi, gi__primes[4]);
-            dim0 = 5;
+        uint32_t got = gi_lightpath_trace_halton(&c, in->rt, hi, B, budget - out->count, &out->v[out->count]);
+        for (uint32_t k = 0; k < got; k++) {
+            out->v[out->count + k].id = path * B + k;
+            out->v[out->count + k].moved = 1;
         }
-        pf_ray ray;
-        pf_vec3 phi;
-        gi_lightpath_emit(&c, &u, &ray, &phi);
-        for (uint32_t k = 0; k < B && out->count < budget; k++) {
-            gi_vpl *v = &out->v[out->count];
-            pf_vec3 albedo;
-            if (!gi_lightpath_hit(in->rt, ray, phi, v, &albedo)) break;
-            out->count++;
-            v->id = path * B + k;
-            v->moved = 1;
-            /* Russian roulette by albedo, then a cosine-weighted bounce */
-            uint32_t d = dim0 + 3 * k;
-            if (d + 2 >= GI__DIMS) break;
-            float rr = (float)gi_halton(hi, gi__primes[d + 2]);
-            float a1 = (float)gi_halton(hi, gi__primes[d]), a2 = (float)gi_halton(hi, gi__primes[d + 1]);
-            if (!gi_lightpath_bounce(v, albedo, rr, a1, a2, &phi, &ray)) break;
-        }
+        out->count += got;
     }
     float inv = 1.0f / (float)paths;
     for (uint32_t i = 0; i < out->count; i++) out->v[i].intensity = pf_v3_scale(out->v[i].intensity, inv);

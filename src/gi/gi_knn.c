@@ -146,15 +146,18 @@ float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude)
     return gi__worst(&h);
 }
 
-/* The best (d2, index) so far in the total order (distance, index). */
+/* The best (d2, index) so far in the total order (distance, index), among
+ * the points ok accepts (all when ok is NULL). */
 typedef struct gi__best {
     float d2;
     uint32_t i;
+    int (*ok)(const void *ctx, uint32_t index);
+    const void *ctx;
 } gi__best;
 
 static void gi__offer(gi__best *b, float d2, uint32_t i)
 {
-    if (d2 < b->d2 || (d2 == b->d2 && i < b->i)) b->d2 = d2, b->i = i;
+    if ((d2 < b->d2 || (d2 == b->d2 && i < b->i)) && (!b->ok || b->ok(b->ctx, i))) b->d2 = d2, b->i = i;
 }
 
 static void gi__nearest(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, gi__best *b)
@@ -182,7 +185,16 @@ static void gi__nearest(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, gi
 
 uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2)
 {
-    gi__best b = {INFINITY, GI_KNN_NONE};
+    gi__best b = {INFINITY, GI_KNN_NONE, NULL, NULL};
+    gi__nearest(t, 0, t->count, q, &b);
+    if (dist2) *dist2 = b.d2;
+    return b.i;
+}
+
+uint32_t gi_knn_nearest_where(const gi_knn *t, pf_vec3 q, int (*ok)(const void *ctx, uint32_t index),
+                              const void *ctx, float *dist2)
+{
+    gi__best b = {INFINITY, GI_KNN_NONE, ok, ctx};
     gi__nearest(t, 0, t->count, q, &b);
     if (dist2) *dist2 = b.d2;
     return b.i;

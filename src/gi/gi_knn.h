@@ -54,6 +54,10 @@ float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude)
  * the point set; *dist2 (may be NULL) gets its squared distance.
  * GI_KNN_NONE for an empty tree. */
 uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2);
+/* The same among the points for which ok(ctx, index) is true (GI_KNN_NONE
+ * when none is). */
+uint32_t gi_knn_nearest_where(const gi_knn *t, pf_vec3 q, int (*ok)(const void *ctx, uint32_t index),
+                              const void *ctx, float *dist2);
 
 /* Eq. 7: density w.r.t. area of N points, given the squared k-NN radius
  * (0 for r2 = INFINITY; INFINITY for r2 = 0). */

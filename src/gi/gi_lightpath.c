@@ -101,6 +101,55 @@ uint32_t gi_lightpath_emit(const gi_lightpath_lights *c, const gi_lightpath_numb
     return l;
 }
 
+static const uint32_t gi__primes[] = {2,  3,  5,  7,  11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59,
+                                      61, 67, 71, 73, 79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131,
+                                      137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199};
+#define GI__DIMS (sizeof gi__primes / sizeof gi__primes[0])
+
+/* The emission numbers of path hi; returns the first dimension not used. */
+static uint32_t gi__numbers_halton(const gi_lightpath_lights *c, uint32_t hi, gi_lightpath_numbers *u)
+{
+    memset(u, 0, sizeof *u);
+    u->choice = gi_halton(hi, 2);
+    u->u1 = (float)gi_halton(hi, 3);
+    u->u2 = (float)gi_halton(hi, 5);
+    double lo, hi_cdf;
+    if (gi_lightpath_choose(c, u->choice, &lo, &hi_cdf) != c->np) return 3;
+    /* an area light: the triangle from the choice's position inside the
+     * area lights' CDF range, the direction from two more primes */
+    double ua = (u->choice * c->total - lo) / (hi_cdf - lo);
+    if (!(ua < 1.0)) ua = 0x1.fffffffffffffp-1;
+    if (!(ua >= 0.0)) ua = 0.0;
+    u->area = ua;
+    u->a1 = (float)gi_halton(hi, gi__primes[3]);
+    u->a2 = (float)gi_halton(hi, gi__primes[4]);
+    return 5;
+}
+
+uint32_t gi_lightpath_trace_halton(const gi_lightpath_lights *c, const pf_rt *rt, uint32_t hi, uint32_t bounces,
+                                   uint32_t max, gi_vpl *out)
+{
+    gi_lightpath_numbers u;
+    uint32_t dim0 = gi__numbers_halton(c, hi, &u);
+    pf_ray ray;
+    pf_vec3 phi;
+    gi_lightpath_emit(c, &u, &ray, &phi);
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < bounces && n < max; k++) {
+        gi_vpl *v = &out[n];
+        pf_vec3 albedo;
+        if (!gi_lightpath_hit(rt, ray, phi, v, &albedo)) break;
+        n++;
+        /* Russian roulette by albedo, then a cosine-weighted bounce */
+        uint32_t d = dim0 + 3 * k;
+        if (d + 2 >= GI__DIMS) break;
+        float rr = (float)gi_halton(hi, gi__primes[d + 2]);
+        float a1 = (float)gi_halton(hi, gi__primes[d]), a2 = (float)gi_halton(hi, gi__primes[d + 1]);
+        if (!gi_lightpath_bounce(v, albedo, rr, a1, a2, &phi, &ray)) break;
+    }
+    return n;
+}
+
 int gi_lightpath_hit(const pf_rt *rt, pf_ray ray, pf_vec3 phi, gi_vpl *v, pf_vec3 *albedo)
 {
     pf_hit h = pf_rt_intersect1(rt, ray);

@@ -58,6 +58,15 @@ uint32_t gi_lightpath_emit(const gi_lightpath_lights *c, const gi_lightpath_numb
  * reuses the position inside the range to pick an area-light triangle). */
 uint32_t gi_lightpath_choose(const gi_lightpath_lights *c, double choice, double *lo, double *hi);
 
+/* Light path `hi` (>= 1) with IR's numbers, the Halton sequence: choice,
+ * u1, u2 in the primes 2, 3, 5; for an area light the triangle from the
+ * choice's position inside the area lights' range of the CDF and the
+ * direction from 7 and 11; then per bounce k three more primes (the
+ * direction's two, Russian roulette's one), from the 4th (or 6th) on.
+ * Writes a VPL (gi_lightpath_hit: no id, moved) per hit, at most `bounces`
+ * and at most `max`, and returns how many. */
+uint32_t gi_lightpath_trace_halton(const gi_lightpath_lights *c, const pf_rt *rt, uint32_t hi, uint32_t bounces,
+                                   uint32_t max, gi_vpl *out);
 /* Traces `ray`; on a hit writes the VPL (position pushed off the surface,
  * normal facing the photon, intensity Phi * albedo / pi, id and moved = 1
  * left to the caller) and the surface albedo, and returns 1; 0 on a miss. */

@@ -278,6 +278,17 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
 
 /* One scene's table: stages as rows, its configurations as columns, each
  * "ms share" (up to 28 + 8 x 17 = 164 columns), then the pipelining gains. */
+/* The union of the configurations' stage names (parts: the methods' own
+ * parts instead), in the order they first ran: a table's rows. */
+static void bf__union(pf_stage_times *rows, const bf_result *res, uint32_t n, int parts)
+{
+    memset(rows, 0, sizeof *rows);
+    for (uint32_t c = 0; c < n; c++) {
+        const pf_stage_times *t = parts ? &res[c].parts : &res[c].stages;
+        for (uint32_t s = 0; s < t->count; s++) pf_stage_add(rows, t->name[s], 0.0);
+    }
+}
+
 /* The frame in Hedman 2017 Table 2's columns (medians, ms): the method's
  * own parts of VPL sampling where it reports them (SMC), VPL sampling in
  * all (the update), shadow maps (the VPLs' maps), interleaved shading with
@@ -290,9 +301,7 @@ static void bf__print_hedman_table2(const bf_result *res, uint32_t n)
                                           "assign VPLs to tiles", "accumulate", "combine", "filter"};
     printf("in Hedman 2017 Table 2's columns (ms):\n");
     pf_stage_times rows;
-    memset(&rows, 0, sizeof rows);
-    for (uint32_t c = 0; c < n; c++)
-        for (uint32_t s = 0; s < res[c].parts.count; s++) pf_stage_add(&rows, res[c].parts.name[s], 0.0);
+    bf__union(&rows, res, n, 1);
     for (uint32_t s = 0; s < rows.count; s++) {
         printf("  %-26.26s", rows.name[s]);
         for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", bf__stage_ms(&res[c].parts, rows.name[s]), "");
@@ -329,11 +338,8 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
         printf("  %15s", h);
     }
     printf("\n");
-    /* rows: the union of the configurations' stages, in frame order */
     pf_stage_times rows;
-    memset(&rows, 0, sizeof rows);
-    for (uint32_t c = 0; c < n; c++)
-        for (uint32_t s = 0; s < res[c].stages.count; s++) pf_stage_add(&rows, res[c].stages.name[s], 0.0);
+    bf__union(&rows, res, n, 0);
     for (uint32_t s = 0; s < rows.count; s++) {
         printf("%-28.28s", rows.name[s]);
         for (uint32_t c = 0; c < n; c++) {

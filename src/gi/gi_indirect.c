@@ -427,8 +427,8 @@ void gi_stage_assign(gi_frame *f)
 
 /* ---------------------------------------------------------- 7. accumulate */
 
-/* Irradiance at (p, n) from one VPL, bounded geometry term, no visibility. */
-static pf_vec3 gi__vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec3 *w_out, float *r_out)
+pf_vec3 gi_vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec3 *w_out, float *r_out, float *g_out,
+                          int *clamped)
 {
     pf_vec3 d = pf_v3_sub(v->pos, p);
     float r2 = pf_v3_dot(d, d);
@@ -438,15 +438,17 @@ static pf_vec3 gi__vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b
     float c1 = pf_v3_dot(n, w), c2 = -pf_v3_dot(v->nrm, w);
     if (!(c1 > 0.0f) || !(c2 > 0.0f)) return pf_v3(0, 0, 0);
     float G = c1 * c2 / r2;
+    if (clamped) *clamped = G > b;
     if (G > b) G = b; /* the bounded geometry term (survey Sec. 5) */
     *w_out = w;
     *r_out = r;
+    if (g_out) *g_out = G;
     return pf_v3_scale(v->intensity, G);
 }
 
 #ifdef GI_HAVE_X86
 /* The accumulation of `groups` runs of 8 consecutive tile pixels against
- * the tile's VPLs with AVX2 — gi__vpl_irradiance and rs_para_visible_at
+ * the tile's VPLs with AVX2 — gi_vpl_irradiance and rs_para_visible_at
  * written lane-wise with the same operations in the same order (sqrt and
  * division are correctly rounded in both; floor, min/max and the integer
  * texel arithmetic are exact), so every lane gets the scalar path's bits.
@@ -485,7 +487,7 @@ __attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indire
             const __m256 Pz = _mm256_loadu_ps(pz_ + 8 * g);
             const __m256 Nx = _mm256_loadu_ps(nx_ + 8 * g), Ny = _mm256_loadu_ps(ny_ + 8 * g);
             const __m256 Nz = _mm256_loadu_ps(nz_ + 8 * g);
-            /* gi__vpl_irradiance */
+            /* gi_vpl_irradiance */
             __m256 dx = _mm256_sub_ps(_mm256_set1_ps(v->pos.x), Px), dy = _mm256_sub_ps(_mm256_set1_ps(v->pos.y), Py),
                    dz = _mm256_sub_ps(_mm256_set1_ps(v->pos.z), Pz);
             __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
@@ -623,7 +625,7 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             const gi_vpl *v = &ind->vpls.v[vi];
             pf_vec3 w;
             float r;
-            pf_vec3 c = gi__vpl_irradiance(v, pos, nrm, ind->b, &w, &r);
+            pf_vec3 c = gi_vpl_irradiance(v, pos, nrm, ind->b, &w, &r, NULL, NULL);
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
             if (ind->ism) {

@@ -159,6 +159,14 @@ void gi_stage_accumulate(struct gi_frame *f);
 void gi_stage_combine(struct gi_frame *f);
 void gi_stage_filter(struct gi_frame *f);
 
+/* Irradiance at (p, n) from one VPL with the bounded geometry term, no
+ * visibility (step 7's scalar kernel): I G_b, G_b = min(cos_r cos_v / r^2,
+ * b); on a nonzero result *w_out and *r_out get the unit direction to the
+ * VPL and its distance, *g_out (may be NULL) G_b, *clamped (may be NULL)
+ * whether the bound applied. */
+pf_vec3 gi_vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec3 *w_out, float *r_out, float *g_out,
+                          int *clamped);
+
 /* The bounded geometry term's bound b = clamp / diagonal^2 (1/m^2) of the
  * scene's bounding box (INFINITY for clamp <= 0): the frame's and the
  * clamped reference's (gi_reference.h). */

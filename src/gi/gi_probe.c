@@ -33,29 +33,6 @@ static void gi__probe_gbuffer(gi_probe *p, const gi_frame *f, size_t i)
 
 /* ------------------------------------------------------------ step 7, VPL by VPL */
 
-/* gi_indirect.c's gi__vpl_irradiance, operation for operation (the build
- * has no fused multiply-adds, so the same expression rounds the same):
- * I G_b with G_b = min(cos_r cos_v / r^2, b), no visibility; *clamped
- * receives 1 when the bound applied. */
-static pf_vec3 gi__vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec3 *w_out, float *r_out,
-                                  float *g_out, int *clamped)
-{
-    pf_vec3 d = pf_v3_sub(v->pos, p);
-    float r2 = pf_v3_dot(d, d);
-    if (!(r2 > 0.0f)) return pf_v3(0, 0, 0);
-    float r = sqrtf(r2);
-    pf_vec3 w = pf_v3_scale(d, 1.0f / r);
-    float c1 = pf_v3_dot(n, w), c2 = -pf_v3_dot(v->nrm, w);
-    if (!(c1 > 0.0f) || !(c2 > 0.0f)) return pf_v3(0, 0, 0);
-    float G = c1 * c2 / r2;
-    *clamped = G > b;
-    if (G > b) G = b;
-    *w_out = w;
-    *r_out = r;
-    *g_out = G;
-    return pf_v3_scale(v->intensity, G);
-}
-
 /* The visibility test gi_stage_accumulate made for VPL vi at (pos, nrm). */
 static int gi__vpl_visible(const gi_frame *f, uint32_t vi, pf_vec3 pos, pf_vec3 nrm, pf_vec3 w, float r)
 {
@@ -98,7 +75,8 @@ static void gi__probe_tile_vpls(gi_probe *p, const gi_frame *f)
         gi_probe_vpl c;
         memset(&c, 0, sizeof c);
         pf_vec3 w = pf_v3(0, 0, 0);
-        pf_vec3 e = gi__vpl_irradiance(v, pos, nrm, ind->b, &w, &c.distance, &c.g, &c.clamped);
+        c.clamped = 0;
+        pf_vec3 e = gi_vpl_irradiance(v, pos, nrm, ind->b, &w, &c.distance, &c.g, &c.clamped);
         if (e.x == 0.0f && e.y == 0.0f && e.z == 0.0f) continue;
         if (!gi__vpl_visible(f, vi, pos, nrm, w, c.distance)) {
             p->occluded++;

@@ -103,12 +103,14 @@ int app_reference(const pf_options *o)
     }
 
     /* Output */
+    float exposure = o->exposure;
     if (r == PF_OK) {
         double t0 = pf_time_now();
         char def[4096];
         snprintf(def, sizeof def, "out/%s-reference.png", su.stem);
         r = pf_imageio_outputs_resolve(&out, o->out_path, o->hdr_path, def, &err);
-        if (r == PF_OK) r = pf_imageio_outputs_write(&out, image, width, height, o->exposure, &err);
+        if (r == PF_OK) exposure = app_exposure(o, image, width, height);
+        if (r == PF_OK) r = pf_imageio_outputs_write(&out, image, width, height, exposure, &err);
         pf_stage_add(&t, "write images", (pf_time_now() - t0) * 1e3);
     }
     int status = 0;
@@ -123,7 +125,9 @@ int app_reference(const pf_options *o)
             pf_stage_print(&t, stdout);
             if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
             else printf("wrote %s\n", out.linear);
+            fflush(stdout); /* before the hint on stderr */
         }
+        app_hint_dark(o, image, width, height, exposure);
         if (o->print_hash)
             printf("hash %016llx (isa %s)\n", (unsigned long long)pf_imageio_hash(image, (uint64_t)width * height * 3),
                    pf_isa_name(su.isa));

@@ -13,6 +13,8 @@
  * complete; an image with a NaN, infinite or negative value is not written
  * (exit 1). --dump-stages DIR writes the stages (gi_dump.h) as pictures,
  * float OpenEXR data or both (--dump-format png|exr|both, default png).
+ * --exposure auto picks the PNG's (and the pictures') exposure from the
+ * image (app_exposure); a nearly black image gets a one-line hint.
  *
  * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
@@ -114,9 +116,10 @@ int app_render(const pf_options *o)
 
     /* Output */
     double t0 = pf_time_now();
-    r = pf_imageio_outputs_write(&out, frame.final, width, height, o->exposure, &err);
+    const float exposure = app_exposure(o, frame.final, width, height); /* the PNG's; the linear image is as rendered */
+    r = pf_imageio_outputs_write(&out, frame.final, width, height, exposure, &err);
     if (r == PF_OK && o->dump_dir) {
-        gi_view_settings vs = {o->exposure, 0}; /* the views `softgi view` shows at this exposure */
+        gi_view_settings vs = {exposure, 0}; /* the views `softgi view` shows at this exposure */
         r = gi_dump_stages(&frame, o->dump_dir, &vs, app__dump_format(o), &err);
     }
     pf_stage_add(&t, o->dump_dir ? "write images + dump" : "write images", (pf_time_now() - t0) * 1e3);
@@ -137,7 +140,9 @@ int app_render(const pf_options *o)
             pf_stage_print(&t, stdout);
             if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
             else printf("wrote %s\n", out.linear);
+            fflush(stdout); /* before the hint on stderr */
         }
+        app_hint_dark(o, frame.final, width, height, exposure);
         if (o->print_hash)
             printf("hash %016llx (isa %s)\n",
                    (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3),

@@ -1,12 +1,16 @@
 /* app_scene: what the commands share before they render: the scene loading
  * (the file or the embedded default scene, the --camera / --light
- * overrides, validation and the user-facing warnings), the scene + Embree +
+ * overrides, validation, the automatic camera and light of app_defaults.h
+ * and the user-facing warnings and notes), the PNG exposure (--exposure
+ * auto) and the nearly-black hint, the scene + Embree +
  * jobs setup of `render` and `reference`, and the frame and path-tracer
  * options the command line describes. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "app.h"
+#include "app_defaults.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
 #include "gi_ism.h"
@@ -47,6 +51,87 @@ static int app__has_emitters(const pf_scene *scene)
     return 0;
 }
 
+/* The image size the command will render (render's default 640x480;
+ * sequence passes the file's size in o->width/height when it has one). */
+static void app__image_size(const pf_options *o, uint32_t *w, uint32_t *h)
+{
+    *w = o->width ? o->width : 640;
+    *h = o->height ? o->height : 480;
+}
+
+/* No camera anywhere: app_defaults_camera, printed as a --camera value and
+ * parsed back from that text, so that copying the line gives the same
+ * image bit for bit. */
+static pf_result app__default_camera(const pf_options *o, const pf_scene *scene, pf_camera *camera, const char *name,
+                                     pf_error *err)
+{
+    app_default_camera dc;
+    app_defaults_camera(&dc, scene);
+    char spec[256];
+    pf_vec3 eye, target;
+    float fovy;
+    pf_result r = PF_OK;
+    /* 5 digits read well; 9 give every float back exactly, for a small
+     * scene far from the origin whose eye and target 5 digits would merge */
+    for (int digits = 5; digits <= 9; digits += 4) {
+        snprintf(spec, sizeof spec, "%.*g,%.*g,%.*g:%.*g,%.*g,%.*g:%g", digits, (double)dc.eye.x, digits,
+                 (double)dc.eye.y, digits, (double)dc.eye.z, digits, (double)dc.target.x, digits, (double)dc.target.y,
+                 digits, (double)dc.target.z, (double)dc.fovy_deg);
+        r = pf_cli_parse_camera(spec, &eye, &target, &fovy, err);
+        if (r == PF_OK) r = pf_camera_look_at(camera, eye, target, pf_radians(fovy), err);
+        if (r == PF_OK) break;
+    }
+    if (r != PF_OK) return r;
+    snprintf(camera->name, sizeof camera->name, "default");
+    if (!o->quiet) {
+        if (dc.interior)
+            fprintf(stderr,
+                    "softgi: note: %s has no camera; using --camera %s (an interior: %u of %u rays from the bounds' "
+                    "centre hit; looking down its %c axis%s)\n",
+                    name, spec, dc.hits, dc.rays, dc.axis, dc.open_end ? " through its open end" : "");
+        else
+            fprintf(stderr,
+                    "softgi: note: %s has no camera; using --camera %s (outside: the bounds fill 80%% of the "
+                    "view)\n",
+                    name, spec);
+    }
+    return PF_OK;
+}
+
+/* No light and no emitter: app_defaults_light, printed as a --light value
+ * and parsed back (as app__default_camera). */
+static pf_result app__default_light(const pf_options *o, pf_scene *scene, const pf_camera *camera, const char *name,
+                                    pf_error *err)
+{
+    uint32_t w, h;
+    app__image_size(o, &w, &h);
+    pf_light l;
+    float median;
+    app_defaults_light(&l, &median, scene, camera, w, h);
+    char spec[256];
+    pf_light parsed;
+    pf_result r = PF_OK;
+    /* 5 digits unless they move the light by more than 1% of the median
+     * distance (a small scene far from the origin): then 9, exact */
+    for (int digits = 5; digits <= 9; digits += 4) {
+        snprintf(spec, sizeof spec, "point:%.*g,%.*g,%.*g:1,1,1:%.3g", digits, (double)l.position.x, digits,
+                 (double)l.position.y, digits, (double)l.position.z, (double)l.intensity);
+        if ((r = pf_cli_parse_light(spec, &parsed, err)) != PF_OK) continue;
+        pf_vec3 moved = pf_v3_sub(parsed.position, l.position);
+        if (pf_v3_max_comp(pf_v3(fabsf(moved.x), fabsf(moved.y), fabsf(moved.z))) <= 0.01f * median) break;
+    }
+    if (r != PF_OK) return r;
+    l = parsed;
+    snprintf(l.name, sizeof l.name, "default");
+    if ((r = pf_scene_add_light(scene, &l, err)) != PF_OK) return r;
+    if (!o->quiet)
+        fprintf(stderr,
+                "softgi: note: %s has no lights; added --light %s (at the camera: %g W/m^2 at the median distance "
+                "%.3g)\n",
+                name, spec, (double)APP_DEFAULT_IRRADIANCE, (double)median);
+    return PF_OK;
+}
+
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err)
 {
@@ -66,25 +151,46 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
         r = pf_camera_look_at(camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), err);
     } else if (scene->camera_count > 0) {
         *camera = scene->cameras[0];
-    } else {
-        r = pf_error_set(err, PF_ERR_NO_CAMERA, "%s has no camera; give one with --camera ex,ey,ez:tx,ty,tz:fovy_deg",
-                         o->scene_path ? o->scene_path : "the scene");
-    }
+    } /* else app__default_camera below, once the scene is validated */
     if (r == PF_OK && o->light_count > 0) {
         scene->light_count = 0; /* given lights replace the file's */
         for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(scene, &o->lights[i], err);
     }
     if (r == PF_OK) r = pf_scene_validate(scene, err);
+    const char *name = o->scene_path ? o->scene_path : "the scene";
+    if (r == PF_OK && !o->has_camera && scene->camera_count == 0) r = app__default_camera(o, scene, camera, name, err);
+    /* emissive triangles are lights too (gi_area.h) */
+    if (r == PF_OK && scene->light_count == 0 && !app__has_emitters(scene))
+        r = app__default_light(o, scene, camera, name, err);
     if (r != PF_OK) {
         pf_scene_free(scene);
         return r;
     }
-    if (scene->light_count == 0 && !o->quiet) {
-        /* emissive triangles are lights too (gi_area.h) */
-        if (!app__has_emitters(scene))
-            fprintf(stderr, "softgi: note: the scene has no lights; add one with --light (only emission will show)\n");
-    }
     return PF_OK;
+}
+
+float app_exposure(const pf_options *o, const float *rgb, uint32_t width, uint32_t height)
+{
+    if (!o->exposure_auto) return o->exposure;
+    double avg;
+    float ev = app_defaults_exposure(rgb, width, height, &avg);
+    if (!o->quiet)
+        fprintf(stderr,
+                "softgi: note: --exposure auto: %+.2f stops (the lit pixels' log-average luminance %.4g to %g%% grey)"
+                "\n",
+                (double)ev, avg, 100.0 * APP_DEFAULT_GREY);
+    return ev;
+}
+
+void app_hint_dark(const pf_options *o, const float *rgb, uint32_t width, uint32_t height, float exposure)
+{
+    if (o->quiet || !app_defaults_nearly_black(rgb, width, height, exposure)) return;
+    fprintf(stderr,
+            "softgi: note: the image is nearly black (99%% of its pixels below luminance %g at exposure %+.2f); "
+            "try %s\n",
+            (double)APP_DARK_LUMINANCE, (double)exposure,
+            o->exposure_auto ? "a brighter --light (W/sr for point and spot, W/m^2 for dir)"
+                             : "--exposure auto or a brighter --light (W/sr for point and spot, W/m^2 for dir)");
 }
 
 void app_reference_options(const pf_options *o, gi_reference_options *ro)

@@ -36,7 +36,9 @@
  * The CLI's render options apply (--size overrides the file's size;
  * --camera/--light act as in render when the file has no camera keys / no
  * full lights, and are refused when it has: the file would override them
- * silently otherwise). Instant Radiosity regenerates every VPL when a light
+ * silently otherwise). Without camera keys, a camera in the scene or
+ * --camera, the camera is render's automatic one (app_defaults.h), and so
+ * is the light. --exposure auto is picked on frame 0 and held. Instant Radiosity regenerates every VPL when a light
  * moves (the expected baseline); a moving camera alone moves none.
  *
  * --pipeline on (default off): each frame's VPL update runs as a job
@@ -242,6 +244,8 @@ int app_sequence(const pf_options *o)
     double t_load = pf_time_now();
     pf_options so = *o;
     so.scene_path = seq->scene_embedded ? NULL : seq->scene_path;
+    so.width = width; /* the automatic light aims through this image (app_defaults.h) */
+    so.height = height;
     if (seq->camera.count) {
         so.has_camera = 1;
         pf_sequence_camera_at(seq, 0, &so.camera_eye, &so.camera_target, &so.camera_fovy_deg);
@@ -349,6 +353,7 @@ int app_sequence(const pf_options *o)
     uint64_t hash = 0xcbf29ce484222325ull;
     double render_sum = 0.0, write_sum = 0.0;
     uint64_t moved_sum = 0;
+    float exposure = o->exposure; /* --exposure auto: picked on frame 0 and held, so the PNGs do not flicker */
     for (uint32_t f = 0; f < seq->frames && r == PF_OK; f++) {
         /* camera and lights of frame f (checked above) */
         pf_vec3 eye, target;
@@ -383,7 +388,11 @@ int app_sequence(const pf_options *o)
         app__frame_path(path, sizeof path, dir, f, ".pfm");
         r = pf_imageio_write_pfm(path, fr->final, width, height, &err);
         app__frame_path(path, sizeof path, dir, f, ".png");
-        if (r == PF_OK) r = pf_imageio_write_png(path, fr->final, width, height, o->exposure, &err);
+        if (r == PF_OK && f == 0) {
+            exposure = app_exposure(o, fr->final, width, height);
+            app_hint_dark(o, fr->final, width, height, exposure);
+        }
+        if (r == PF_OK) r = pf_imageio_write_png(path, fr->final, width, height, exposure, &err);
         app__frame_path(path, sizeof path, dir, f, ".view");
         if (r == PF_OK) r = gi_metrics_view_write(path, &view, &err);
         app__frame_path(path, sizeof path, dir, f, ".depth.pfm");

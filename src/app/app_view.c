@@ -841,6 +841,8 @@ static void view_render_frame(view_app *a)
         for (uint32_t i = 0; i < a->frame.ind.vpls.count; i++) a->vpls_moved += a->frame.ind.vpls.v[i].moved != 0;
     if (a->grab_swapped && !rebuilt) /* a rebuilt state renders every map once: not counted */
         a->grab_frames++, a->grab_maps += a->frame.ind.maps_rendered;
+    if (a->frames_done == 0 && a->opt->exposure_auto) /* once, from the first frame; - and = adjust from there */
+        a->exposure = app_exposure(a->opt, a->frame.final, a->width, a->height);
     a->frames_done++;
     a->frame_needed = 0;
     a->image_dirty = 1;

@@ -69,7 +69,10 @@ static const pf__opt k_options[] = {
     {PF__OPT_THREADS, "--threads", NULL, "N", BR | BF, "measure only N threads (default: 1 and 2)", NULL},
     {PF__OPT_ISA, "--isa", NULL, "auto|sse2|sse4.2|avx2|avx512", ALL, "pin Embree's and softgi's SIMD ISA (default auto)",
      NULL},
-    {PF__OPT_EXPOSURE, "--exposure", NULL, "STOPS", SCENE, "PNG exposure, 2^STOPS before Reinhard (default 0)", NULL},
+    {PF__OPT_EXPOSURE, "--exposure", NULL, "STOPS|auto", SCENE,
+     "PNG exposure, 2^STOPS before Reinhard (default 0); auto: the\nlit pixels' log-average to 18% grey (printed); "
+     "the linear\nimage is the same either way",
+     NULL},
     {PF__OPT_CAMERA, "--camera", NULL, "ex,ey,ez:tx,ty,tz:fovy_deg", SCENE, "the camera (replaces the scene's)", NULL},
     {PF__OPT_LIGHT, "--light", NULL, "SPEC", SCENE,
      "point:x,y,z:r,g,b:I (I: W/sr)\n"
@@ -550,7 +553,10 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
     case PF__OPT_THREADS: r = pf__uint(a, val, 1, 256, &o->threads, err); break;
     case PF__OPT_ISA: r = pf_isa_parse(val, &o->isa, err); break;
     case PF__OPT_EXPOSURE:
-        r = pf__float_option(a, val, -64.0f, 64.0f, "a number of stops in -64..64", &o->exposure, err);
+        o->exposure_auto = !strcmp(val, "auto");
+        o->exposure = 0.0f;
+        if (!o->exposure_auto)
+            r = pf__float_option(a, val, -64.0f, 64.0f, "a number of stops in -64..64, or auto", &o->exposure, err);
         break;
     case PF__OPT_CAMERA:
         r = pf_cli_parse_camera(val, &o->camera_eye, &o->camera_target, &o->camera_fovy_deg, err);

@@ -98,7 +98,7 @@ static void imh_check(const gi_sample_domain *d, const float *f, uint32_t N, uin
     for (uint32_t j = 0; j < N; j++) {
         double w;
         float fv;
-        uint32_t t = gi_imh_chain(d, f, j, N, M, &w, &fv);
+        uint32_t t = gi_imh_chain(d, f, j, N, M, &w, &fv, NULL);
         assert_true(t < d->total);
         assert_true(fv == f[t]);
         count[t]++;
@@ -163,11 +163,18 @@ static void test_imh_m1_uniform(void **state)
     for (uint32_t j = 0; j < N; j++) {
         double w, q;
         float fv;
-        uint32_t t = gi_imh_chain(&d, g, j, N, 1, &w, &fv);
+        double g0 = -1.0, wm, g0m;
+        uint32_t t = gi_imh_chain(&d, g, j, N, 1, &w, &fv, &g0);
         uint32_t h = gi_imh_index(j, 0, N, 1);
         uint32_t t0 = gi_domain_texel(&d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
         assert_int_equal(t, t0);
         assert_true(w == (double)g[t] / q);
+        assert_true(g0 == w); /* M-H-Single's weight is the initial sample's g: for M = 1 the same */
+        /* longer chains: g0 is still the initial proposal's g, w the mean of all M */
+        gi_imh_chain(&d, g, j, N, 4, &wm, &fv, &g0m);
+        h = gi_imh_index(j, 0, N, 4);
+        t0 = gi_domain_texel(&d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
+        assert_true(g0m == (double)g[t0] / q);
         count[t]++;
     }
     int df;
@@ -919,6 +926,7 @@ static void test_bad_params(void **state)
         {&gi_method_tcas, "dims=2"},    {&gi_method_invtm, "dims=4"},  {&gi_method_invtm, "M=3"},
         {&gi_method_invtm, "P=0"},      {&gi_method_invtm, "rsm=99999"},
         {&gi_method_invtm, "area_points=0"}, {&gi_method_tcas, "area_points=257"}, {&gi_method_ssvp, "area_points=0"},
+        {&gi_method_tcas, "weight=median"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         gi_params p;
@@ -1067,7 +1075,7 @@ static void bench_rsm_sibenik(void **state)
             for (uint32_t j = 0; j < 256; j++) {
                 double w;
                 float fv;
-                sink += gi_imh_chain(&im.domain, im.f, j, 256, 16, &w, &fv);
+                sink += gi_imh_chain(&im.domain, im.f, j, 256, 16, &w, &fv, NULL);
             }
             double t3 = 1000.0 * pf_time_now();
             ti[r] = t1 - t0, tc[r] = t2 - t1, th[r] = t3 - t2;

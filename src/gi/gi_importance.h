@@ -110,12 +110,13 @@ uint32_t gi_invtm_sample(const gi_invtm_cdf *c, const gi_sample_domain *d, int d
  * M - 1 moves), proposal k from Halton index gi_imh_index(j, k, N, M)
  * (bases 2, 3, 5 for the vector, 7 for the acceptance number).
  * Returns the final texel; *w the chain's mean of f(v)/q(v) over its M
- * proposals (an estimate of sum f), *fv = f(final). */
+ * proposals (an estimate of sum f), *fv = f(final), *g0 (may be NULL)
+ * f(v)/q(v) of the initial sample (M-H-Single's weight). */
 /* Halton index of chain j's k-th proposal: 1 + pi(j + N k), pi a fixed
  * permutation of [0, N M) (gi_tcas.c says why). N M must be < 2^32 - 1. */
 uint32_t gi_imh_index(uint32_t j, uint32_t k, uint32_t N, uint32_t M);
 uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uint32_t N, uint32_t M, double *w,
-                      float *fv);
+                      float *fv, double *g0);
 
 /* ------------------------------------------------------------------ VPLs */
 

@@ -45,7 +45,10 @@
  *                       rsm= RSM texels per side (per cube face);
  *                       P=   camera points;
  *                       area_points= K, emitter points (faces) of the area
- *                            lights' RSM, default GI_RSM_DEFAULT_AREA_POINTS.
+ *                            lights' RSM, default GI_RSM_DEFAULT_AREA_POINTS;
+ *                       weight=local|single|global, Eq. 3's chain weight:
+ *                            the paper's (default) or the two variants its
+ *                            Sec. 6 compares with (gi__tcas_weight).
  * A chain whose M samples all have f = 0 yields a VPL of zero intensity
  * (it keeps its slot, at last frame's position when it had one).
  * Area lights (gi_area.h) have one RSM of K hemispherical faces after the
@@ -94,12 +97,13 @@ uint32_t gi_imh_index(uint32_t j, uint32_t k, uint32_t N, uint32_t M)
 }
 
 uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uint32_t N, uint32_t M, double *w,
-                      float *fv)
+                      float *fv, double *g0)
 {
     double q;
     uint32_t h = gi_imh_index(j, 0, N, M);
     uint32_t v = gi_domain_texel(d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
     double gv = (double)f[v] / q, s = gv;
+    if (g0) *g0 = gv;
     for (uint32_t k = 1; k < M; k++) {
         h = gi_imh_index(j, k, N, M);
         uint32_t vn = gi_domain_texel(d, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
@@ -118,14 +122,23 @@ uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uin
 
 /* ------------------------------------------------------------------ method */
 
+/* The chain weight w of Eq. 3 (Barak 2013 Sec. 4.3 and Fig. 6-7):
+ * LOCAL, the paper's method ("M-H-Our"): the chain's mean of its M
+ * proposals' g, which also removes the start-up bias; SINGLE ("M-H-Single",
+ * after Veach and Guibas 1997): g of the chain's initial sample, drawn from
+ * the proposal; GLOBAL ("Our w/o bias reduction", Fig. 6): one weight for
+ * every chain, the mean of g over all N M proposals, as if every chain had
+ * reached f's distribution. */
+typedef enum gi__tcas_weight { GI__TCAS_LOCAL = 0, GI__TCAS_SINGLE, GI__TCAS_GLOBAL } gi__tcas_weight;
+
 typedef struct gi__tcas_state {
-    uint32_t M;
+    uint32_t M, weight;
     gi_rsm_set rsm;
     gi_importance imp;
     gi_vpl_set prev;
     /* per frame, per chain (allocated for the budget) */
     uint32_t *texel;
-    double *w;
+    double *w, *g0;
     float *fv;
     uint32_t cap;
 } gi__tcas_state;
@@ -139,13 +152,15 @@ static void gi__tcas_destroy(void *state)
     gi_vpl_set_free(&s->prev);
     free(s->texel);
     free(s->w);
+    free(s->g0);
     free(s->fv);
     free(s);
 }
 
 static pf_result gi__tcas_create(void **state, const gi_params *params, pf_error *err)
 {
-    static const char *const known[] = {"M", "rsm", "P", "area_points", NULL};
+    static const char *const known[] = {"M", "rsm", "P", "area_points", "weight", NULL};
+    static const char *const weights[] = {"local", "single", "global", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "tcas", known, err);
     uint32_t M = GI_TCAS_DEFAULT_M, size = GI_RSM_DEFAULT_SIZE, P = GI_IMPORTANCE_DEFAULT_P;
@@ -154,10 +169,13 @@ static pf_result gi__tcas_create(void **state, const gi_params *params, pf_error
     if (r == PF_OK) r = gi_param_u32(params, "rsm", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &size, err);
     if (r == PF_OK) r = gi_param_u32(params, "P", 1, 1u << 20, &P, err);
     if (r == PF_OK) r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &K, err);
+    uint32_t weight = GI__TCAS_LOCAL;
+    if (r == PF_OK) r = gi_param_choice(params, "weight", weights, &weight, err);
     if (r != PF_OK) return r;
     gi__tcas_state *s = calloc(1, sizeof *s);
     if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     s->M = M;
+    s->weight = weight;
     gi_rsm_set_init(&s->rsm, size);
     s->rsm.area_points = K;
     gi_importance_init(&s->imp, P);
@@ -175,7 +193,20 @@ static void gi__tcas_chain_job(void *p, uint32_t j, uint32_t worker)
     (void)worker;
     const gi__chains_ctx *c = p;
     gi__tcas_state *s = c->s;
-    s->texel[j] = gi_imh_chain(&s->imp.domain, s->imp.f, j, c->N, s->M, &s->w[j], &s->fv[j]);
+    s->texel[j] = gi_imh_chain(&s->imp.domain, s->imp.f, j, c->N, s->M, &s->w[j], &s->fv[j], &s->g0[j]);
+}
+
+/* The weights of weight=single and weight=global (local: as the chains
+ * left them). The global mean is summed in chain order (any thread count
+ * gives the same bits). */
+static void gi__tcas_weights(gi__tcas_state *s, uint32_t N)
+{
+    if (s->weight == GI__TCAS_SINGLE)
+        for (uint32_t j = 0; j < N; j++) s->w[j] = s->g0[j];
+    if (s->weight != GI__TCAS_GLOBAL) return;
+    double sum = 0.0;
+    for (uint32_t j = 0; j < N; j++) sum += s->w[j];
+    for (uint32_t j = 0; j < N; j++) s->w[j] = sum / (double)N;
 }
 
 /* 4. VPL j from chain j's final sample, weighted by Eq. 3. */
@@ -218,11 +249,13 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     if (s->cap < N) {
         free(s->texel);
         free(s->w);
+        free(s->g0);
         free(s->fv);
         s->texel = malloc(sizeof(uint32_t) * N);
         s->w = malloc(sizeof(double) * N);
+        s->g0 = malloc(sizeof(double) * N);
         s->fv = malloc(sizeof(float) * N);
-        s->cap = s->texel && s->w && s->fv ? N : 0;
+        s->cap = s->texel && s->w && s->g0 && s->fv ? N : 0;
         if (!s->cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u chains", N);
     }
     r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
@@ -232,6 +265,7 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     if (s->rsm.texel_count > 0 && N > 0) {
         gi__chains_ctx c = {s, N};
         pf_jobs_parallel_for(in->jobs, gi__tcas_chain_job, &c, N, 0);
+        gi__tcas_weights(s, N);
         gi__tcas_make_vpls(s, in->scene, N, out);
     }
     return gi_vpl_mark_moved(out, &s->prev, err);

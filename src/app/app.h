@@ -18,15 +18,6 @@ int app_fail(const pf_error *err);
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
 
-/* Writes an image by the output's extension (pf_imageio_output_paths):
- * -o NAME.png (or `default_png`) writes the PNG and the linear PFM (--hdr,
- * or NAME.pfm); -o NAME.pfm writes only that PFM; any other extension is
- * refused. Both files are written to temporary files and renamed only once
- * both are complete: both are written or neither. The paths written go to
- * png/pfm (png empty when none). */
-pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
-                          uint32_t height, char png[4096], char pfm[4096], pf_error *err);
-
 /* The PNG's exposure in stops: --exposure STOPS, or for --exposure auto
  * the stops app_defaults_exposure picks from the linear image (said in one
  * note unless -q). Only the PNG and the pictures change, never the linear

@@ -285,28 +285,6 @@ pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene
     return r;
 }
 
-/* The names come from pf_imageio_output_paths (-o NAME.png: the PNG and
- * NAME.pfm or --hdr; -o NAME.pfm: only the PFM; other extensions refused).
- * Both files are written to temporary files first and renamed over their
- * targets only once both are complete, so a failure (a full disk, a bad
- * value in the image) leaves both old files as they were. */
-pf_result app_write_image(const pf_options *o, const char *default_png, const float *rgb, uint32_t width,
-                          uint32_t height, char png[4096], char pfm[4096], pf_error *err)
-{
-    pf_result r = pf_imageio_output_paths(o->out_path, o->hdr_path, default_png, png, pfm, err);
-    if (r != PF_OK) return r;
-    pf_file fpng, fpfm;
-    memset(&fpng, 0, sizeof fpng);
-    memset(&fpfm, 0, sizeof fpfm);
-    if (png[0]) r = pf_imageio_stage_png(&fpng, png, rgb, width, height, o->exposure, err);
-    if (r == PF_OK) r = pf_imageio_stage_pfm(&fpfm, pfm, rgb, width, height, PF_IMAGEIO_RADIANCE, err);
-    if (r == PF_OK && png[0]) r = pf_file_commit(&fpng, err);
-    if (r == PF_OK) r = pf_file_commit(&fpfm, err);
-    pf_file_abort(&fpng); /* no-ops after a commit or a failure */
-    pf_file_abort(&fpfm);
-    return r;
-}
-
 pf_result app_setup_begin(const pf_options *o, app_setup *s, pf_stage_times *t, pf_error *err)
 {
     memset(s, 0, sizeof *s);

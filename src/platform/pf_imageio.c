@@ -460,17 +460,6 @@ pf_result pf_imageio_outputs_resolve(pf_imageio_outputs *o, const char *output, 
     }
 }
 
-pf_result pf_imageio_output_paths(const char *output, const char *hdr, const char *default_png,
-                                  char png[PF_IMAGEIO_PATH_MAX], char pfm[PF_IMAGEIO_PATH_MAX], pf_error *err)
-{
-    pf_imageio_outputs o;
-    pf_result r = pf_imageio_outputs_resolve(&o, output, hdr, default_png, err);
-    memcpy(png, o.png, PF_IMAGEIO_PATH_MAX);
-    memcpy(pfm, o.linear, PF_IMAGEIO_PATH_MAX);
-    if (r != PF_OK) png[0] = pfm[0] = 0;
-    return r;
-}
-
 pf_result pf_imageio_outputs_write(const pf_imageio_outputs *o, const float *rgb, uint32_t w, uint32_t h,
                                    float exposure, pf_error *err)
 {

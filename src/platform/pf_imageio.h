@@ -171,12 +171,6 @@ pf_result pf_imageio_outputs_resolve(pf_imageio_outputs *out, const char *output
  * none. */
 pf_result pf_imageio_outputs_write(const pf_imageio_outputs *out, const float *rgb, uint32_t w, uint32_t h,
                                    float exposure, pf_error *err);
-/* The same resolution as two arrays (pfm: the linear image, .pfm or .exr),
- * kept for callers that write the pair themselves: they must write `pfm`
- * with pf_imageio_stage_linear, which follows its extension. */
-pf_result pf_imageio_output_paths(const char *output, const char *hdr, const char *default_png,
-                                  char png[PF_IMAGEIO_PATH_MAX], char pfm[PF_IMAGEIO_PATH_MAX], pf_error *err);
-
 /* PF_OK when every value of the w x h x 3 buffer is within `range`; else
  * PF_ERR_NONFINITE with "<name>: N pixels are ... (first: pixel (x, y) ...)". */
 pf_result pf_imageio_check(const char *name, const float *rgb, uint32_t w, uint32_t h, pf_imageio_range range,

@@ -199,8 +199,8 @@ uint32_t pf_cli_command_bit(const char *command, const char *subject)
         return !subject ? 0 : !strcmp(subject, "raster") ? PF_CLI_BENCH_RASTER
                           : !strcmp(subject, "frame")    ? PF_CLI_BENCH_FRAME
                                                          : 0;
-    for (size_t c = 0; c < PF__COMMANDS; c++)
-        if (!strcmp(k_commands[c].name, command)) return k_commands[c].bit;
+    for (size_t c = 0; c < PF__COMMANDS; c++) /* "bench raster" is two arguments, never one */
+        if (!strchr(k_commands[c].name, ' ') && !strcmp(k_commands[c].name, command)) return k_commands[c].bit;
     return 0;
 }
 

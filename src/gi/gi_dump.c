@@ -49,33 +49,28 @@ static void gi__dump_planes(const gi_frame *f, const float *x, const float *y, c
     }
 }
 
-/* A split-layout buffer as the picture's mosaic (gi_view.c, gi__view_mosaic):
- * tile (i, j) at (i w0, j h0), w0 x h0 being tile 0's size; uncovered pixels
- * 0. normals: RGBA from the split normals, A = valid; else RGB irradiance. */
+/* A split-layout buffer as the picture's mosaic (gi_view_mosaic_index);
+ * uncovered pixels 0. normals: RGBA from the split normals, A = valid; else
+ * RGB irradiance. */
 static void gi__dump_mosaic(const gi_frame *f, int normals, float *px)
 {
     const gi_indirect *ind = &f->ind;
     const uint32_t W = f->width, H = f->height, C = normals ? 4 : 3;
     memset(px, 0, (size_t)W * H * C * sizeof(float));
-    for (uint32_t j = 0; j < ind->m; j++)
-        for (uint32_t i = 0; i < ind->n; i++) {
-            uint32_t t = j * ind->n + i;
-            for (uint32_t b = 0; b < ind->tile_h[t]; b++)
-                for (uint32_t a = 0; a < ind->tile_w[t]; a++) {
-                    uint32_t x = i * ind->tile_w[0] + a, y = j * ind->tile_h[0] + b;
-                    if (x >= W || y >= H) continue;
-                    size_t k = ind->tile_x0[t] + (size_t)b * ind->tile_w[t] + a;
-                    float *o = px + C * ((size_t)y * W + x);
-                    if (normals) {
-                        int valid = ind->split_valid[k] != 0;
-                        o[0] = valid ? ind->split_nx[k] : 0.0f;
-                        o[1] = valid ? ind->split_ny[k] : 0.0f;
-                        o[2] = valid ? ind->split_nz[k] : 0.0f;
-                        o[3] = valid ? 1.0f : 0.0f;
-                    } else {
-                        memcpy(o, ind->split_e + 3 * k, 3 * sizeof(float));
-                    }
-                }
+    for (uint32_t y = 0; y < H; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            size_t k = gi_view_mosaic_index(f, x, y);
+            if (k == SIZE_MAX) continue;
+            float *o = px + C * ((size_t)y * W + x);
+            if (normals) {
+                int valid = ind->split_valid[k] != 0;
+                o[0] = valid ? ind->split_nx[k] : 0.0f;
+                o[1] = valid ? ind->split_ny[k] : 0.0f;
+                o[2] = valid ? ind->split_nz[k] : 0.0f;
+                o[3] = valid ? 1.0f : 0.0f;
+            } else {
+                memcpy(o, ind->split_e + 3 * k, 3 * sizeof(float));
+            }
         }
 }
 

@@ -579,34 +579,48 @@ static void gi__view_vpl_map(const gi_frame *f, const gi_view_settings *s, uint8
     gi__box(rgb, W, H, (int)(ox + side / 2), (int)(oy + side / 2), (int)side / 2, 255, 255, 255);
 }
 
-/* A split-layout buffer (3 floats a texel) as the n x m mosaic of tiles:
- * tile (i, j) drawn at (i w0, j h0), w0 x h0 being tile 0's size. Unit data
- * (normals) is remapped from [-1, 1]; irradiance goes through the display
- * transform. */
+/* The mosaic's layout: tile (i, j) drawn at (i w0, j h0), w0 x h0 being
+ * tile 0's size (the largest). Pixel (u, v) shows tile t's texel (a, b), or
+ * (return 0) no tile covers it. */
+static int gi__mosaic_tile(const gi_indirect *ind, uint32_t u, uint32_t v, uint32_t *t, uint32_t *a, uint32_t *b)
+{
+    uint32_t i = u / ind->tile_w[0], j = v / ind->tile_h[0];
+    *a = u % ind->tile_w[0], *b = v % ind->tile_h[0];
+    if (i >= ind->n || j >= ind->m) return 0;
+    *t = j * ind->n + i;
+    return *a < ind->tile_w[*t] && *b < ind->tile_h[*t];
+}
+
+size_t gi_view_mosaic_index(const gi_frame *f, uint32_t u, uint32_t v)
+{
+    const gi_indirect *ind = &f->ind;
+    uint32_t t, a, b;
+    if (!gi__mosaic_tile(ind, u, v, &t, &a, &b)) return SIZE_MAX;
+    return ind->tile_x0[t] + (size_t)b * ind->tile_w[t] + a;
+}
+
+/* A split-layout buffer (3 floats a texel) as the n x m mosaic of tiles
+ * (gi_view_mosaic_index). Unit data (normals) is remapped from [-1, 1];
+ * irradiance goes through the display transform. */
 static void gi__view_mosaic(const gi_frame *f, int normals, float exposure, uint8_t *rgb)
 {
     const gi_indirect *ind = &f->ind;
     uint32_t W = f->width, H = f->height;
     float scale = exp2f(exposure);
     memset(rgb, 0, (size_t)W * H * 3);
-    for (uint32_t j = 0; j < ind->m; j++)
-        for (uint32_t i = 0; i < ind->n; i++) {
-            uint32_t t = j * ind->n + i;
-            for (uint32_t b = 0; b < ind->tile_h[t]; b++)
-                for (uint32_t a = 0; a < ind->tile_w[t]; a++) {
-                    uint32_t x = i * ind->tile_w[0] + a, y = j * ind->tile_h[0] + b;
-                    if (x >= W || y >= H) continue;
-                    size_t k = ind->tile_x0[t] + (size_t)b * ind->tile_w[t] + a;
-                    uint8_t *o = rgb + 3 * ((size_t)y * W + x);
-                    if (normals) {
-                        int valid = ind->split_valid[k] != 0;
-                        o[0] = valid ? gi__unit(0.5f + 0.5f * ind->split_nx[k]) : 0;
-                        o[1] = valid ? gi__unit(0.5f + 0.5f * ind->split_ny[k]) : 0;
-                        o[2] = valid ? gi__unit(0.5f + 0.5f * ind->split_nz[k]) : 0;
-                    } else {
-                        for (int c = 0; c < 3; c++) o[c] = pf_imageio_display(ind->split_e[3 * k + c], scale);
-                    }
-                }
+    for (uint32_t y = 0; y < H; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            size_t k = gi_view_mosaic_index(f, x, y);
+            if (k == SIZE_MAX) continue;
+            uint8_t *o = rgb + 3 * ((size_t)y * W + x);
+            if (normals) {
+                int valid = ind->split_valid[k] != 0;
+                o[0] = valid ? gi__unit(0.5f + 0.5f * ind->split_nx[k]) : 0;
+                o[1] = valid ? gi__unit(0.5f + 0.5f * ind->split_ny[k]) : 0;
+                o[2] = valid ? gi__unit(0.5f + 0.5f * ind->split_nz[k]) : 0;
+            } else {
+                for (int c = 0; c < 3; c++) o[c] = pf_imageio_display(ind->split_e[3 * k + c], scale);
+            }
         }
 }
 
@@ -662,13 +676,11 @@ int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v
         return 1;
     }
     if (!gi__mosaic_view(id)) return 0;
-    /* gi__view_mosaic: tile (i, j) at (i w0, j h0), its pixel (a, b) is frame pixel (a n + i, b m + j) */
+    /* tile t = (i, j)'s texel (a, b) is frame pixel (a n + i, b m + j) */
     const gi_indirect *ind = &f->ind;
-    uint32_t i = u / ind->tile_w[0], a = u % ind->tile_w[0], j = v / ind->tile_h[0], b = v % ind->tile_h[0];
-    if (i >= ind->n || j >= ind->m) return 0;
-    uint32_t t = j * ind->n + i;
-    if (a >= ind->tile_w[t] || b >= ind->tile_h[t]) return 0;
-    *x = a * ind->n + i, *y = b * ind->m + j;
+    uint32_t t, a, b;
+    if (!gi__mosaic_tile(ind, u, v, &t, &a, &b)) return 0;
+    *x = a * ind->n + t % ind->n, *y = b * ind->m + t / ind->n;
     return *x < f->width && *y < f->height;
 }
 

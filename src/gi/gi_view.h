@@ -28,6 +28,7 @@
 #ifndef GI_VIEW_H
 #define GI_VIEW_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "gi_frame.h"
@@ -75,6 +76,11 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s, 
  * and accumulated views (tile (i, j) drawn at (i w0, j h0)). Returns 0 for
  * the views that are maps or drawings (shadow map, overhead, paraboloid
  * map), outside the view, and on a mosaic pixel no tile covers. */
+/* The index into gi_indirect's split-layout buffers that pixel (u, v) of
+ * the split and accumulated views' mosaic shows (tile (i, j) drawn at
+ * (i w0, j h0), w0 x h0 being tile 0's size); SIZE_MAX where no tile
+ * covers the pixel. */
+size_t gi_view_mosaic_index(const gi_frame *f, uint32_t u, uint32_t v);
 int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v, uint32_t *x, uint32_t *y);
 /* The inverse: where view `id` draws frame pixel (x, y); 0 where it does
  * not draw it. */

@@ -783,8 +783,15 @@ static pf_result gi__smc_estimate_densities_vpls(gi__smc_state *s, const gi_vpl_
  * all of them while it has fewer than area_window, then an exponential
  * mean of rate 1 / area_window, which follows a cell that changes (the
  * camera moves, a neighbour is replaced). Areas do not depend on the
- * lights. Needs the VPL tree of line 19. */
+ * lights. Needs the VPL tree of line 19. Measured only when rendering
+ * uses them (flux=point): with flux=photons a VPL emits its photons and no
+ * area (gi__smc_needs_areas). */
 #define GI__SMC_NEAREST_CHUNK 256
+
+static int gi__smc_needs_areas(const gi__smc_state *s)
+{
+    return s->prm.area == GI__SMC_AREA_VORONOI && s->prm.flux == GI__SMC_FLUX_POINT;
+}
 
 static void gi__smc_nearest_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
@@ -1035,7 +1042,7 @@ static pf_result gi__smc_initialize_vpls(gi__smc_state *s, const gi_vpl_inputs *
     for (uint32_t i = 0; i < s->I; i++) s->y[i].rank_epoch = s->light_epoch - 1u; /* no candidate estimates here */
     gi__smc_estimate_radiosities_vpls(s, in);
     r = gi__smc_estimate_densities_vpls(s, in, err);
-    if (r == PF_OK) gi__smc_estimate_areas_vpls(s, in);
+    if (r == PF_OK && gi__smc_needs_areas(s)) gi__smc_estimate_areas_vpls(s, in);
     return r;
 }
 
@@ -1064,7 +1071,7 @@ static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     gi__smc_estimate_radiosities_vpls(s, in);                     /* 18 */
     gi__smc_part(s, GI__SMC_T_RAD);
     r = gi__smc_estimate_densities_vpls(s, in, err);              /* 19 */
-    if (r == PF_OK) gi__smc_estimate_areas_vpls(s, in);           /* beyond the paper */
+    if (r == PF_OK && gi__smc_needs_areas(s)) gi__smc_estimate_areas_vpls(s, in); /* beyond the paper */
     gi__smc_part(s, GI__SMC_T_KNN);
     return r;
 }

@@ -460,17 +460,17 @@ static void test_random(void **state)
     double sum = 0.0;
     const int n = 100000;
     for (int i = 0; i < n; i++) {
-        float u = gi_reference_random((uint32_t)i, 7, 2, 1);
+        float u = pf_random((uint32_t)i, 7, 2, 1);
         assert_true(u >= 0.0f && u < 1.0f);
         sum += u;
     }
     /* mean of n uniforms: sd 1/sqrt(12 n) = 0.0009; 5 sd */
     assert_true(fabs(sum / n - 0.5) < 0.0046);
-    float base = gi_reference_random(5, 6, 7, 1);
-    assert_true(base != gi_reference_random(6, 6, 7, 1));
-    assert_true(base != gi_reference_random(5, 7, 7, 1));
-    assert_true(base != gi_reference_random(5, 6, 8, 1));
-    assert_true(base != gi_reference_random(5, 6, 7, 0));
+    float base = pf_random(5, 6, 7, 1);
+    assert_true(base != pf_random(6, 6, 7, 1));
+    assert_true(base != pf_random(5, 7, 7, 1));
+    assert_true(base != pf_random(5, 6, 8, 1));
+    assert_true(base != pf_random(5, 6, 7, 0));
 }
 
 int main(void)

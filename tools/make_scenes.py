@@ -10,7 +10,7 @@ Writes, each as one self-contained .gltf (geometry in an embedded base64 data-UR
   scenes/maze/maze.gltf                    8 x 8 maze of thin wall boxes (heavy occlusion)
   scenes/corridor/corridor.gltf            two rooms joined by a Z-shaped corridor (indirect visibility)
 
-Conventions (softgi README "Light units", src/platform/pf_scene.h): right-handed world, +Y up,
+Conventions (softgi README "Light units", src/scene/pf_scene.h): right-handed world, +Y up,
 metres. KHR_lights_punctual point/spot intensity is radiant intensity in W/sr (E = I cos(theta) / r^2),
 directional intensity is irradiance in W/m^2. Materials are Lambertian, albedo = baseColorFactor
 (linear RGB). Every triangle is counter-clockwise seen from its front (the side its NORMAL points

@@ -11,7 +11,7 @@
 
 #include "gi_frame.h"
 #include "gi_light.h"
-#include "gi_reference.h"
+#include "pf_random.h"
 
 static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
 {
@@ -58,14 +58,14 @@ void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__
 
 /* Irradiance at a visible point from the area lights: S = strata^2
  * stratified emitter samples (see gi_frame.h), shadow rays in packets of 8,
- * summed in sample order. Random numbers: gi_reference_random(pixel, sample,
+ * summed in sample order. Random numbers: pf_random(pixel, sample,
  * GI__AREA_STREAM, dim), a hash of stable ids only. */
 #define GI__AREA_STREAM 0x41524541u /* "AREA": a vertex index no path reaches */
 static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm, pf_vec3 ng)
 {
     uint32_t sd = f->area_strata, S = sd * sd;
     /* per-pixel rotation of the (u1, u2) points (Cranley-Patterson) */
-    float r1 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 1), r2 = gi_reference_random(pixel, 0, GI__AREA_STREAM, 2);
+    float r1 = pf_random(pixel, 0, GI__AREA_STREAM, 1), r2 = pf_random(pixel, 0, GI__AREA_STREAM, 2);
     pf_vec3 sum = pf_v3(0, 0, 0);
     for (uint32_t k0 = 0; k0 < S; k0 += PF_RT_WIDTH) {
         uint32_t n = S - k0 < PF_RT_WIDTH ? S - k0 : PF_RT_WIDTH, m = 0;
@@ -73,7 +73,7 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
         pf_vec3 irr[PF_RT_WIDTH];
         for (uint32_t i = 0; i < n; i++) {
             uint32_t k = k0 + i;
-            double u0 = ((double)k + gi_reference_random(pixel, k, GI__AREA_STREAM, 0)) / S;
+            double u0 = ((double)k + pf_random(pixel, k, GI__AREA_STREAM, 0)) / S;
             float u1 = (float)gi_halton(k, 2) + r1, u2 = (float)gi_halton(k, 3) + r2;
             u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
             u2 -= u2 >= 1.0f ? 1.0f : 0.0f;

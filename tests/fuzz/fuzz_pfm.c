@@ -15,8 +15,8 @@
  *     bottom row first), reads back to the same bits.
  * Seeds: tests/fuzz/seeds/pfm. Build (by hand, or tests/fuzz/CMakeLists.txt):
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Isrc/platform \
- *     tests/fuzz/fuzz_pfm.c src/platform/pf_imageio.c src/platform/pf_result.c \
- *     src/platform/pf_scene.c src/platform/pf_texture.c $(pkg-config --cflags --libs stb) -lm -o fuzz_pfm */
+ *     tests/fuzz/fuzz_pfm.c src/platform/pf_imageio.c src/base/pf_result.c \
+ *     src/scene/pf_scene.c src/scene/pf_texture.c $(pkg-config --cflags --libs stb) -lm -o fuzz_pfm */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>

@@ -21,8 +21,8 @@
  *     keys, bit for bit.
  * Seeds: tests/fuzz/seeds/sequence. Build (by hand, or tests/fuzz/CMakeLists.txt):
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Isrc/platform tests/fuzz/fuzz_sequence.c \
- *     src/platform/pf_sequence.c src/platform/pf_imageio.c src/platform/pf_scene.c \
- *     src/platform/pf_result.c src/platform/pf_texture.c $(pkg-config --cflags --libs libcjson stb) -lm -o fuzz_sequence */
+ *     src/app/pf_sequence.c src/platform/pf_imageio.c src/scene/pf_scene.c \
+ *     src/base/pf_result.c src/scene/pf_texture.c $(pkg-config --cflags --libs libcjson stb) -lm -o fuzz_sequence */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>

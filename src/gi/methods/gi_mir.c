@@ -69,11 +69,11 @@
 
 #include "gi_area.h"
 #include "gi_light.h"
-#include "gi_reference.h"
+#include "pf_random.h"
 #include "gi_lightpath.h"
 #include "gi_vpl.h"
 
-#define GI__MIR_TAG_CAM 0x4d495201u  /* stream tags for gi_reference_random */
+#define GI__MIR_TAG_CAM 0x4d495201u  /* stream tags for pf_random */
 #define GI__MIR_TAG_EVAL 0x4d495202u
 #define GI__MIR_TAG_RES 0x4d495203u
 #define GI__MIR_MAX_CANDIDATES (1u << 26)
@@ -161,8 +161,8 @@ static void gi__mir_camera_points(gi__mir_state *s, const gi_vpl_inputs *in)
             uint32_t x0 = (uint32_t)((uint64_t)cx * W / gx), x1 = (uint32_t)((uint64_t)(cx + 1) * W / gx);
             uint32_t y0 = (uint32_t)((uint64_t)cy * H / gy), y1 = (uint32_t)((uint64_t)(cy + 1) * H / gy);
             if (x1 <= x0 || y1 <= y0) continue;
-            uint32_t x = x0 + (uint32_t)(gi_reference_random(cell, in->frame, GI__MIR_TAG_CAM, 0) * (float)(x1 - x0));
-            uint32_t y = y0 + (uint32_t)(gi_reference_random(cell, in->frame, GI__MIR_TAG_CAM, 1) * (float)(y1 - y0));
+            uint32_t x = x0 + (uint32_t)(pf_random(cell, in->frame, GI__MIR_TAG_CAM, 0) * (float)(x1 - x0));
+            uint32_t y = y0 + (uint32_t)(pf_random(cell, in->frame, GI__MIR_TAG_CAM, 1) * (float)(y1 - y0));
             if (x >= x1) x = x1 - 1;
             if (y >= y1) y = y1 - 1;
             size_t p = (size_t)y * W + x;
@@ -183,7 +183,7 @@ static void gi__mir_camera_points(gi__mir_state *s, const gi_vpl_inputs *in)
 /* Random number of light path `path` this frame: vertex 0 = emission. */
 static float gi__u(const gi_vpl_inputs *in, uint32_t path, uint32_t vertex, uint32_t dim)
 {
-    return gi_reference_random(path, in->frame, vertex, dim);
+    return pf_random(path, in->frame, vertex, dim);
 }
 
 /* What every light path of a frame shares: the light CDF (entry np is the
@@ -296,7 +296,7 @@ static void gi__mir_weigh_chunk(void *ctx, uint32_t item, uint32_t worker)
         float w[GI__MIR_MAX_EVALS];
         uint32_t m = 0;
         for (uint32_t j = 0; j < s->evals; j++) {
-            uint32_t k = (uint32_t)(gi_reference_random(i, c->in->frame, GI__MIR_TAG_EVAL, j) * (float)s->pcount);
+            uint32_t k = (uint32_t)(pf_random(i, c->in->frame, GI__MIR_TAG_EVAL, j) * (float)s->pcount);
             if (k >= s->pcount) k = s->pcount - 1;
             gi_light_sample ls;
             pf_vec3 d = pf_v3_sub(v->pos, s->xp[k]);
@@ -359,7 +359,7 @@ static void gi__mir_resample(gi__mir_state *s, const gi_vpl_inputs *in, gi_vpl_s
     }
     if (!(S > 0.0)) return;
     /* systematic resampling: points (k + u) S / N on the CDF */
-    double u = gi_reference_random(0, in->frame, GI__MIR_TAG_RES, 0), acc = 0.0;
+    double u = pf_random(0, in->frame, GI__MIR_TAG_RES, 0), acc = 0.0;
     uint32_t i = 0;
     for (uint32_t k = 0; k < N; k++) {
         double x = ((double)k + u) * S / N;

@@ -43,7 +43,7 @@ typedef struct gi_radiosity_ctx {
 } gi_radiosity_ctx;
 
 /* A float in [0, 1) from a 64-bit seed and three counters (SplitMix64
- * finaliser, the same construction as gi_reference_random). */
+ * finaliser, the same construction as pf_random). */
 float gi_radiosity_random(uint64_t seed, uint32_t a, uint32_t b, uint32_t c);
 /* A well-mixed 64-bit word from two counters, for deriving seeds. */
 uint64_t gi_radiosity_hash(uint64_t a, uint64_t b);

@@ -19,26 +19,14 @@
 #include "gi_reference.h"
 #include "gi_indirect.h"
 
-/* ---------------------------------------------------------------- random numbers */
-
-float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim)
-{
-    /* Two rounds: the first makes one word per (pixel, sample) stream (a
-     * bijection of the 64-bit counter, offset by the golden ratio so that
-     * stream 0 does not map to 0), the second mixes in the position within
-     * the stream. The top 24 bits give a float in [0, 1) exactly: k * 2^-24
-     * with k < 2^24 is representable and never rounds up to 1. */
-    uint64_t stream = pf_mix64((((uint64_t)pixel << 32) | sample) + 0x9e3779b97f4a7c15ull);
-    uint64_t h = pf_mix64(stream ^ (((uint64_t)vertex << 32) | dim));
-    return (float)(h >> 40) * 0x1p-24f;
-}
+/* ---------------------------------------------------------------- camera rays */
 
 pf_ray gi_reference_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y,
                                uint32_t sample)
 {
     uint32_t pixel = y * width + x;
     /* Box filter: a point uniform in the pixel square [x, x+1) x [y, y+1). */
-    float jx = gi_reference_random(pixel, sample, 0, 0), jy = gi_reference_random(pixel, sample, 0, 1);
+    float jx = pf_random(pixel, sample, 0, 0), jy = pf_random(pixel, sample, 0, 1);
     pf_ray r;
     r.org = cam->eye;
     r.dir = pf_camera_ray_dir(cam, width, height, (float)x + jx, (float)y + jy);
@@ -110,8 +98,8 @@ static void gi__next_event(const gi__ref_ctx *c, gi__path *paths, const uint32_t
             gi__path *P = &paths[lanes[j]];
             uint32_t pixel = pixel0 + lanes[j];
             gi_area_sample as;
-            gi_area_sample_point(c->area, gi_reference_random(pixel, sample, k, 2),
-                                 gi_reference_random(pixel, sample, k, 3), gi_reference_random(pixel, sample, k, 4),
+            gi_area_sample_point(c->area, pf_random(pixel, sample, k, 2),
+                                 pf_random(pixel, sample, k, 3), pf_random(pixel, sample, k, 4),
                                  &as);
             gi_light_sample ls;
             if (!gi_area_sample_irradiance(&as, P->p, P->ns, &ls.irradiance, &ls.wi, &ls.distance)) continue;
@@ -246,7 +234,7 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
                 continue;
             }
             uint32_t pixel = y * c->width + x0 + hit_lanes[j];
-            float u0 = gi_reference_random(pixel, sample, k, 0), u1 = gi_reference_random(pixel, sample, k, 1);
+            float u0 = pf_random(pixel, sample, k, 0), u1 = pf_random(pixel, sample, k, 1);
             /* A shading normal that points below the (turned) geometric
              * surface, possible with bad vertex normals, is replaced by ng. */
             pf_vec3 n = pf_v3_dot(P->ns, P->ng_front) > 0.0f ? P->ns : P->ng_front;

@@ -71,7 +71,7 @@
  * meshes never need it).
  *
  * Random numbers: counter-based, a 64-bit hash of (pixel index, sample index,
- * path vertex, dimension) (gi_reference_random), never of the thread, so the
+ * path vertex, dimension) (pf_random), never of the thread, so the
  * image is bit-identical for any thread count. Camera rays go through the
  * pixel jittered uniformly within it (box filter) by the vertex-0 numbers.
  *
@@ -86,6 +86,7 @@
 #include <stdint.h>
 
 #include "pf_jobs.h"
+#include "pf_random.h"
 #include "pf_result.h"
 #include "pf_rt.h"
 #include "pf_scene.h"
@@ -137,11 +138,11 @@ pf_result gi_reference_render_pixels(float *out_rgb, const pf_scene *scene, cons
                                      const pf_camera *camera, uint32_t width, uint32_t height, const uint32_t *xy,
                                      uint32_t count, const gi_reference_options *opts, pf_error *err);
 
-/* The random number in [0, 1) of (pixel = y * width + x, sample, path vertex,
- * dimension). Vertex 0 is the camera (dimensions 0, 1: the jitter within the
- * pixel); vertex k >= 1 is the bounce leaving x_k (dimensions 0, 1: the
- * hemisphere sample; 2, 3, 4: the area-light sample of the NEE at x_k). */
-float gi_reference_random(uint32_t pixel, uint32_t sample, uint32_t vertex, uint32_t dim);
+/* Random numbers: pf_random (base/pf_random.h) of (pixel = y * width + x,
+ * sample, path vertex, dimension). Vertex 0 is the camera (dimensions 0, 1:
+ * the jitter within the pixel); vertex k >= 1 is the bounce leaving x_k
+ * (dimensions 0, 1: the hemisphere sample; 2, 3, 4: the area-light sample of
+ * the NEE at x_k). */
 
 /* The camera ray of pixel (x, y), sample `sample`: through the pixel at the
  * jittered position (x + u0, y + u1), dir scaled as gi_camera_ray's (t =

@@ -195,8 +195,12 @@ static void check_dump(const char *dir, int indirect, int para_maps)
         if (tu_file_exists(path) != expected)
             fail_msg("%s should %s", path, expected ? "exist" : "not be written (the frame has no such data)");
         if (!expected) continue;
-        snprintf(want, sizeof want, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v),
-                 gi_view_caption((gi_view_id)v));
+        char what[400];
+        gi_view_describe((gi_view_id)v, what, sizeof what);
+        /* the description names the view's stage from the stage table */
+        const gi_stage_info *st = gi_stage_get(gi_view_stage((gi_view_id)v));
+        assert_non_null(strstr(what, st->name));
+        snprintf(want, sizeof want, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v), what);
         if (!fgets(line, sizeof line, cap) || strcmp(line, want) != 0)
             fail_msg("%s/captions.txt: got '%s', want '%s'", dir, line, want);
     }

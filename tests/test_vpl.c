@@ -400,7 +400,7 @@ static pf_result bad_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *ou
 static void test_bad_vpls_are_inert(void **state)
 {
     (void)state;
-    static const gi_vpl_method bad = {"bad", "test", bad_create, bad_update, bad_destroy, NULL};
+    static const gi_vpl_method bad = {"bad", "test", bad_create, bad_update, bad_destroy, NULL, 0};
     for (int k = 0; k < 3; k++) {
         if (!simd_runs(k_simds[k])) continue;
         fx x;
@@ -459,7 +459,7 @@ static pf_result origin_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
 static void test_vpl_at_pixel_position(void **state)
 {
     (void)state;
-    static const gi_vpl_method origin = {"origin", "test", bad_create, origin_update, bad_destroy, NULL};
+    static const gi_vpl_method origin = {"origin", "test", bad_create, origin_update, bad_destroy, NULL, 0};
     uint64_t h0 = 0;
     for (int k = 0; k < 3; k++) {
         if (!simd_runs(k_simds[k])) continue;

@@ -22,7 +22,7 @@
  * one VPL's paraboloid map, split, accumulated, combined, filtered, final),
  * each with its one-line caption naming the paper section it implements;
  * V lists the views to jump to. `--dump-stages DIR` writes the same pictures
- * (gi_view_dump).
+ * (gi_dump_stages).
  *
  * Inspector: a left click probes the pixel under the cursor (gi_probe.h:
  * its G-buffer values, direct light, tile and filtered irradiance, final
@@ -1098,8 +1098,9 @@ static int view_draw_caption(view_app *a)
             total++;
             if (v <= a->stage) shown++;
         }
-    snprintf(text, sizeof text, "[%d/%d %s] %s", shown, total, gi_view_name((gi_view_id)a->stage),
-             gi_view_caption((gi_view_id)a->stage));
+    char what[400];
+    gi_view_describe((gi_view_id)a->stage, what, sizeof what);
+    snprintf(text, sizeof text, "[%d/%d %s] %s", shown, total, gi_view_name((gi_view_id)a->stage), what);
     if (a->stage == GI_VIEW_VPL_MAP || a->stage == GI_VIEW_VPLS || a->stage == GI_VIEW_VPL_OVERHEAD) {
         char more[96];
         uint32_t n = a->frame.ind.vpls.count;
@@ -1264,7 +1265,7 @@ static int view_finish(view_app *a)
     if (o->screenshot_path) r = view_screenshot(a, o->screenshot_path, &err);
     if (r == PF_OK && o->dump_dir) {
         gi_view_settings s = {a->exposure, a->vpl_pick};
-        r = gi_view_dump(&a->frame, o->dump_dir, &s, &err);
+        r = gi_dump_stages(&a->frame, o->dump_dir, &s, GI_DUMP_PNG, &err);
     }
     if (r != PF_OK) return app_fail(&err);
     if (!o->quiet) {

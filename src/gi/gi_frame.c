@@ -8,29 +8,70 @@
 #include <string.h>
 
 static const char *const gi__buffer_names[GI_BUF_COUNT] = {
-    "depth", "position", "normal", "albedo", "prim", "direct", "vpls", "split", "accumulated", "combined", "filtered",
-    "final",
-};
-static const char *const gi__buffer_captions[GI_BUF_COUNT] = {
-    "G-buffer depth: view-space distance of the visible surface (Laine 2007 Sec. 3, step 1)",
-    "G-buffer world position of the visible surface",
-    "G-buffer shading normal, turned to face the camera",
-    "G-buffer albedo: filtered baseColor, linear RGB",
-    "G-buffer primitive id: which triangle each pixel sees",
-    "Direct light: every light with its shadow test, albedo E / pi (Laine 2007 Sec. 3, step 5)",
-    "VPL set: each VPL drawn where it projects, coloured by its intensity (Laine 2007 Sec. 4; survey Sec. 4.1)",
-    "Split G-buffer: n x m interleaved tiles, each the image sub-sampled with its own offset (Laine 2007 Sec. 5.1)",
-    "Accumulated: each tile's irradiance from its share of the VPLs, bounded geometry term (Sec. 5.1; survey Sec. 5)",
-    "Combined: the tiles back in image layout; the n x m structured noise is visible (Laine 2007 Fig. 4a)",
-    "Filtered: geometry-aware n x m box filter (Laine 2007 Fig. 5) removes the pattern",
-    "Final: emission + direct + albedo / pi x filtered indirect, linear RGB",
+    "visibility", "gbuffer", "shadow maps", "area-light maps", "direct", "VPL set", "VPL maps",
+    "split", "assignment", "accumulated", "combined", "filtered", "final",
 };
 
 const char *gi_buffer_name(gi_buffer_id id) { return (unsigned)id < GI_BUF_COUNT ? gi__buffer_names[id] : "?"; }
-const char *gi_buffer_caption(gi_buffer_id id)
-{
-    return (unsigned)id < GI_BUF_COUNT ? gi__buffer_captions[id] : "?";
-}
+
+#define B(id) GI_BUFFER_BIT(GI_BUF_##id)
+/* The stage table (gi_frame.h). Reads and writes name the frame's buffers;
+ * the VPL update also reads the lights and, for methods that say so
+ * (gi_vpl_method.reads_gbuffer), the G-buffer. */
+static const gi_stage_info gi__stages[GI_STAGE_COUNT] = {
+    [GI_STAGE_GBUFFER_RASTER] = {"gbuffer raster (visibility)", 1, "Laine 2007 Sec. 3 step 5, Sec. 5.1",
+                                 "G-buffer, visibility: the nearest triangle and its depth per pixel, rasterized",
+                                 0, B(VISIBILITY), gi_stage_gbuffer_raster},
+    [GI_STAGE_GBUFFER_RAYTRACE] = {"gbuffer (embree)", 1, "Laine 2007 Sec. 3 step 5 (ray-traced, the reference)",
+                                   "G-buffer from Embree primary rays: visibility and attributes in one pass", 0,
+                                   B(VISIBILITY) | B(GBUFFER), gi_stage_gbuffer_raytrace},
+    [GI_STAGE_GBUFFER_RESOLVE] = {"gbuffer resolve (attributes)", 1, "Laine 2007 Sec. 5.1",
+                                  "G-buffer attributes: position, camera-facing normal and albedo of each visible "
+                                  "triangle",
+                                  B(VISIBILITY), B(GBUFFER), gi_stage_gbuffer_resolve},
+    [GI_STAGE_SHADOW_MAPS] = {"shadow maps", 2, "Laine 2007 Sec. 6",
+                              "Direct light's shadow maps: one map per light (a cube for point lights), reused while "
+                              "the light stays",
+                              0, B(SHADOW_MAPS), gi_stage_shadow_maps},
+    [GI_STAGE_AREA_MAPS] = {"area-light maps", 2, "Brabec 2002 paraboloid maps",
+                            "Area lights' maps: paraboloid maps of K fixed emitter points, first frame only", 0,
+                            B(AREA_MAPS), gi_stage_area_shadow_maps},
+    [GI_STAGE_DIRECT_SHADOWMAP] = {"direct light (shadow maps)", 2, "Laine 2007 Sec. 3 (beside steps 1-4), Sec. 6",
+                                   "Direct light: every light with its 16-tap PCF shadow test, E per pixel",
+                                   B(GBUFFER) | B(SHADOW_MAPS) | B(AREA_MAPS), B(DIRECT),
+                                   gi_stage_direct_shadowmap},
+    [GI_STAGE_DIRECT_RAYTRACE] = {"direct light (shadow rays)", 2, "Laine 2007 Sec. 3 (ray-traced, the reference)",
+                                  "Direct light with Embree shadow rays; area lights by stratified samples",
+                                  B(GBUFFER), B(DIRECT), gi_stage_direct_raytrace},
+    [GI_STAGE_VPL_UPDATE] = {"VPL update", 3, "Laine 2007 Sec. 3 steps 1-4; survey Sec. 4.1; the method's paper",
+                             "VPL set: the method places the VPLs and sets their intensities", B(GBUFFER),
+                             B(VPLS), gi_stage_vpl_update},
+    [GI_STAGE_VPL_MAPS] = {"VPL paraboloid maps", 4, "Laine 2007 Sec. 3 step 3, Sec. 4.6; Brabec 2002",
+                           "VPL shadow maps: paraboloid maps of new and moved VPLs (or every VPL's ISM)", B(VPLS),
+                           B(VPL_MAPS), gi_stage_vpl_shadow_maps},
+    [GI_STAGE_SPLIT] = {"split", 5, "Laine 2007 Sec. 3 step 6, Sec. 5.1",
+                        "Split G-buffer: n x m interleaved tiles, each the image sub-sampled with its own offset",
+                        B(GBUFFER), B(SPLIT), gi_stage_split},
+    [GI_STAGE_ASSIGN] = {"assign VPLs to tiles", 6, "Laine 2007 Sec. 5.1 and Sec. 7",
+                         "Assignment: each VPL to one tile, a surviving VPL keeps its tile", B(VPLS),
+                         B(ASSIGNMENT), gi_stage_assign},
+    [GI_STAGE_ACCUMULATE] = {"accumulate", 7, "Laine 2007 Sec. 3 step 7, Sec. 5.1; survey Sec. 5",
+                             "Accumulated: each tile's irradiance from its share of the VPLs, bounded geometry term",
+                             B(SPLIT) | B(VPLS) | B(VPL_MAPS) | B(ASSIGNMENT), B(ACCUMULATED),
+                             gi_stage_accumulate},
+    [GI_STAGE_COMBINE] = {"combine", 8, "Laine 2007 Sec. 3 step 8, Sec. 5.1",
+                          "Combined: the tiles back in image layout; the n x m structured noise is visible (Fig. 4a)",
+                          B(ACCUMULATED), B(COMBINED), gi_stage_combine},
+    [GI_STAGE_FILTER] = {"filter", 9, "Laine 2007 Sec. 3 step 9, Sec. 5.2, Fig. 5",
+                         "Filtered: the geometry-aware n x m box filter (or the chosen filter) removes the pattern",
+                         B(GBUFFER) | B(COMBINED), B(FILTERED), gi_stage_filter},
+    [GI_STAGE_COMPOSE] = {"compose", 10, "Laine 2007 Sec. 3 (after step 9)",
+                          "Final: emission + direct + albedo / pi x filtered indirect, linear RGB",
+                          B(VISIBILITY) | B(GBUFFER) | B(DIRECT) | B(FILTERED), B(FINAL), gi_stage_compose},
+};
+#undef B
+
+const gi_stage_info *gi_stage_get(gi_stage_id id) { return (unsigned)id < GI_STAGE_COUNT ? &gi__stages[id] : NULL; }
 
 static void gi__area_maps_free(gi_area_maps *m)
 {
@@ -200,11 +241,13 @@ void gi_stage_compose(gi_frame *f)
     pf_jobs_parallel_for(f->jobs, gi__compose_rows, &ctx, f->height, 8);
 }
 
-static void gi__timed(gi_frame *f, const char *name, void (*stage)(gi_frame *))
+/* Runs stage `id` of the table and adds its time under the table's name. */
+static void gi__run(gi_frame *f, gi_stage_id id)
 {
+    const gi_stage_info *s = &gi__stages[id];
     double t0 = pf_time_now();
-    stage(f);
-    pf_stage_add(&f->times, name, (pf_time_now() - t0) * 1e3);
+    s->run(f);
+    pf_stage_add(&f->times, s->name, (pf_time_now() - t0) * 1e3);
 }
 
 void gi_stage_gbuffer_raster(gi_frame *f)
@@ -239,23 +282,23 @@ static void gi__indirect_stages(gi_frame *f)
 {
     if (!f->indirect) return;
     if (f->ind.opt.pipeline && f->ind.have_set) gi_stage_vpl_update_begin(f, 1);
-    else gi__timed(f, "VPL update", gi_stage_vpl_update);
-    gi__timed(f, "VPL paraboloid maps", gi_stage_vpl_shadow_maps);
-    gi__timed(f, "split", gi_stage_split);
-    gi__timed(f, "assign VPLs to tiles", gi_stage_assign);
-    gi__timed(f, "accumulate", gi_stage_accumulate);
-    gi__timed(f, "combine", gi_stage_combine);
-    gi__timed(f, "filter", gi_stage_filter);
+    else gi__run(f, GI_STAGE_VPL_UPDATE);
+    gi__run(f, GI_STAGE_VPL_MAPS);
+    gi__run(f, GI_STAGE_SPLIT);
+    gi__run(f, GI_STAGE_ASSIGN);
+    gi__run(f, GI_STAGE_ACCUMULATE);
+    gi__run(f, GI_STAGE_COMBINE);
+    gi__run(f, GI_STAGE_FILTER);
 }
 
 void gi_frame_render_raytraced(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
-    gi__timed(f, "gbuffer (embree)", gi_stage_gbuffer_raytrace);
-    if (f->show_direct) gi__timed(f, "direct light (shadow rays)", gi_stage_direct_raytrace);
+    gi__run(f, GI_STAGE_GBUFFER_RAYTRACE);
+    if (f->show_direct) gi__run(f, GI_STAGE_DIRECT_RAYTRACE);
     gi__indirect_stages(f);
-    gi__timed(f, "compose", gi_stage_compose);
+    gi__run(f, GI_STAGE_COMPOSE);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
 }
@@ -264,15 +307,15 @@ void gi_frame_render_raster(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
-    gi__timed(f, "gbuffer raster (visibility)", gi_stage_gbuffer_raster);
-    gi__timed(f, "gbuffer resolve (attributes)", gi_stage_gbuffer_resolve);
+    gi__run(f, GI_STAGE_GBUFFER_RASTER);
+    gi__run(f, GI_STAGE_GBUFFER_RESOLVE);
     if (f->show_direct) {
-        gi__timed(f, "shadow maps", gi_stage_shadow_maps);
-        gi__timed(f, "area-light maps", gi_stage_area_shadow_maps);
-        gi__timed(f, "direct light (shadow maps)", gi_stage_direct_shadowmap);
+        gi__run(f, GI_STAGE_SHADOW_MAPS);
+        gi__run(f, GI_STAGE_AREA_MAPS);
+        gi__run(f, GI_STAGE_DIRECT_SHADOWMAP);
     }
     gi__indirect_stages(f);
-    gi__timed(f, "compose", gi_stage_compose);
+    gi__run(f, GI_STAGE_COMPOSE);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
 }

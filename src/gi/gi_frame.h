@@ -51,25 +51,67 @@
 #include "gi_indirect.h"
 #include "rs_paraboloid.h"
 
+/* The frame's named buffers: every intermediate result a stage writes, so
+ * the stage table can say what each stage reads and writes (masks of
+ * GI_BUFFER_BIT), the viewer can show it and the dump can write it. */
 typedef enum gi_buffer_id {
-    GI_BUF_DEPTH = 0, /* G-buffer planes */
-    GI_BUF_POSITION,
-    GI_BUF_NORMAL,
-    GI_BUF_ALBEDO,
-    GI_BUF_PRIM,
-    GI_BUF_DIRECT, /* direct radiance (RGB) */
-    GI_BUF_VPLS,        /* the VPLs drawn over the final image */
-    GI_BUF_SPLIT,       /* split G-buffer normals, tile layout */
-    GI_BUF_ACCUMULATED, /* per-tile irradiance, tile layout */
-    GI_BUF_COMBINED,    /* irradiance, image layout, before the filter */
-    GI_BUF_FILTERED,    /* irradiance after the filter */
-    GI_BUF_FINAL,  /* composed linear radiance (RGB) */
+    GI_BUF_VISIBILITY = 0, /* depth and triangle id per pixel (gbuf.depth, gbuf.prim) */
+    GI_BUF_GBUFFER,        /* position, normal and albedo planes (gbuf) */
+    GI_BUF_SHADOW_MAPS,    /* one map or cube per light (shadows) */
+    GI_BUF_AREA_MAPS,      /* the K emitter points' paraboloid maps (area_maps) */
+    GI_BUF_DIRECT,         /* direct radiance, RGB (direct) */
+    GI_BUF_VPLS,           /* the VPL set (ind.vpls) */
+    GI_BUF_VPL_MAPS,       /* the VPLs' paraboloid maps or ISMs (ind.atlas) */
+    GI_BUF_SPLIT,          /* the split G-buffer, tile layout (ind.split_*) */
+    GI_BUF_ASSIGNMENT,     /* VPLs grouped by tile (ind.assign, ind.tile_of) */
+    GI_BUF_ACCUMULATED,    /* per-tile irradiance, tile layout (ind.split_e) */
+    GI_BUF_COMBINED,       /* irradiance, image layout (ind.combined) */
+    GI_BUF_FILTERED,       /* irradiance after the filter (ind.filtered) */
+    GI_BUF_FINAL,          /* composed linear radiance, RGB (final) */
     GI_BUF_COUNT
 } gi_buffer_id;
-
-/* Name and one-line caption of a buffer, for dumps and the stepper. */
+#define GI_BUFFER_BIT(id) (1u << (id))
 const char *gi_buffer_name(gi_buffer_id id);
-const char *gi_buffer_caption(gi_buffer_id id);
+
+/* The stage table: every stage a frame can run, in the order the frames run
+ * them (the outline above). The frame runs and times each stage through it
+ * (the timer rows are the table's names), and the dump, the viewer's
+ * stepper and HUD, and the benchmarks read names, steps, papers and
+ * captions from it, so each exists once. `step` is softgi's own numbering
+ * (the outline above); `paper` says where a paper describes the stage
+ * (Laine 2007's outline numbers its steps differently: VPL management is
+ * its steps 1-4, the G-buffer its step 5). */
+typedef enum gi_stage_id {
+    GI_STAGE_GBUFFER_RASTER = 0,
+    GI_STAGE_GBUFFER_RAYTRACE,
+    GI_STAGE_GBUFFER_RESOLVE,
+    GI_STAGE_SHADOW_MAPS,
+    GI_STAGE_AREA_MAPS,
+    GI_STAGE_DIRECT_SHADOWMAP,
+    GI_STAGE_DIRECT_RAYTRACE,
+    GI_STAGE_VPL_UPDATE,
+    GI_STAGE_VPL_MAPS,
+    GI_STAGE_SPLIT,
+    GI_STAGE_ASSIGN,
+    GI_STAGE_ACCUMULATE,
+    GI_STAGE_COMBINE,
+    GI_STAGE_FILTER,
+    GI_STAGE_COMPOSE,
+    GI_STAGE_COUNT
+} gi_stage_id;
+
+struct gi_frame;
+typedef struct gi_stage_info {
+    const char *name;       /* the timer row ("accumulate") */
+    uint32_t step;          /* 1..10: the frame outline's step */
+    const char *paper;      /* where the papers describe it */
+    const char *caption;    /* what it does, one line */
+    uint32_t reads, writes; /* GI_BUFFER_BIT masks */
+    void (*run)(struct gi_frame *f);
+} gi_stage_info;
+
+/* The table entry of a stage (NULL for an id out of range). */
+const gi_stage_info *gi_stage_get(gi_stage_id id);
 
 /* Area lights (gi_area.h) in the direct light of a frame.
  *
@@ -173,11 +215,6 @@ void gi_stage_shadow_maps(gi_frame *f);
 void gi_stage_area_shadow_maps(gi_frame *f); /* the K emitter points' maps, first frame only */
 void gi_stage_direct_shadowmap(gi_frame *f);
 void gi_stage_compose(gi_frame *f);
-
-/* Writes every stage of the last frame as `DIR/NN-name.png` plus
- * `DIR/captions.txt` with one caption line per image: gi_view_dump (gi_view.h)
- * at exposure 0. */
-pf_result gi_frame_dump_stages(const gi_frame *f, const char *dir, pf_error *err);
 
 /* The whole ray-traced frame: G-buffer, direct light, compose (timed). */
 void gi_frame_render_raytraced(gi_frame *f);

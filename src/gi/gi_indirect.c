@@ -192,14 +192,7 @@ void gi_stage_vpl_update(gi_frame *f)
     ind->maps_current = 0;
 }
 
-int gi_vpl_method_gbuffer_free(const gi_vpl_method *m)
-{
-    /* Instant Radiosity and Incremental Instant Radiosity start at the
-     * lights; the camera and the G-buffer play no part. (Kept here rather
-     * than as a field of gi_vpl_method so that the methods' files need no
-     * change.) */
-    return m == &gi_method_ir || m == &gi_method_iir;
-}
+int gi_vpl_method_gbuffer_free(const gi_vpl_method *m) { return m->gbuffer_free; }
 
 /* The pipelined update: one job of one item. It touches only the method's
  * state, vpls_next and pipe_ms; the frame's stages meanwhile read `vpls`
@@ -253,7 +246,7 @@ void gi_stage_vpl_update_end(gi_frame *f)
     if (!ind->pending) return;
     ind->pending = 0;
     ind->next_ready = 1; /* swapped in at the next frame's begin, so `vpls` stays this frame's set */
-    pf_stage_add(&f->times, "VPL update", ind->pipe_ms);
+    pf_stage_add(&f->times, gi_stage_get(GI_STAGE_VPL_UPDATE)->name, ind->pipe_ms);
 }
 
 /* ---------------------------------------------------------- 4. VPL shadow maps */

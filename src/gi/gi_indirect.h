@@ -47,7 +47,7 @@
  * pipelining. Every later frame N shades with the set the update made
  * during frame N-1 and adds the update for frame N as one job of the job
  * system (no extra thread): it starts before the G-buffer for methods that
- * never read the G-buffer (gi_vpl_method_gbuffer_free: Instant Radiosity),
+ * never read the G-buffer (gi_vpl_method.gbuffer_free: IR and IIR),
  * else right after the G-buffer is resolved, and runs alongside the
  * remaining stages; the two sets swap at the start of the next frame (so
  * after a frame `vpls` is still the set it shaded with, for the dumps and
@@ -149,8 +149,8 @@ void gi_stage_vpl_update(struct gi_frame *f);
  * job's time as the "VPL update" stage. */
 void gi_stage_vpl_update_begin(struct gi_frame *f, int gbuffer_ready);
 void gi_stage_vpl_update_end(struct gi_frame *f);
-/* Whether a method's update never reads the G-buffer (a list kept in
- * gi_indirect.c: Instant Radiosity). Unknown methods: 0, the safe answer. */
+/* Whether a method's update never reads the G-buffer (the method says so:
+ * gi_vpl_method.gbuffer_free). */
 int gi_vpl_method_gbuffer_free(const gi_vpl_method *m);
 void gi_stage_vpl_shadow_maps(struct gi_frame *f);
 void gi_stage_split(struct gi_frame *f);

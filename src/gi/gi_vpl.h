@@ -106,6 +106,12 @@ typedef struct gi_vpl_method {
      * method's own parts (SMC: Hedman 2017 Table 2's columns), for `softgi
      * bench frame`. The times never feed back into results. */
     const pf_stage_times *(*parts)(const void *state);
+    /* 1 if update never reads the G-buffer: the method starts at the lights
+     * only (IR, IIR), so its pipelined update may start before the G-buffer
+     * exists (gi_indirect.h, "Pipelining"). 0, the safe default, for the
+     * methods with camera-side samples (SMC's X, TCAS's and InvTM's
+     * importance, SSVP's screen-space VPLs, MIR's camera paths). */
+    int gbuffer_free;
 } gi_vpl_method;
 
 /* The methods softgi has, by name ("ir", "iir", ...). NULL if unknown. */

@@ -12,12 +12,6 @@
 
 #include "pf_imageio.h"
 
-pf_result gi_frame_dump_stages(const gi_frame *f, const char *dir, pf_error *err)
-{
-    gi_view_settings s = {0.0f, 0};
-    return gi_dump_stages(f, dir, &s, GI_DUMP_PNG, err);
-}
-
 int gi_dump_has_exr(gi_view_id id)
 {
     switch (id) {
@@ -99,8 +93,9 @@ static uint32_t gi__dump_float(const gi_frame *f, gi_view_id id, float *px)
 
 static pf_result gi__dump_exr(const gi_frame *f, gi_view_id v, const char *path, float *px, pf_error *err)
 {
-    char comment[512];
-    snprintf(comment, sizeof comment, "softgi stage %02d-%s: %s", (int)v, gi_view_name(v), gi_view_caption(v));
+    char comment[512], text[400];
+    gi_view_describe(v, text, sizeof text);
+    snprintf(comment, sizeof comment, "softgi stage %02d-%s: %s", (int)v, gi_view_name(v), text);
     uint32_t channels = gi__dump_float(f, v, px);
     return pf_imageio_write_exr(path, px, f->width, f->height, channels, PF_IMAGEIO_DATA, comment, err);
 }
@@ -115,13 +110,14 @@ typedef struct gi__dump_captions {
 static int gi__print_captions(FILE *out, void *user)
 {
     const gi__dump_captions *c = user;
+    char text[400];
     for (int v = 0; v < GI_VIEW_COUNT; v++) {
         gi_view_id id = (gi_view_id)v;
         if (!gi_view_available(c->f, id)) continue;
-        if ((c->format & GI_DUMP_PNG) && fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name(id), gi_view_caption(id)) < 0)
-            return 1;
+        gi_view_describe(id, text, sizeof text);
+        if ((c->format & GI_DUMP_PNG) && fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name(id), text) < 0) return 1;
         if ((c->format & GI_DUMP_EXR) && gi_dump_has_exr(id) &&
-            fprintf(out, "%02d-%s.exr: %s\n", v, gi_view_name(id), gi_view_caption(id)) < 0)
+            fprintf(out, "%02d-%s.exr: %s\n", v, gi_view_name(id), text) < 0)
             return 1;
     }
     return 0;
@@ -132,12 +128,10 @@ static int gi__print_captions(FILE *out, void *user)
 pf_result gi_dump_stages(const gi_frame *f, const char *dir, const gi_view_settings *s, gi_dump_format format,
                          pf_error *err)
 {
-    /* the pictures alone: exactly gi_view_dump's files */
-    if (format == GI_DUMP_PNG) return gi_view_dump(f, dir, s, err);
     const size_t n = (size_t)f->width * f->height;
     uint8_t *rgb8 = (format & GI_DUMP_PNG) ? malloc(n * 3) : NULL;
-    float *px = malloc(n * 4 * sizeof(float));
-    if (!px || ((format & GI_DUMP_PNG) && !rgb8)) {
+    float *px = (format & GI_DUMP_EXR) ? malloc(n * 4 * sizeof(float)) : NULL;
+    if (((format & GI_DUMP_EXR) && !px) || ((format & GI_DUMP_PNG) && !rgb8)) {
         free(rgb8);
         free(px);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory dumping the stages of a %ux%u frame",
@@ -153,7 +147,7 @@ pf_result gi_dump_stages(const gi_frame *f, const char *dir, const gi_view_setti
             snprintf(path, sizeof path, "%s/%02d-%s.png", dir, v, gi_view_name(id));
             r = gi_view_write_png(path, rgb8, f->width, f->height, err);
         }
-        if (r == PF_OK && gi_dump_has_exr(id)) {
+        if (r == PF_OK && (format & GI_DUMP_EXR) && gi_dump_has_exr(id)) {
             snprintf(path, sizeof path, "%s/%02d-%s.exr", dir, v, gi_view_name(id));
             r = gi__dump_exr(f, id, path, px, err);
         }

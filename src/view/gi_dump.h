@@ -1,9 +1,10 @@
 /* gi_dump: `--dump-stages DIR [--dump-format png|exr|both]`, every stage of
  * a frame as files a learner can open without a display.
  *
- * png (the default): gi_view_dump's pictures, DIR/NN-name.png (NN = the
+ * png (the default): gi_view_render's pictures, DIR/NN-name.png (NN = the
  *   gi_view_id), byte for byte what the stepper of `softgi view` shows, and
- *   DIR/captions.txt ("NN-name.png: caption" a line).
+ *   DIR/captions.txt ("NN-name.png: description" a line, gi_view_describe:
+ *   the step, stage and paper from the stage table, then what the view shows).
  * exr: the stages' float data, DIR/NN-name.exr (OpenEXR, 32-bit float,
  *   pf_exr.h), beside the pictures of the same NN, each with its caption in
  *   the file's "comments" attribute:

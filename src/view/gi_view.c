@@ -10,43 +10,53 @@
 
 #include "pf_imageio.h"
 
-static const char *const gi__view_names[GI_VIEW_COUNT] = {
-    "depth", "position", "normal", "albedo", "prim", "shadow-map", "direct", "vpls", "vpl-overhead", "vpl-map",
-    "split", "accumulated", "combined", "filtered", "final",
+/* The views: file-name part, the stage whose output each shows (its step,
+ * name and paper come from the stage table, gi_frame.h) and what the
+ * picture shows. */
+typedef struct gi__view_info {
+    const char *name;
+    gi_stage_id stage;
+    const char *caption;
+} gi__view_info;
+
+static const gi__view_info gi__views[GI_VIEW_COUNT] = {
+    [GI_VIEW_DEPTH] = {"depth", GI_STAGE_GBUFFER_RASTER, "view-space distance of the visible surface, near = bright"},
+    [GI_VIEW_POSITION] = {"position", GI_STAGE_GBUFFER_RESOLVE, "world position of the visible surface"},
+    [GI_VIEW_NORMAL] = {"normal", GI_STAGE_GBUFFER_RESOLVE, "shading normal, turned to face the camera"},
+    [GI_VIEW_ALBEDO] = {"albedo", GI_STAGE_GBUFFER_RESOLVE, "filtered baseColor, linear RGB"},
+    [GI_VIEW_PRIM] = {"prim", GI_STAGE_GBUFFER_RASTER, "primitive id: which triangle each pixel sees"},
+    [GI_VIEW_SHADOW_MAP] = {"shadow-map", GI_STAGE_SHADOW_MAPS,
+                            "light 0's map, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF"},
+    [GI_VIEW_DIRECT] = {"direct", GI_STAGE_DIRECT_SHADOWMAP, "every light with its shadow test, albedo E / pi"},
+    [GI_VIEW_VPLS] = {"vpls", GI_STAGE_VPL_UPDATE, "each VPL drawn where it projects, coloured by its intensity"},
+    [GI_VIEW_VPL_OVERHEAD] = {"vpl-overhead", GI_STAGE_VPL_UPDATE,
+                              "VPLs from above (cut at eye height), coloured by intensity; lights yellow, camera and "
+                              "frustum green (Hedman 2017 Fig. 3)"},
+    [GI_VIEW_VPL_MAP] = {"vpl-map", GI_STAGE_VPL_MAPS, "the chosen VPL's paraboloid map (white box), near = bright"},
+    [GI_VIEW_SPLIT] = {"split", GI_STAGE_SPLIT, "the split G-buffer's normals: n x m tiles, each the image "
+                                                "sub-sampled with its own offset"},
+    [GI_VIEW_ACCUMULATED] = {"accumulated", GI_STAGE_ACCUMULATE,
+                             "each tile's irradiance from its share of the VPLs, in tile layout"},
+    [GI_VIEW_COMBINED] = {"combined", GI_STAGE_COMBINE,
+                          "the tiles back in image layout; the n x m structured noise is visible (Laine 2007 Fig. 4a)"},
+    [GI_VIEW_FILTERED] = {"filtered", GI_STAGE_FILTER,
+                          "the filtered irradiance (default: Laine 2007 Fig. 5's geometry-aware box)"},
+    [GI_VIEW_FINAL] = {"final", GI_STAGE_COMPOSE, "emission + direct + albedo / pi x filtered indirect, linear RGB"},
 };
 
-/* Captions of the views that have no gi_buffer_id (the others reuse
- * gi_buffer_caption, so dump, stepper and frame share one text). */
-static const char *gi__caption_shadow_map =
-    "Shadow map of light 0, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF (Laine 2007 Sec. 6)";
-static const char *gi__caption_overhead =
-    "VPLs from above (cut at eye height), coloured by intensity; lights yellow, camera and frustum green (Hedman "
-    "2017 Fig. 3)";
-static const char *gi__caption_vpl_map =
-    "Paraboloid shadow map of the chosen VPL (white box), near = bright (Laine 2007 Sec. 4.6; Brabec 2002)";
+const char *gi_view_name(gi_view_id id) { return (unsigned)id < GI_VIEW_COUNT ? gi__views[id].name : "?"; }
 
-const char *gi_view_name(gi_view_id id) { return (unsigned)id < GI_VIEW_COUNT ? gi__view_names[id] : "?"; }
+const char *gi_view_caption(gi_view_id id) { return (unsigned)id < GI_VIEW_COUNT ? gi__views[id].caption : "?"; }
 
-const char *gi_view_caption(gi_view_id id)
+gi_stage_id gi_view_stage(gi_view_id id)
 {
-    switch (id) {
-    case GI_VIEW_DEPTH: return gi_buffer_caption(GI_BUF_DEPTH);
-    case GI_VIEW_POSITION: return gi_buffer_caption(GI_BUF_POSITION);
-    case GI_VIEW_NORMAL: return gi_buffer_caption(GI_BUF_NORMAL);
-    case GI_VIEW_ALBEDO: return gi_buffer_caption(GI_BUF_ALBEDO);
-    case GI_VIEW_PRIM: return gi_buffer_caption(GI_BUF_PRIM);
-    case GI_VIEW_SHADOW_MAP: return gi__caption_shadow_map;
-    case GI_VIEW_DIRECT: return gi_buffer_caption(GI_BUF_DIRECT);
-    case GI_VIEW_VPLS: return gi_buffer_caption(GI_BUF_VPLS);
-    case GI_VIEW_VPL_OVERHEAD: return gi__caption_overhead;
-    case GI_VIEW_VPL_MAP: return gi__caption_vpl_map;
-    case GI_VIEW_SPLIT: return gi_buffer_caption(GI_BUF_SPLIT);
-    case GI_VIEW_ACCUMULATED: return gi_buffer_caption(GI_BUF_ACCUMULATED);
-    case GI_VIEW_COMBINED: return gi_buffer_caption(GI_BUF_COMBINED);
-    case GI_VIEW_FILTERED: return gi_buffer_caption(GI_BUF_FILTERED);
-    case GI_VIEW_FINAL: return gi_buffer_caption(GI_BUF_FINAL);
-    default: return "?";
-    }
+    return (unsigned)id < GI_VIEW_COUNT ? gi__views[id].stage : GI_STAGE_COMPOSE;
+}
+
+int gi_view_describe(gi_view_id id, char *buf, size_t n)
+{
+    const gi_stage_info *st = gi_stage_get(gi_view_stage(id));
+    return snprintf(buf, n, "step %u, %s (%s): %s", st->step, st->name, st->paper, gi_view_caption(id));
 }
 
 int gi_view_available(const gi_frame *f, gi_view_id id)
@@ -786,38 +796,4 @@ void gi_view_blit(uint8_t *dst, uint32_t dw, uint32_t dh, const uint8_t *src, ui
 pf_result gi_view_write_png(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h, pf_error *err)
 {
     return pf_imageio_write_png_rgb8(path, rgb, w, h, err); /* temporary file + rename (pf_imageio.h) */
-}
-
-typedef struct gi__captions {
-    const gi_frame *f;
-} gi__captions;
-
-static int gi__print_captions(FILE *out, void *user)
-{
-    const gi__captions *c = user;
-    for (int v = 0; v < GI_VIEW_COUNT; v++)
-        if (gi_view_available(c->f, (gi_view_id)v) &&
-            fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v), gi_view_caption((gi_view_id)v)) < 0)
-            return 1;
-    return 0;
-}
-
-pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_settings *s, pf_error *err)
-{
-    uint8_t *rgb = malloc((size_t)f->width * f->height * 3);
-    if (!rgb) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
-    char path[4096];
-    pf_result r = PF_OK;
-    for (int v = 0; v < GI_VIEW_COUNT && r == PF_OK; v++) {
-        if (!gi_view_available(f, (gi_view_id)v)) continue;
-        gi_view_render(f, (gi_view_id)v, s, rgb);
-        snprintf(path, sizeof path, "%s/%02d-%s.png", dir, v, gi_view_name((gi_view_id)v));
-        r = gi_view_write_png(path, rgb, f->width, f->height, err);
-    }
-    free(rgb);
-    /* captions.txt last: one line per image written */
-    gi__captions c = {f};
-    snprintf(path, sizeof path, "%s/captions.txt", dir);
-    if (r == PF_OK) r = pf_imageio_write_text(path, gi__print_captions, &c, err);
-    return r;
 }

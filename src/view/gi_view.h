@@ -58,9 +58,16 @@ typedef struct gi_view_settings {
     uint32_t vpl;     /* the chosen VPL (index into the frame's set, taken modulo the count) */
 } gi_view_settings;
 
-/* File-name part ("depth", "shadow-map", ...) and one-line caption. */
+/* File-name part ("depth", "shadow-map", ...) and what the picture shows. */
 const char *gi_view_name(gi_view_id id);
 const char *gi_view_caption(gi_view_id id);
+/* The stage whose output the view shows (gi_frame.h's stage table). */
+gi_stage_id gi_view_stage(gi_view_id id);
+/* The view's one-line description from the stage table and the view:
+ * "step 7, accumulate (Laine 2007 Sec. 3 step 7, ...): each tile's ...".
+ * The dump's captions.txt and the stepper's HUD show it. Returns what
+ * snprintf returns. */
+int gi_view_describe(gi_view_id id, char *buf, size_t n);
 /* 1 if the frame has what the view shows (the VPL views need the indirect
  * stages; the shadow-map view a rasterized frame with direct light). */
 int gi_view_available(const gi_frame *f, gi_view_id id);
@@ -85,10 +92,6 @@ int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v
 /* The inverse: where view `id` draws frame pixel (x, y); 0 where it does
  * not draw it. */
 int gi_view_view_pixel(const gi_frame *f, gi_view_id id, uint32_t x, uint32_t y, uint32_t *u, uint32_t *v);
-
-/* Every available view as `DIR/NN-name.png` (NN = the view id) plus
- * `DIR/captions.txt`, one "NN-name.png: caption" line per image. */
-pf_result gi_view_dump(const gi_frame *f, const char *dir, const gi_view_settings *s, pf_error *err);
 
 /* Writes an RGB8 image (top row first) as a PNG, creating parent folders;
  * the same encoder and settings as pf_imageio_write_png. */

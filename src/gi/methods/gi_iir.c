@@ -578,5 +578,11 @@ static pf_result gi__iir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 }
 
 const gi_vpl_method gi_method_iir = {
-    "iir", "Incremental Instant Radiosity (Laine 2007 Sec. 4)", gi__iir_create, gi__iir_update, gi__iir_destroy, NULL,
+    .name = "iir",
+    .paper = "Incremental Instant Radiosity (Laine 2007 Sec. 4)",
+    .create = gi__iir_create,
+    .update = gi__iir_update,
+    .destroy = gi__iir_destroy,
+    .parts = NULL,
+    .gbuffer_free = 1,
 };

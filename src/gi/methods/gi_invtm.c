@@ -233,6 +233,10 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
 }
 
 const gi_vpl_method gi_method_invtm = {
-    "invtm", "Inverse transform sampling of reflective shadow maps (Ritschel 2011; Barak 2013 Sec. 4.2)",
-    gi__invtm_create, gi__invtm_update, gi__invtm_destroy, NULL,
+    .name = "invtm",
+    .paper = "Inverse transform sampling of reflective shadow maps (Ritschel 2011; Barak 2013 Sec. 4.2)",
+    .create = gi__invtm_create,
+    .update = gi__invtm_update,
+    .destroy = gi__invtm_destroy,
+    .parts = NULL,
 };

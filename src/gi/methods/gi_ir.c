@@ -104,5 +104,11 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
 }
 
 const gi_vpl_method gi_method_ir = {
-    "ir", "Instant Radiosity (Keller 1997; survey Sec. 4.1)", gi__ir_create, gi__ir_update, gi__ir_destroy, NULL,
+    .name = "ir",
+    .paper = "Instant Radiosity (Keller 1997; survey Sec. 4.1)",
+    .create = gi__ir_create,
+    .update = gi__ir_update,
+    .destroy = gi__ir_destroy,
+    .parts = NULL,
+    .gbuffer_free = 1,
 };

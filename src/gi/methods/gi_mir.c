@@ -430,5 +430,10 @@ static pf_result gi__mir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 }
 
 const gi_vpl_method gi_method_mir = {
-    "mir", "MIR-style resampled light paths (Hedman 2017 Sec. 5.1)", gi__mir_create, gi__mir_update, gi__mir_destroy, NULL,
+    .name = "mir",
+    .paper = "MIR-style resampled light paths (Hedman 2017 Sec. 5.1)",
+    .create = gi__mir_create,
+    .update = gi__mir_update,
+    .destroy = gi__mir_destroy,
+    .parts = NULL,
 };

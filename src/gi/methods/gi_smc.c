@@ -1154,6 +1154,10 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc_state *)state)->parts; }
 
 const gi_vpl_method gi_method_smc = {
-    "smc", "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)",
-    gi__smc_create, gi__smc_update, gi__smc_destroy, gi__smc_parts,
+    .name = "smc",
+    .paper = "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)",
+    .create = gi__smc_create,
+    .update = gi__smc_update,
+    .destroy = gi__smc_destroy,
+    .parts = gi__smc_parts,
 };

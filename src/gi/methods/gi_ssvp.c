@@ -485,6 +485,10 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
 }
 
 const gi_vpl_method gi_method_ssvp = {
-    "ssvp", "Screen-space VPL propagation, two bounces (Aranha, Sec. III)", gi__ssvp_create, gi__ssvp_update,
-    gi__ssvp_destroy, NULL,
+    .name = "ssvp",
+    .paper = "Screen-space VPL propagation, two bounces (Aranha, Sec. III)",
+    .create = gi__ssvp_create,
+    .update = gi__ssvp_update,
+    .destroy = gi__ssvp_destroy,
+    .parts = NULL,
 };

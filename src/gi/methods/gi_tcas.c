@@ -272,6 +272,10 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
 }
 
 const gi_vpl_method gi_method_tcas = {
-    "tcas", "Independent Metropolis-Hastings RSM sampling, TCAS (Barak 2013 Sec. 4, Algorithm 1)", gi__tcas_create,
-    gi__tcas_update, gi__tcas_destroy, NULL,
+    .name = "tcas",
+    .paper = "Independent Metropolis-Hastings RSM sampling, TCAS (Barak 2013 Sec. 4, Algorithm 1)",
+    .create = gi__tcas_create,
+    .update = gi__tcas_update,
+    .destroy = gi__tcas_destroy,
+    .parts = NULL,
 };

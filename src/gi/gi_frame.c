@@ -161,8 +161,8 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
         return r;
     }
     size_t n = (size_t)width * height * 3;
-    f->direct = calloc(n, sizeof(float));
-    f->final = calloc(n, sizeof(float));
+    f->direct = pf_arena_calloc(&f->mem, n, sizeof(float));
+    f->final = pf_arena_calloc(&f->mem, n, sizeof(float));
     if (!f->direct || !f->final) {
         gi_frame_free(f);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width, height);
@@ -195,8 +195,7 @@ void gi_frame_free(gi_frame *f)
     gi_indirect_free(&f->ind);
     gi__area_maps_free(&f->area_maps);
     gi_area_lights_free(&f->area);
-    free(f->direct);
-    free(f->final);
+    pf_arena_release(&f->mem); /* direct, final */
     memset(f, 0, sizeof *f);
 }
 

@@ -162,6 +162,7 @@ typedef struct gi_frame {
     uint32_t area_strata;  /* ray-traced direct light: area_strata^2 samples per pixel */
     gi_area_maps area_maps; /* rasterized direct light: K emitter points */
     /* buffers (owned, frame lifetime) */
+    pf_arena mem;          /* direct and final (the indirect part has its own, ind.mem) */
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
     pf_light *shadow_lights;  /* the lights the maps were rendered for (static lights: maps reused) */

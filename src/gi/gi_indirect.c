@@ -52,22 +52,23 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if (r != PF_OK) return r;
     uint32_t T = ind->n * ind->m;
     size_t px = (size_t)f->width * f->height;
-    ind->tile_x0 = calloc(T + 1, sizeof(uint32_t));
-    ind->tile_w = calloc(T, sizeof(uint32_t));
-    ind->tile_h = calloc(T, sizeof(uint32_t));
-    ind->assign_start = calloc(T + 1, sizeof(uint32_t));
-    ind->assign = calloc(o.vpls, sizeof(uint32_t));
-    ind->sort_keys = calloc(o.vpls, sizeof(gi__lumkey));
-    ind->tile_of = calloc(o.vpls, sizeof(uint32_t));
-    ind->assigned_id = calloc(o.vpls, sizeof(uint32_t));
-    ind->tile_load = calloc(T, sizeof(double));
-    ind->cursor = calloc(T, sizeof(uint32_t));
+    pf_arena *mem = &ind->mem;
+    ind->tile_x0 = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
+    ind->tile_w = pf_arena_calloc(mem, T, sizeof(uint32_t));
+    ind->tile_h = pf_arena_calloc(mem, T, sizeof(uint32_t));
+    ind->assign_start = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
+    ind->assign = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
+    ind->sort_keys = pf_arena_calloc(mem, o.vpls, sizeof(gi__lumkey));
+    ind->tile_of = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
+    ind->assigned_id = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
+    ind->tile_load = pf_arena_calloc(mem, T, sizeof(double));
+    ind->cursor = pf_arena_calloc(mem, T, sizeof(uint32_t));
     float **planes[] = {&ind->split_px, &ind->split_py, &ind->split_pz, &ind->split_nx, &ind->split_ny, &ind->split_nz};
-    for (size_t k = 0; k < 6; k++) *planes[k] = calloc(px, sizeof(float));
-    ind->split_valid = calloc(px, sizeof(uint32_t));
-    ind->split_e = calloc(3 * px, sizeof(float));
-    ind->combined = calloc(3 * px, sizeof(float));
-    ind->filtered = calloc(3 * px, sizeof(float));
+    for (size_t k = 0; k < 6; k++) *planes[k] = pf_arena_calloc(mem, px, sizeof(float));
+    ind->split_valid = pf_arena_calloc(mem, px, sizeof(uint32_t));
+    ind->split_e = pf_arena_calloc(mem, 3 * px, sizeof(float));
+    ind->combined = pf_arena_calloc(mem, 3 * px, sizeof(float));
+    ind->filtered = pf_arena_calloc(mem, 3 * px, sizeof(float));
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
              ind->split_e && ind->combined && ind->filtered && ind->sort_keys && ind->tile_of && ind->cursor &&
              ind->assigned_id && ind->tile_load;
@@ -91,10 +92,10 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
             if (r != PF_OK) return r;
         }
         /* +64 bytes: the SIMD accumulation gathers 4 bytes at a 2-byte texel */
-        ind->atlas = malloc(rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
-        ind->frames = calloc(o.vpls, sizeof(rs_para_frame));
-        ind->map_pos = calloc(o.vpls, sizeof(pf_vec3));
-        ind->map_nrm = calloc(o.vpls, sizeof(pf_vec3));
+        ind->atlas = pf_arena_alloc(mem, rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
+        ind->frames = pf_arena_calloc(mem, o.vpls, sizeof(rs_para_frame));
+        ind->map_pos = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
+        ind->map_nrm = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
         ind->range = rs_para_default_range(s);
         ok = ind->atlas && ind->frames && ind->map_pos && ind->map_nrm;
     }
@@ -120,13 +121,7 @@ void gi_indirect_free(gi_indirect *ind)
     gi_vpl_set_free(&ind->vpls_next);
     rs_para_context_destroy(ind->para);
     gi_ism_destroy(ind->ism);
-    free(ind->atlas);
-    free(ind->frames), free(ind->map_pos), free(ind->map_nrm);
-    free(ind->sort_keys), free(ind->tile_of), free(ind->cursor), free(ind->assigned_id), free(ind->tile_load);
-    free(ind->tile_x0), free(ind->tile_w), free(ind->tile_h), free(ind->assign), free(ind->assign_start);
-    free(ind->split_px), free(ind->split_py), free(ind->split_pz);
-    free(ind->split_nx), free(ind->split_ny), free(ind->split_nz), free(ind->split_valid);
-    free(ind->split_e), free(ind->combined), free(ind->filtered);
+    pf_arena_release(&ind->mem); /* every buffer above */
     memset(ind, 0, sizeof *ind);
 }
 

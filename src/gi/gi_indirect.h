@@ -62,6 +62,7 @@
 #ifndef GI_INDIRECT_H
 #define GI_INDIRECT_H
 
+#include "pf_arena.h"
 #include "gi_vpl.h"
 #include "gi_ism.h"
 #include "rs_paraboloid.h"
@@ -89,6 +90,7 @@ typedef struct gi_indirect_options {
 
 typedef struct gi_indirect {
     gi_indirect_options opt;
+    pf_arena mem;             /* every array below: allocated by gi_indirect_init, released by gi_indirect_free */
     void *method_state;
     gi_vpl_set vpls;          /* the set this frame shades with */
     uint32_t frame;           /* frame number the next update gets */

@@ -19,6 +19,8 @@
  *   7. accumulate          gi_stage_accumulate         (bounded geometry term, map lookups)
  *   8. combine             gi_stage_combine
  *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)
+ *                          gi_stage_upsample           (--indirect-scale > 1 only: steps 5-9 ran at
+ *                                                       reduced resolution; geometry-aware upsampling)
  *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):
@@ -96,6 +98,7 @@ typedef enum gi_stage_id {
     GI_STAGE_ACCUMULATE,
     GI_STAGE_COMBINE,
     GI_STAGE_FILTER,
+    GI_STAGE_UPSAMPLE,
     GI_STAGE_COMPOSE,
     GI_STAGE_COUNT
 } gi_stage_id;

@@ -40,6 +40,10 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
     if (o.visibility_ism) o.para_res = o.ism.resolution ? o.ism.resolution : GI_ISM_DEFAULT_RES;
     if (!o.para_res) o.para_res = RS_PARA_DEFAULT_RES;
+    if (!o.scale) o.scale = 1;
+    if (o.scale > GI_INDIRECT_MAX_SCALE)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "indirect-light scale %u: expected 1..%u", o.scale,
+                            GI_INDIRECT_MAX_SCALE);
     ind->opt = o;
     ind->bias_scale = 1.0f;
     const pf_scene *s = f->scene;
@@ -51,7 +55,10 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     pf_result r = o.method->create(&ind->method_state, &o.params, err);
     if (r != PF_OK) return r;
     uint32_t T = ind->n * ind->m;
-    size_t px = (size_t)f->width * f->height;
+    ind->scale = o.scale;
+    ind->w = (f->width + o.scale - 1) / o.scale;
+    ind->h = (f->height + o.scale - 1) / o.scale;
+    size_t px = (size_t)ind->w * ind->h;
     pf_arena *mem = &ind->mem;
     ind->tile_x0 = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
     ind->tile_w = pf_arena_calloc(mem, T, sizeof(uint32_t));
@@ -68,9 +75,14 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->split_valid = pf_arena_calloc(mem, px, sizeof(uint32_t));
     ind->split_e = pf_arena_calloc(mem, 3 * px, sizeof(float));
     ind->combined = pf_arena_calloc(mem, 3 * px, sizeof(float));
-    ind->filtered = pf_arena_calloc(mem, 3 * px, sizeof(float));
+    ind->filtered = pf_arena_calloc(mem, 3 * (size_t)f->width * f->height, sizeof(float));
+    if (o.scale > 1) {
+        ind->filtered_low = pf_arena_calloc(mem, 3 * px, sizeof(float));
+        r = rs_gbuffer_init(&ind->low, ind->w, ind->h, err);
+        if (r != PF_OK) return r;
+    }
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
-             ind->split_e && ind->combined && ind->filtered && ind->sort_keys && ind->tile_of && ind->cursor &&
+             ind->split_e && ind->combined && ind->filtered && (o.scale == 1 || ind->filtered_low) && ind->sort_keys && ind->tile_of && ind->cursor &&
              ind->assigned_id && ind->tile_load;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
     if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
@@ -105,8 +117,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     for (uint32_t j = 0; j < ind->m; j++)
         for (uint32_t i = 0; i < ind->n; i++) {
             uint32_t t = j * ind->n + i;
-            ind->tile_w[t] = f->width > i ? (f->width - i + ind->n - 1) / ind->n : 0;
-            ind->tile_h[t] = f->height > j ? (f->height - j + ind->m - 1) / ind->m : 0;
+            ind->tile_w[t] = ind->w > i ? (ind->w - i + ind->n - 1) / ind->n : 0;
+            ind->tile_h[t] = ind->h > j ? (ind->h - j + ind->m - 1) / ind->m : 0;
             ind->tile_x0[t] = off;
             off += ind->tile_w[t] * ind->tile_h[t];
         }
@@ -121,6 +133,7 @@ void gi_indirect_free(gi_indirect *ind)
     gi_vpl_set_free(&ind->vpls_next);
     rs_para_context_destroy(ind->para);
     gi_ism_destroy(ind->ism);
+    rs_gbuffer_free(&ind->low);
     pf_arena_release(&ind->mem); /* every buffer above */
     memset(ind, 0, sizeof *ind);
 }
@@ -290,6 +303,31 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
 
 /* ---------------------------------------------------------- 5. split */
 
+/* The G-buffer the indirect stages read: the frame's, or its samples. */
+static const rs_gbuffer *gi__indirect_gbuffer(const gi_frame *f)
+{
+    return f->ind.scale > 1 ? &f->ind.low : &f->gbuf;
+}
+
+/* Reduced resolution (opt.scale s > 1): row y of the indirect image takes
+ * the G-buffer's pixels (s X, s y), the top-left pixel of each s x s block,
+ * so sample X of the indirect image sits exactly on a frame pixel (the
+ * upsampling below relies on it). Only what the indirect stages read is
+ * copied: position, normal, triangle id. */
+static void gi__sample_row(gi_frame *f, uint32_t y)
+{
+    gi_indirect *ind = &f->ind;
+    const rs_gbuffer *g = &f->gbuf;
+    rs_gbuffer *lo = &ind->low;
+    const uint32_t s = ind->scale;
+    for (uint32_t x = 0; x < ind->w; x++) {
+        size_t i = (size_t)y * s * f->width + (size_t)x * s, k = (size_t)y * ind->w + x;
+        lo->pos_x[k] = g->pos_x[i], lo->pos_y[k] = g->pos_y[i], lo->pos_z[k] = g->pos_z[i];
+        lo->nrm_x[k] = g->nrm_x[i], lo->nrm_y[k] = g->nrm_y[i], lo->nrm_z[k] = g->nrm_z[i];
+        lo->prim[k] = g->prim[i];
+    }
+}
+
 /* Image row y -> its tile row: tile column i holds pixels x = a n + i, so
  * walking each tile column avoids a division per pixel (gi_split_index's
  * mapping, written incrementally). */
@@ -298,12 +336,13 @@ static void gi__split_row(void *p, uint32_t y, uint32_t worker)
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    const size_t row = (size_t)y * f->width;
-    for (uint32_t i = 0; i < ind->n && i < f->width; i++) {
+    if (ind->scale > 1) gi__sample_row(f, y);
+    const rs_gbuffer *g = gi__indirect_gbuffer(f);
+    const size_t row = (size_t)y * ind->w;
+    for (uint32_t i = 0; i < ind->n && i < ind->w; i++) {
         uint32_t t = (y % ind->m) * ind->n + i;
         uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
-        for (uint32_t x = i; x < f->width; x += ind->n, k++) {
+        for (uint32_t x = i; x < ind->w; x += ind->n, k++) {
             size_t s = row + x;
             ind->split_px[k] = g->pos_x[s], ind->split_py[k] = g->pos_y[s], ind->split_pz[k] = g->pos_z[s];
             ind->split_nx[k] = g->nrm_x[s], ind->split_ny[k] = g->nrm_y[s], ind->split_nz[k] = g->nrm_z[s];
@@ -312,7 +351,7 @@ static void gi__split_row(void *p, uint32_t y, uint32_t worker)
     }
 }
 
-void gi_stage_split(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__split_row, f, f->height, 8); }
+void gi_stage_split(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__split_row, f, f->ind.h, 8); }
 
 /* ---------------------------------------------------------- 6. assign */
 
@@ -647,16 +686,16 @@ static void gi__combine_row(void *p, uint32_t y, uint32_t worker)
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
-    const size_t row = (size_t)y * f->width;
-    for (uint32_t i = 0; i < ind->n && i < f->width; i++) { /* as gi__split_row */
+    const size_t row = (size_t)y * ind->w;
+    for (uint32_t i = 0; i < ind->n && i < ind->w; i++) { /* as gi__split_row */
         uint32_t t = (y % ind->m) * ind->n + i;
         uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
-        for (uint32_t x = i; x < f->width; x += ind->n, k++)
+        for (uint32_t x = i; x < ind->w; x += ind->n, k++)
             memcpy(ind->combined + 3 * (row + x), ind->split_e + 3 * (size_t)k, 3 * sizeof(float));
     }
 }
 
-void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_row, f, f->height, 8); }
+void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_row, f, f->ind.h, 8); }
 
 /* ---------------------------------------------------------- 9. filter */
 
@@ -668,9 +707,9 @@ void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_r
 __attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, int x, int y, float *out)
 {
     const gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    const int H = (int)f->height, n = (int)ind->n, m = (int)ind->m;
-    const size_t i0 = (size_t)y * f->width + (size_t)x;
+    const rs_gbuffer *g = gi__indirect_gbuffer(f);
+    const int H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
+    const size_t i0 = (size_t)y * ind->w + (size_t)x;
     const __m256 a2 = _mm256_set1_ps(ind->alpha * ind->alpha), beta = _mm256_set1_ps(ind->opt.beta);
     const __m256 px = _mm256_loadu_ps(g->pos_x + i0), py = _mm256_loadu_ps(g->pos_y + i0),
                  pz = _mm256_loadu_ps(g->pos_z + i0);
@@ -689,7 +728,7 @@ __attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, 
         int ty = y + dy - m / 2;
         if (ty < 0 || ty >= H) continue;
         for (int dx = 0; dx < n; dx++) {
-            size_t j = (size_t)ty * f->width + (size_t)(x + dx - n / 2);
+            size_t j = (size_t)ty * ind->w + (size_t)(x + dx - n / 2);
             __m256i prim = _mm256_loadu_si256((const __m256i *)(g->prim + j));
             __m256 valid = _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(prim, empty), _mm256_set1_epi32(-1)));
             __m256 ddx = _mm256_sub_ps(_mm256_loadu_ps(g->pos_x + j), px);
@@ -759,8 +798,9 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    const int W = (int)f->width, H = (int)f->height, n = (int)ind->n, m = (int)ind->m;
+    const rs_gbuffer *g = gi__indirect_gbuffer(f);
+    float *filtered = ind->scale > 1 ? ind->filtered_low : ind->filtered;
+    const int W = (int)ind->w, H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
     /* SIMD for the interior of the row: windows [x - n/2, x + 7 + n - 1 - n/2] on screen */
     int simd_x0 = W, simd_x1 = W;
 #ifdef GI_HAVE_X86
@@ -772,13 +812,13 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     for (int x = 0; x < W; x++) {
 #ifdef GI_HAVE_X86
         if (x >= simd_x0 && x < simd_x1) {
-            gi__filter8_avx2(f, x, (int)y, ind->filtered + 3 * ((size_t)y * f->width + (size_t)x));
+            gi__filter8_avx2(f, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
             x += 7;
             continue;
         }
 #endif
-        size_t i = (size_t)y * f->width + (size_t)x;
-        float *out = ind->filtered + 3 * i;
+        size_t i = (size_t)y * ind->w + (size_t)x;
+        float *out = filtered + 3 * i;
         if (g->prim[i] == RS_GBUFFER_EMPTY || ind->opt.filter == GI_FILTER_NONE) {
             memcpy(out, ind->combined + 3 * i, 3 * sizeof(float));
             continue;
@@ -795,7 +835,7 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
             for (int dx = x0; dx <= x1; dx++) {
                 int tx = x + dx, ty = (int)y + dy;
                 if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
-                size_t j = (size_t)ty * f->width + (size_t)tx;
+                size_t j = (size_t)ty * ind->w + (size_t)tx;
                 if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
                 pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
                 float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
@@ -810,4 +850,79 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     }
 }
 
-void gi_stage_filter(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__filter_row, f, f->height, 4); }
+void gi_stage_filter(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__filter_row, f, f->ind.h, 4); }
+
+/* ---------------------------------------------------------- 9b. upsample */
+
+/* Joint (geometry-aware) upsampling of the reduced-resolution irradiance
+ * (opt.scale s > 1; beyond Laine 2007, after Kopf et al. 2007's joint
+ * bilateral upsampling with Laine's edge tests as the range term). Frame
+ * pixel (x, y) lies between the samples X0 = floor(x / s), X0 + 1 (sample X
+ * sits on frame pixel s X) at the fraction tx = x / s - X0, likewise in y;
+ * each of the four samples weighs its bilinear weight if it passes the
+ * filter's tests against the pixel's own surface (valid, |p_s - p| < alpha,
+ * n_s . n > beta). A pixel none of them passes (an edge the samples miss:
+ * a thin object, a silhouette) takes the passing sample nearest in position
+ * from the 3 x 3 samples around it, else the nearest valid one, else 0.
+ * Sample pixels themselves (tx = ty = 0) get their sample's value exactly. */
+static int gi__up_ok(const rs_gbuffer *lo, size_t k, pf_vec3 p, pf_vec3 n, float a2, float beta, float *d2_out)
+{
+    if (lo->prim[k] == RS_GBUFFER_EMPTY) return 0;
+    pf_vec3 d = pf_v3_sub(pf_v3(lo->pos_x[k], lo->pos_y[k], lo->pos_z[k]), p);
+    float d2 = pf_v3_dot(d, d), nd = n.x * lo->nrm_x[k] + n.y * lo->nrm_y[k] + n.z * lo->nrm_z[k];
+    *d2_out = d2;
+    return d2 < a2 && nd > beta ? 2 : 1; /* 2: passes the tests; 1: valid only */
+}
+
+static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = p;
+    gi_indirect *ind = &f->ind;
+    const rs_gbuffer *g = &f->gbuf, *lo = &ind->low;
+    const uint32_t s = ind->scale, w = ind->w, h = ind->h;
+    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta, inv_s = 1.0f / (float)s;
+    const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0;
+    const float ty = (float)(y - Y0 * s) * inv_s;
+    for (uint32_t x = 0; x < f->width; x++) {
+        size_t i = (size_t)y * f->width + x;
+        float *out = ind->filtered + 3 * i;
+        out[0] = out[1] = out[2] = 0.0f;
+        if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
+        pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
+        const uint32_t X0 = x / s, X1 = X0 + 1 < w ? X0 + 1 : X0;
+        const float tx = (float)(x - X0 * s) * inv_s;
+        const uint32_t xs[4] = {X0, X1, X0, X1}, ys[4] = {Y0, Y0, Y1, Y1};
+        const float bw[4] = {(1.0f - tx) * (1.0f - ty), tx * (1.0f - ty), (1.0f - tx) * ty, tx * ty};
+        float acc[3] = {0, 0, 0}, wsum = 0.0f, d2;
+        for (int c = 0; c < 4; c++) {
+            size_t k = (size_t)ys[c] * w + xs[c];
+            if (!(bw[c] > 0.0f) || gi__up_ok(lo, k, pos, nrm, a2, beta, &d2) != 2) continue;
+            const float *e = ind->filtered_low + 3 * k;
+            acc[0] += bw[c] * e[0], acc[1] += bw[c] * e[1], acc[2] += bw[c] * e[2];
+            wsum += bw[c];
+        }
+        if (wsum > 0.0f) {
+            out[0] = acc[0] / wsum, out[1] = acc[1] / wsum, out[2] = acc[2] / wsum;
+            continue;
+        }
+        /* no sample passes among the four: the best of the 3 x 3 around */
+        size_t best = SIZE_MAX;
+        int best_ok = 0;
+        float best_d2 = INFINITY;
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dx = -1; dx <= 1; dx++) {
+                int X = (int)X0 + dx, Y = (int)Y0 + dy;
+                if (X < 0 || Y < 0 || X >= (int)w || Y >= (int)h) continue;
+                size_t k = (size_t)Y * w + (size_t)X;
+                int ok = gi__up_ok(lo, k, pos, nrm, INFINITY, beta, &d2);
+                if (ok > best_ok || (ok == best_ok && ok > 0 && d2 < best_d2)) best = k, best_ok = ok, best_d2 = d2;
+            }
+        if (best != SIZE_MAX) memcpy(out, ind->filtered_low + 3 * best, 3 * sizeof(float));
+    }
+}
+
+void gi_stage_upsample(gi_frame *f)
+{
+    if (f->ind.scale > 1) pf_jobs_parallel_for(f->jobs, gi__upsample_row, f, f->height, 8);
+}

@@ -86,7 +86,12 @@ typedef struct gi_indirect_options {
     uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
     gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
     int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
+    uint32_t scale;              /* 1 (0: 1): the indirect stages run at full resolution; 2..4: at
+                                    (width / scale) x (height / scale), upsampled geometry-aware
+                                    (gi_stage_upsample; beyond the papers) */
 } gi_indirect_options;
+
+#define GI_INDIRECT_MAX_SCALE 4u
 
 typedef struct gi_indirect {
     gi_indirect_options opt;
@@ -124,6 +129,12 @@ typedef struct gi_indirect {
     uint32_t *tile_of, *assigned_id;
     uint32_t assigned_count;  /* slots assigned last time */
     uint32_t assign_kept;     /* survivors that kept their tile this frame */
+    /* resolution of the indirect stages (split .. filter): w x h = the frame's
+     * size / scale (rounded up), reading the frame's G-buffer, or with
+     * scale > 1 `low`, the frame's pixels (scale X, scale Y) */
+    uint32_t scale, w, h;
+    rs_gbuffer low;
+    float *filtered_low;      /* scale > 1: the filter's output, w x h, before gi_stage_upsample */
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */
@@ -133,8 +144,8 @@ typedef struct gi_indirect {
     uint32_t *assign;         /* VPL indices grouped by tile */
     uint32_t *assign_start;   /* n m + 1 */
     float *split_e;           /* RGB irradiance in split layout */
-    float *combined;          /* RGB irradiance, image layout */
-    float *filtered;          /* RGB irradiance after the filter */
+    float *combined;          /* RGB irradiance, image layout, w x h */
+    float *filtered;          /* RGB irradiance after the filter (and the upsampling), the frame's size */
 } gi_indirect;
 
 struct gi_frame;
@@ -160,6 +171,8 @@ void gi_stage_assign(struct gi_frame *f);
 void gi_stage_accumulate(struct gi_frame *f);
 void gi_stage_combine(struct gi_frame *f);
 void gi_stage_filter(struct gi_frame *f);
+/* scale > 1: filtered_low to the frame's size (a no-op at scale 1). */
+void gi_stage_upsample(struct gi_frame *f);
 
 /* Irradiance at (p, n) from one VPL with the bounded geometry term, no
  * visibility (step 7's scalar kernel): I G_b, G_b = min(cos_r cos_v / r^2,
@@ -174,7 +187,14 @@ pf_vec3 gi_vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec
  * clamped reference's (gi_reference.h). */
 float gi_clamp_bound(const pf_scene *scene, float clamp);
 
-/* Pixel (x, y) of the image -> index in the split layout. */
+/* Frame pixel (x, y) -> the index of the indirect image's pixel (x / scale,
+ * y / scale) in the w x h buffers (combined, filtered_low). */
+static inline size_t gi_indirect_pixel(const gi_indirect *ind, uint32_t x, uint32_t y)
+{
+    return (size_t)(y / ind->scale) * ind->w + x / ind->scale;
+}
+
+/* Pixel (x, y) of the indirect image (w x h) -> index in the split layout. */
 uint32_t gi_split_index(const gi_indirect *ind, uint32_t width, uint32_t x, uint32_t y);
 
 #endif

@@ -83,7 +83,13 @@ static uint32_t gi__dump_float(const gi_frame *f, gi_view_id id, float *px)
     case GI_VIEW_SPLIT: gi__dump_mosaic(f, 1, px); return 4;
     case GI_VIEW_ACCUMULATED: gi__dump_mosaic(f, 0, px); return 3;
     case GI_VIEW_DIRECT: rgb = f->direct; break;
-    case GI_VIEW_COMBINED: rgb = f->ind.combined; break;
+    case GI_VIEW_COMBINED:
+        /* the indirect image's buffer, each pixel as a scale x scale block */
+        for (uint32_t y = 0; y < f->height; y++)
+            for (uint32_t x = 0; x < f->width; x++)
+                memcpy(px + 3 * ((size_t)y * f->width + x), f->ind.combined + 3 * gi_indirect_pixel(&f->ind, x, y),
+                       3 * sizeof(float));
+        return 3;
     case GI_VIEW_FILTERED: rgb = f->ind.filtered; break;
     default: rgb = f->final; break;
     }

@@ -97,15 +97,17 @@ static void gi__probe_indirect(gi_probe *p, const gi_frame *f, size_t i)
     const gi_indirect *ind = &f->ind;
     p->indirect = 1;
     p->tiles_n = ind->n, p->tiles_m = ind->m;
-    p->tile_i = p->x % ind->n, p->tile_j = p->y % ind->m;
+    /* the indirect image's pixel (the frame's unless --indirect-scale > 1) */
+    const uint32_t xi = p->x / ind->scale, yi = p->y / ind->scale;
+    p->tile_i = xi % ind->n, p->tile_j = yi % ind->m;
     p->tile = p->tile_j * ind->n + p->tile_i;
-    p->split = gi_split_index(ind, f->width, p->x, p->y);
-    p->mosaic_x = p->tile_i * ind->tile_w[0] + p->x / ind->n; /* gi_view.c's mosaic */
-    p->mosaic_y = p->tile_j * ind->tile_h[0] + p->y / ind->m;
+    p->split = gi_split_index(ind, ind->w, xi, yi);
+    p->mosaic_x = p->tile_i * ind->tile_w[0] + xi / ind->n; /* gi_view.c's mosaic */
+    p->mosaic_y = p->tile_j * ind->tile_h[0] + yi / ind->m;
     p->weight = (float)(ind->n * ind->m);
     p->tile_vpls = ind->assign_start[p->tile + 1] - ind->assign_start[p->tile];
     p->tile_e = gi__rgb(ind->split_e, p->split);
-    p->combined = gi__rgb(ind->combined, i);
+    p->combined = gi__rgb(ind->combined, gi_indirect_pixel(ind, p->x, p->y));
     p->filtered = gi__rgb(ind->filtered, i);
     gi__probe_tile_vpls(p, f);
 }

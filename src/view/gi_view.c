@@ -362,6 +362,25 @@ static void gi__view_radiance(const gi_frame *f, const float *src, float exposur
     pf_jobs_parallel_for(f->jobs, gi__display_row, &c, f->height, 8);
 }
 
+/* A buffer of the indirect image (w x h; the frame's size unless
+ * --indirect-scale > 1, then each of its pixels drawn as a scale x scale
+ * block: frame pixel (x, y) shows gi_indirect_pixel). */
+static void gi__view_indirect_image(const gi_frame *f, const float *src, float exposure, uint8_t *rgb)
+{
+    const gi_indirect *ind = &f->ind;
+    if (ind->scale <= 1) {
+        gi__view_radiance(f, src, exposure, rgb);
+        return;
+    }
+    float scale = exp2f(exposure);
+    for (uint32_t y = 0; y < f->height; y++)
+        for (uint32_t x = 0; x < f->width; x++) {
+            const float *e = src + 3 * gi_indirect_pixel(ind, x, y);
+            uint8_t *o = rgb + 3 * ((size_t)y * f->width + x);
+            for (int c = 0; c < 3; c++) o[c] = pf_imageio_display(e[c], scale);
+        }
+}
+
 /* Light 0's shadow map: one face fitted in the image, or a cube's six faces
  * as a 3 x 2 grid (+x -x +y on top, -y +z -z below). */
 static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb)
@@ -661,7 +680,7 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
     case GI_VIEW_VPL_MAP: gi__view_vpl_map(f, &s, rgb); break;
     case GI_VIEW_SPLIT: gi__view_mosaic(f, 1, s.exposure, rgb); break;
     case GI_VIEW_ACCUMULATED: gi__view_mosaic(f, 0, s.exposure, rgb); break;
-    case GI_VIEW_COMBINED: gi__view_radiance(f, f->ind.combined, s.exposure, rgb); break;
+    case GI_VIEW_COMBINED: gi__view_indirect_image(f, f->ind.combined, s.exposure, rgb); break;
     case GI_VIEW_FILTERED: gi__view_radiance(f, f->ind.filtered, s.exposure, rgb); break;
     default: gi__view_radiance(f, f->final, s.exposure, rgb); break;
     }
@@ -686,11 +705,12 @@ int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v
         return 1;
     }
     if (!gi__mosaic_view(id)) return 0;
-    /* tile t = (i, j)'s texel (a, b) is frame pixel (a n + i, b m + j) */
+    /* tile t = (i, j)'s texel (a, b) is pixel (a n + i, b m + j) of the
+     * indirect image, frame pixel scale x that */
     const gi_indirect *ind = &f->ind;
     uint32_t t, a, b;
     if (!gi__mosaic_tile(ind, u, v, &t, &a, &b)) return 0;
-    *x = a * ind->n + t % ind->n, *y = b * ind->m + t / ind->n;
+    *x = (a * ind->n + t % ind->n) * ind->scale, *y = (b * ind->m + t / ind->n) * ind->scale;
     return *x < f->width && *y < f->height;
 }
 
@@ -703,6 +723,7 @@ int gi_view_view_pixel(const gi_frame *f, gi_view_id id, uint32_t x, uint32_t y,
     }
     if (!gi__mosaic_view(id)) return 0;
     const gi_indirect *ind = &f->ind;
+    x /= ind->scale, y /= ind->scale; /* the indirect image's pixel */
     *u = (x % ind->n) * ind->tile_w[0] + x / ind->n;
     *v = (y % ind->m) * ind->tile_h[0] + y / ind->m;
     return *u < f->width && *v < f->height;

@@ -865,13 +865,23 @@ void gi_stage_filter(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__filter_row
  * a thin object, a silhouette) takes the passing sample nearest in position
  * from the 3 x 3 samples around it, else the nearest valid one, else 0.
  * Sample pixels themselves (tx = ty = 0) get their sample's value exactly. */
-static int gi__up_ok(const rs_gbuffer *lo, size_t k, pf_vec3 p, pf_vec3 n, float a2, float beta, float *d2_out)
+/* The planes the upsampling reads, as local restrict pointers (the output
+ * never aliases them, and the loop then keeps them in registers). */
+typedef struct gi__up_planes {
+    const float *restrict px, *restrict py, *restrict pz, *restrict nx, *restrict ny, *restrict nz;
+    const uint32_t *restrict prim;
+    const float *restrict e; /* filtered_low */
+} gi__up_planes;
+
+/* 2: sample k passes the tests against (p, n); 1: valid only; 0: empty. */
+static inline int gi__up_ok(const gi__up_planes *lo, size_t k, pf_vec3 p, pf_vec3 n, float a2, float beta,
+                            float *d2_out)
 {
     if (lo->prim[k] == RS_GBUFFER_EMPTY) return 0;
-    pf_vec3 d = pf_v3_sub(pf_v3(lo->pos_x[k], lo->pos_y[k], lo->pos_z[k]), p);
-    float d2 = pf_v3_dot(d, d), nd = n.x * lo->nrm_x[k] + n.y * lo->nrm_y[k] + n.z * lo->nrm_z[k];
+    float dx = lo->px[k] - p.x, dy = lo->py[k] - p.y, dz = lo->pz[k] - p.z;
+    float d2 = dx * dx + dy * dy + dz * dz, nd = n.x * lo->nx[k] + n.y * lo->ny[k] + n.z * lo->nz[k];
     *d2_out = d2;
-    return d2 < a2 && nd > beta ? 2 : 1; /* 2: passes the tests; 1: valid only */
+    return d2 < a2 && nd > beta ? 2 : 1;
 }
 
 static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
@@ -879,14 +889,17 @@ static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
     (void)worker;
     gi_frame *f = p;
     gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf, *lo = &ind->low;
-    const uint32_t s = ind->scale, w = ind->w, h = ind->h;
+    const rs_gbuffer *g = &f->gbuf;
+    const gi__up_planes lo = {ind->low.pos_x, ind->low.pos_y, ind->low.pos_z, ind->low.nrm_x,
+                              ind->low.nrm_y, ind->low.nrm_z, ind->low.prim, ind->filtered_low};
+    float *restrict filtered = ind->filtered;
+    const uint32_t s = ind->scale, w = ind->w, h = ind->h, W = f->width;
     const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta, inv_s = 1.0f / (float)s;
     const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0;
     const float ty = (float)(y - Y0 * s) * inv_s;
-    for (uint32_t x = 0; x < f->width; x++) {
-        size_t i = (size_t)y * f->width + x;
-        float *out = ind->filtered + 3 * i;
+    for (uint32_t x = 0; x < W; x++) {
+        size_t i = (size_t)y * W + x;
+        float *out = filtered + 3 * i;
         out[0] = out[1] = out[2] = 0.0f;
         if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
         pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
@@ -894,16 +907,16 @@ static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
         const float tx = (float)(x - X0 * s) * inv_s;
         const uint32_t xs[4] = {X0, X1, X0, X1}, ys[4] = {Y0, Y0, Y1, Y1};
         const float bw[4] = {(1.0f - tx) * (1.0f - ty), tx * (1.0f - ty), (1.0f - tx) * ty, tx * ty};
-        float acc[3] = {0, 0, 0}, wsum = 0.0f, d2;
+        float acc0 = 0.0f, acc1 = 0.0f, acc2 = 0.0f, wsum = 0.0f, d2;
         for (int c = 0; c < 4; c++) {
             size_t k = (size_t)ys[c] * w + xs[c];
-            if (!(bw[c] > 0.0f) || gi__up_ok(lo, k, pos, nrm, a2, beta, &d2) != 2) continue;
-            const float *e = ind->filtered_low + 3 * k;
-            acc[0] += bw[c] * e[0], acc[1] += bw[c] * e[1], acc[2] += bw[c] * e[2];
+            if (!(bw[c] > 0.0f) || gi__up_ok(&lo, k, pos, nrm, a2, beta, &d2) != 2) continue;
+            const float *e = lo.e + 3 * k;
+            acc0 += bw[c] * e[0], acc1 += bw[c] * e[1], acc2 += bw[c] * e[2];
             wsum += bw[c];
         }
         if (wsum > 0.0f) {
-            out[0] = acc[0] / wsum, out[1] = acc[1] / wsum, out[2] = acc[2] / wsum;
+            out[0] = acc0 / wsum, out[1] = acc1 / wsum, out[2] = acc2 / wsum;
             continue;
         }
         /* no sample passes among the four: the best of the 3 x 3 around */
@@ -915,10 +928,10 @@ static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
                 int X = (int)X0 + dx, Y = (int)Y0 + dy;
                 if (X < 0 || Y < 0 || X >= (int)w || Y >= (int)h) continue;
                 size_t k = (size_t)Y * w + (size_t)X;
-                int ok = gi__up_ok(lo, k, pos, nrm, INFINITY, beta, &d2);
+                int ok = gi__up_ok(&lo, k, pos, nrm, INFINITY, beta, &d2);
                 if (ok > best_ok || (ok == best_ok && ok > 0 && d2 < best_d2)) best = k, best_ok = ok, best_d2 = d2;
             }
-        if (best != SIZE_MAX) memcpy(out, ind->filtered_low + 3 * best, 3 * sizeof(float));
+        if (best != SIZE_MAX) memcpy(out, lo.e + 3 * best, 3 * sizeof(float));
     }
 }
 

@@ -68,6 +68,9 @@ static const gi_stage_info gi__stages[GI_STAGE_COUNT] = {
     [GI_STAGE_UPSAMPLE] = {"upsample", 9, "beyond the papers: joint bilateral upsampling (Kopf 2007) with Laine's tests",
                            "Upsampled: the reduced-resolution irradiance to the frame's size, geometry-aware",
                            B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_upsample},
+    [GI_STAGE_TEMPORAL] = {"temporal", 9, "beyond the papers: reprojected history (Nehab 2007; Schied 2017)",
+                           "Temporal: the filtered irradiance averaged with last frames' at the same surface",
+                           B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_temporal},
     [GI_STAGE_COMPOSE] = {"compose", 10, "Laine 2007 Sec. 3 (after step 9)",
                           "Final: emission + direct + albedo / pi x filtered indirect, linear RGB",
                           B(VISIBILITY) | B(GBUFFER) | B(DIRECT) | B(FILTERED), B(FINAL), gi_stage_compose},
@@ -292,6 +295,7 @@ static void gi__indirect_stages(gi_frame *f)
     gi__run(f, GI_STAGE_COMBINE);
     gi__run(f, GI_STAGE_FILTER);
     if (f->ind.scale > 1) gi__run(f, GI_STAGE_UPSAMPLE);
+    if (f->ind.opt.temporal) gi__run(f, GI_STAGE_TEMPORAL);
 }
 
 void gi_frame_render_raytraced(gi_frame *f)

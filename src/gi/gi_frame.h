@@ -21,6 +21,8 @@
  *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)
  *                          gi_stage_upsample           (--indirect-scale > 1 only: steps 5-9 ran at
  *                                                       reduced resolution; geometry-aware upsampling)
+ *                          gi_stage_temporal           (--temporal N only: reprojected history, rotated
+ *                                                       VPL groups)
  *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):
@@ -99,6 +101,7 @@ typedef enum gi_stage_id {
     GI_STAGE_COMBINE,
     GI_STAGE_FILTER,
     GI_STAGE_UPSAMPLE,
+    GI_STAGE_TEMPORAL,
     GI_STAGE_COMPOSE,
     GI_STAGE_COUNT
 } gi_stage_id;

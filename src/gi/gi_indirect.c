@@ -41,6 +41,9 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if (o.visibility_ism) o.para_res = o.ism.resolution ? o.ism.resolution : GI_ISM_DEFAULT_RES;
     if (!o.para_res) o.para_res = RS_PARA_DEFAULT_RES;
     if (!o.scale) o.scale = 1;
+    if (o.temporal == 1 || o.temporal > GI_INDIRECT_MAX_TEMPORAL)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "temporal accumulation over %u frames: expected 0 (off) or 2..%u",
+                            o.temporal, GI_INDIRECT_MAX_TEMPORAL);
     if (o.scale > GI_INDIRECT_MAX_SCALE)
         return pf_error_set(err, PF_ERR_ARGUMENT, "indirect-light scale %u: expected 1..%u", o.scale,
                             GI_INDIRECT_MAX_SCALE);
@@ -76,6 +79,22 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->split_e = pf_arena_calloc(mem, 3 * px, sizeof(float));
     ind->combined = pf_arena_calloc(mem, 3 * px, sizeof(float));
     ind->filtered = pf_arena_calloc(mem, 3 * (size_t)f->width * f->height, sizeof(float));
+    if (o.temporal) {
+        size_t fpx = (size_t)f->width * f->height;
+        for (int b = 0; b < 2; b++) {
+            ind->hist[b] = pf_arena_calloc(mem, 3 * fpx, sizeof(float));
+            ind->hist_n[b] = pf_arena_calloc(mem, fpx, sizeof(uint16_t));
+            ind->hist_prim[b] = pf_arena_calloc(mem, fpx, sizeof(uint32_t));
+            for (int c = 0; c < 3; c++) {
+                ind->hist_p[b][c] = pf_arena_calloc(mem, fpx, sizeof(float));
+                ind->hist_nrm[b][c] = pf_arena_calloc(mem, fpx, sizeof(float));
+                if (!ind->hist_p[b][c] || !ind->hist_nrm[b][c])
+                    return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the temporal history");
+            }
+            if (!ind->hist[b] || !ind->hist_n[b] || !ind->hist_prim[b])
+                return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the temporal history");
+        }
+    }
     if (o.scale > 1) {
         ind->filtered_low = pf_arena_calloc(mem, 3 * px, sizeof(float));
         r = rs_gbuffer_init(&ind->low, ind->w, ind->h, err);
@@ -615,7 +634,8 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     uint32_t t = item / rows, row = item % rows;
     if (t >= T || row >= ind->tile_h[t]) return;
     const float weight = (float)T; /* each tile sees 1/T of the VPLs */
-    uint32_t a0 = ind->assign_start[t], a1 = ind->assign_start[t + 1];
+    const uint32_t grp = gi_indirect_tile_group(ind, t);
+    uint32_t a0 = ind->assign_start[grp], a1 = ind->assign_start[grp + 1];
     const uint32_t R = ind->opt.para_res;
     const size_t map = (size_t)R * R;
     uint32_t a = 0;
@@ -675,6 +695,9 @@ void gi_stage_accumulate(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     uint32_t T = ind->n * ind->m, rows = 0;
+    /* with temporal accumulation, frame k's tiles shade with the groups
+     * rotated by k (gi_indirect_tile_group) */
+    ind->shift = ind->opt.temporal ? ind->temporal_frames % T : 0;
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
     pf_jobs_parallel_for(f->jobs, gi__accumulate_row, f, T * rows, 1);
 }
@@ -938,4 +961,103 @@ static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
 void gi_stage_upsample(gi_frame *f)
 {
     if (f->ind.scale > 1) pf_jobs_parallel_for(f->jobs, gi__upsample_row, f, f->height, 8);
+}
+
+/* ---------------------------------------------------------- 9c. temporal */
+
+/* Temporal accumulation with reprojection (opt.temporal = N; beyond Laine
+ * 2007, after the reprojection caches of Nehab et al. 2007 and SVGF's
+ * temporal pass, Schied et al. 2017). Each frame the tiles shade with a
+ * rotated group of VPLs (gi_indirect_tile_group: tile t takes group
+ * (t + frame) mod T), so over T frames a pixel has seen every VPL once, and
+ * the history averages those frames: with a stable VPL set (IIR, SMC, TCAS,
+ * a static light) the accumulated image tends to the one without
+ * interleaving. Per pixel: its surface is projected into last frame's
+ * camera; the history pixel there is taken when it saw a surface within
+ * alpha of this one with a normal within beta (the filter's tests), else
+ * the history restarts (disocclusion, a pixel that left the screen). The
+ * blend is the running mean over the last min(n, N) frames,
+ *   E = H + (E_new - H) / min(n + 1, N),
+ * so a static view converges like an average of N frames and a moving light
+ * or changing VPLs are followed within N frames (the lag is the price; N is
+ * the knob). Nearest-pixel reprojection, no clamping of the history. */
+typedef struct gi__temporal_ctx {
+    gi_frame *f;
+    const float *hp[3], *hn[3], *h;
+    const uint32_t *hprim;
+    const uint16_t *hcount;
+    float *op[3], *on[3], *o;
+    uint32_t *oprim;
+    uint16_t *ocount;
+    int have;  /* a history exists */
+    float th, ta; /* last camera: tan(fov / 2), and its aspect-scaled value */
+} gi__temporal_ctx;
+
+static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi__temporal_ctx *c = p;
+    gi_frame *f = c->f;
+    gi_indirect *ind = &f->ind;
+    const rs_gbuffer *g = &f->gbuf;
+    const pf_camera *pc = &ind->hist_camera;
+    const uint32_t W = f->width, H = f->height, N = ind->opt.temporal;
+    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
+    for (uint32_t x = 0; x < W; x++) {
+        size_t i = (size_t)y * W + x;
+        float *e = ind->filtered + 3 * i;
+        uint32_t prim = g->prim[i];
+        c->op[0][i] = g->pos_x[i], c->op[1][i] = g->pos_y[i], c->op[2][i] = g->pos_z[i];
+        c->on[0][i] = g->nrm_x[i], c->on[1][i] = g->nrm_y[i], c->on[2][i] = g->nrm_z[i];
+        c->oprim[i] = prim;
+        uint32_t n = 0;
+        size_t j = SIZE_MAX;
+        if (c->have && prim != RS_GBUFFER_EMPTY) {
+            /* the surface in last frame's camera (pf_camera_ray_dir inverted) */
+            pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), pc->eye);
+            float z = pf_v3_dot(d, pc->forward);
+            if (z > 0.0f) {
+                float sx = pf_v3_dot(d, pc->right) / z, sy = pf_v3_dot(d, pc->up) / z;
+                float px = (sx / c->ta + 1.0f) * 0.5f * (float)W, py = (1.0f - sy / c->th) * 0.5f * (float)H;
+                if (px >= 0.0f && py >= 0.0f && px < (float)W && py < (float)H) {
+                    size_t k = (size_t)(uint32_t)py * W + (uint32_t)px;
+                    float dx = c->hp[0][k] - g->pos_x[i], dy = c->hp[1][k] - g->pos_y[i], dz = c->hp[2][k] - g->pos_z[i];
+                    float nd = c->hn[0][k] * g->nrm_x[i] + c->hn[1][k] * g->nrm_y[i] + c->hn[2][k] * g->nrm_z[i];
+                    if (c->hprim[k] != RS_GBUFFER_EMPTY && dx * dx + dy * dy + dz * dz < a2 && nd > beta)
+                        j = k, n = c->hcount[k];
+                }
+            }
+        }
+        uint32_t m = n + 1 < N ? n + 1 : N;
+        if (j != SIZE_MAX) {
+            const float *h = c->h + 3 * j;
+            float inv = 1.0f / (float)m;
+            for (int ch = 0; ch < 3; ch++) e[ch] = h[ch] + (e[ch] - h[ch]) * inv;
+        }
+        memcpy(c->o + 3 * i, e, 3 * sizeof(float));
+        c->ocount[i] = (uint16_t)(prim != RS_GBUFFER_EMPTY ? m : 0);
+    }
+}
+
+void gi_stage_temporal(gi_frame *f)
+{
+    gi_indirect *ind = &f->ind;
+    if (!ind->opt.temporal) return;
+    const int prev = ind->hist_cur, next = 1 - prev;
+    gi__temporal_ctx c;
+    memset(&c, 0, sizeof c);
+    c.f = f;
+    for (int k = 0; k < 3; k++) {
+        c.hp[k] = ind->hist_p[prev][k], c.hn[k] = ind->hist_nrm[prev][k];
+        c.op[k] = ind->hist_p[next][k], c.on[k] = ind->hist_nrm[next][k];
+    }
+    c.h = ind->hist[prev], c.hprim = ind->hist_prim[prev], c.hcount = ind->hist_n[prev];
+    c.o = ind->hist[next], c.oprim = ind->hist_prim[next], c.ocount = ind->hist_n[next];
+    c.have = ind->temporal_frames > 0;
+    c.th = tanf(0.5f * ind->hist_camera.yfov);
+    c.ta = c.th * (float)f->width / (float)f->height;
+    pf_jobs_parallel_for(f->jobs, gi__temporal_row, &c, f->height, 8);
+    ind->hist_cur = next;
+    ind->hist_camera = f->camera;
+    ind->temporal_frames++;
 }

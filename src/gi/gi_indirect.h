@@ -86,12 +86,16 @@ typedef struct gi_indirect_options {
     uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
     gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
     int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
+    uint32_t temporal;           /* 0: off; N >= 2: temporal accumulation of the filtered irradiance over
+                                    up to N frames, with reprojection (gi_stage_temporal; beyond Laine
+                                    2007) and the tiles' VPL groups rotated every frame */
     uint32_t scale;              /* 1 (0: 1): the indirect stages run at full resolution; 2..4: at
                                     (width / scale) x (height / scale), upsampled geometry-aware
                                     (gi_stage_upsample; beyond the papers) */
 } gi_indirect_options;
 
 #define GI_INDIRECT_MAX_SCALE 4u
+#define GI_INDIRECT_MAX_TEMPORAL 256u
 
 typedef struct gi_indirect {
     gi_indirect_options opt;
@@ -135,6 +139,16 @@ typedef struct gi_indirect {
     uint32_t scale, w, h;
     rs_gbuffer low;
     float *filtered_low;      /* scale > 1: the filter's output, w x h, before gi_stage_upsample */
+    /* temporal accumulation (opt.temporal > 0): the group of VPLs tile t
+     * shades with this frame is (t + shift) mod T; the history is last
+     * frame's output with its G-buffer and camera, double-buffered */
+    uint32_t shift, temporal_frames;
+    float *hist[2];           /* RGB irradiance, the frame's size */
+    uint16_t *hist_n[2];      /* frames in each pixel's history */
+    float *hist_p[2][3], *hist_nrm[2][3];
+    uint32_t *hist_prim[2];
+    pf_camera hist_camera;
+    int hist_cur;             /* which of [2] holds last frame's */
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */
@@ -173,6 +187,16 @@ void gi_stage_combine(struct gi_frame *f);
 void gi_stage_filter(struct gi_frame *f);
 /* scale > 1: filtered_low to the frame's size (a no-op at scale 1). */
 void gi_stage_upsample(struct gi_frame *f);
+/* opt.temporal > 0: filtered blended with last frame's reprojected output. */
+void gi_stage_temporal(struct gi_frame *f);
+
+/* The group of VPLs (an index into assign_start) tile t shades with this
+ * frame: t itself, or rotated by the frame with temporal accumulation. */
+static inline uint32_t gi_indirect_tile_group(const gi_indirect *ind, uint32_t t)
+{
+    uint32_t T = ind->n * ind->m;
+    return (t + ind->shift) % T;
+}
 
 /* Irradiance at (p, n) from one VPL with the bounded geometry term, no
  * visibility (step 7's scalar kernel): I G_b, G_b = min(cos_r cos_v / r^2,

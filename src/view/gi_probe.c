@@ -69,7 +69,8 @@ static void gi__probe_tile_vpls(gi_probe *p, const gi_frame *f)
     pf_vec3 pos = pf_v3(ind->split_px[k], ind->split_py[k], ind->split_pz[k]);
     pf_vec3 nrm = pf_v3(ind->split_nx[k], ind->split_ny[k], ind->split_nz[k]);
     pf_vec3 sum = pf_v3(0, 0, 0);
-    for (uint32_t q = ind->assign_start[p->tile]; q < ind->assign_start[p->tile + 1]; q++) {
+    const uint32_t grp = gi_indirect_tile_group(ind, p->tile);
+    for (uint32_t q = ind->assign_start[grp]; q < ind->assign_start[grp + 1]; q++) {
         uint32_t vi = ind->assign[q];
         const gi_vpl *v = &ind->vpls.v[vi];
         gi_probe_vpl c;
@@ -105,7 +106,8 @@ static void gi__probe_indirect(gi_probe *p, const gi_frame *f, size_t i)
     p->mosaic_x = p->tile_i * ind->tile_w[0] + xi / ind->n; /* gi_view.c's mosaic */
     p->mosaic_y = p->tile_j * ind->tile_h[0] + yi / ind->m;
     p->weight = (float)(ind->n * ind->m);
-    p->tile_vpls = ind->assign_start[p->tile + 1] - ind->assign_start[p->tile];
+    const uint32_t grp = gi_indirect_tile_group(ind, p->tile);
+    p->tile_vpls = ind->assign_start[grp + 1] - ind->assign_start[grp];
     p->tile_e = gi__rgb(ind->split_e, p->split);
     p->combined = gi__rgb(ind->combined, gi_indirect_pixel(ind, p->x, p->y));
     p->filtered = gi__rgb(ind->filtered, i);

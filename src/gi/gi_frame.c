@@ -62,6 +62,9 @@ static const gi_stage_info gi__stages[GI_STAGE_COUNT] = {
     [GI_STAGE_COMBINE] = {"combine", 8, "Laine 2007 Sec. 3 step 8, Sec. 5.1",
                           "Combined: the tiles back in image layout; the n x m structured noise is visible (Fig. 4a)",
                           B(ACCUMULATED), B(COMBINED), gi_stage_combine},
+    [GI_STAGE_COMPENSATE] = {"compensate", 8, "survey Sec. 5.2; Novak 2011 screen-space bias compensation",
+                             "Compensated: the light the clamp removed, gathered from nearby pixels, added back",
+                             B(GBUFFER) | B(DIRECT) | B(COMBINED), B(COMBINED), gi_stage_compensate},
     [GI_STAGE_FILTER] = {"filter", 9, "Laine 2007 Sec. 3 step 9, Sec. 5.2, Fig. 5",
                          "Filtered: the geometry-aware n x m box filter (or the chosen filter) removes the pattern",
                          B(GBUFFER) | B(COMBINED), B(FILTERED), gi_stage_filter},
@@ -246,6 +249,10 @@ void gi_stage_compose(gi_frame *f)
     pf_jobs_parallel_for(f->jobs, gi__compose_rows, &ctx, f->height, 8);
 }
 
+/* Direct light is computed when the image shows it, and for the clamp
+ * compensation, which reflects it (--indirect-only --compensate). */
+static int gi__needs_direct(const gi_frame *f) { return f->show_direct || (f->indirect && f->ind.opt.compensate); }
+
 /* Runs stage `id` of the table and adds its time under the table's name. */
 static void gi__run(gi_frame *f, gi_stage_id id)
 {
@@ -293,6 +300,7 @@ static void gi__indirect_stages(gi_frame *f)
     gi__run(f, GI_STAGE_ASSIGN);
     gi__run(f, GI_STAGE_ACCUMULATE);
     gi__run(f, GI_STAGE_COMBINE);
+    if (f->ind.opt.compensate) gi__run(f, GI_STAGE_COMPENSATE);
     gi__run(f, GI_STAGE_FILTER);
     if (f->ind.scale > 1) gi__run(f, GI_STAGE_UPSAMPLE);
     if (f->ind.opt.temporal) gi__run(f, GI_STAGE_TEMPORAL);
@@ -303,7 +311,7 @@ void gi_frame_render_raytraced(gi_frame *f)
     memset(&f->times, 0, sizeof f->times);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     gi__run(f, GI_STAGE_GBUFFER_RAYTRACE);
-    if (f->show_direct) gi__run(f, GI_STAGE_DIRECT_RAYTRACE);
+    if (gi__needs_direct(f)) gi__run(f, GI_STAGE_DIRECT_RAYTRACE);
     gi__indirect_stages(f);
     gi__run(f, GI_STAGE_COMPOSE);
     pf_jobs_wait_all(f->jobs);
@@ -316,7 +324,7 @@ void gi_frame_render_raster(gi_frame *f)
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     gi__run(f, GI_STAGE_GBUFFER_RASTER);
     gi__run(f, GI_STAGE_GBUFFER_RESOLVE);
-    if (f->show_direct) {
+    if (gi__needs_direct(f)) {
         gi__run(f, GI_STAGE_SHADOW_MAPS);
         gi__run(f, GI_STAGE_AREA_MAPS);
         gi__run(f, GI_STAGE_DIRECT_SHADOWMAP);

@@ -18,6 +18,8 @@
  *   6. assign              gi_stage_assign             (VPLs to tiles: survivors keep theirs)
  *   7. accumulate          gi_stage_accumulate         (bounded geometry term, map lookups)
  *   8. combine             gi_stage_combine
+ *                          gi_stage_compensate         (--compensate only: screen-space estimate of the
+ *                                                       clamped-away light, survey Sec. 5.2)
  *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)
  *                          gi_stage_upsample           (--indirect-scale > 1 only: steps 5-9 ran at
  *                                                       reduced resolution; geometry-aware upsampling)
@@ -99,6 +101,7 @@ typedef enum gi_stage_id {
     GI_STAGE_ASSIGN,
     GI_STAGE_ACCUMULATE,
     GI_STAGE_COMBINE,
+    GI_STAGE_COMPENSATE,
     GI_STAGE_FILTER,
     GI_STAGE_UPSAMPLE,
     GI_STAGE_TEMPORAL,

@@ -1,5 +1,6 @@
 /* gi_indirect: the many-light stages of a frame (see gi_indirect.h). */
 #include "gi_indirect.h"
+#include "pf_random.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,6 +80,15 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->split_e = pf_arena_calloc(mem, 3 * px, sizeof(float));
     ind->combined = pf_arena_calloc(mem, 3 * px, sizeof(float));
     ind->filtered = pf_arena_calloc(mem, 3 * (size_t)f->width * f->height, sizeof(float));
+    if (o.compensate) {
+        if (!o.compensate_taps) o.compensate_taps = 32;
+        if (o.compensate_taps > 1024)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "clamp compensation with %u taps: expected 1..1024",
+                                o.compensate_taps);
+        ind->opt.compensate_taps = o.compensate_taps;
+        if (!(ind->comp = pf_arena_calloc(mem, 3 * px, sizeof(float))))
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the clamp compensation");
+    }
     if (o.temporal) {
         size_t fpx = (size_t)f->width * f->height;
         for (int b = 0; b < 2; b++) {
@@ -719,6 +729,106 @@ static void gi__combine_row(void *p, uint32_t y, uint32_t worker)
 }
 
 void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_row, f, f->ind.h, 8); }
+
+/* ---------------------------------------------------------- 8b. compensate */
+
+/* Screen-space compensation of the bounded geometry term's bias (the
+ * survey's Sec. 5.2 after Novak, Engelhardt and Dachsbacher 2011; one step
+ * of their recursion, T_r applied once). The clamp removes, at receiver x,
+ * the residual transport
+ *   E_r(x) = integral over surfaces y of L(y) G_r(x, y) V dA_y,
+ *   G_r = max(G - b, 0),  L(y) = direct + albedo / pi x bounded indirect,
+ * the light y reflects (emission excluded: the direct light already
+ * carries it). G_r > 0 needs |x - y| < 1 / sqrt(b), a disc of R = r_b /
+ * (pixel size at x's depth) pixels around x on screen, so the integral is
+ * estimated from the image itself: K taps on a Vogel spiral over that disc
+ * (equal-area, rotated per pixel by a stable random angle),
+ *   E_r ~ (pi R^2 / K) sum_k L(y_k) G_r(x, y_k) a(y_k),
+ * with a(y) the surface area pixel y covers (its footprint at its depth over
+ * |cos| of its normal to the view ray, at most 10x the frontal one). What
+ * the screen cannot show is missing (surfaces off screen or hidden behind
+ * others), visibility between x and y is not tested, and the noise of the
+ * K taps is left to the filter that follows. The residual is written to
+ * `comp` and then added to `combined`, so every tap reads the bounded
+ * image. */
+typedef struct gi__comp_ctx {
+    gi_frame *f;
+    float th;   /* tan(fov / 2) */
+    float rb;   /* 1 / sqrt(b), world units */
+} gi__comp_ctx;
+
+static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    const gi__comp_ctx *c = p;
+    gi_frame *f = c->f;
+    gi_indirect *ind = &f->ind;
+    const rs_gbuffer *g = gi__indirect_gbuffer(f), *fg = &f->gbuf;
+    const uint32_t w = ind->w, h = ind->h, s = ind->scale, K = ind->opt.compensate_taps;
+    const pf_camera *cam = &f->camera;
+    const float b = ind->b, pix = 2.0f * c->th / (float)h; /* a pixel's size at depth 1 */
+    for (uint32_t x = 0; x < w; x++) {
+        size_t i = (size_t)y * w + x;
+        float *out = ind->comp + 3 * i;
+        out[0] = out[1] = out[2] = 0.0f;
+        if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
+        pf_vec3 px = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nx = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
+        float zx = pf_v3_dot(pf_v3_sub(px, cam->eye), cam->forward);
+        if (!(zx > 0.0f)) continue;
+        float R = c->rb / (zx * pix); /* the disc's radius in pixels */
+        if (!(R >= 1.0f)) continue;
+        if (R > 128.0f) R = 128.0f;
+        const float rot = 2.0f * PF_PI * pf_random((uint32_t)i, 0, 0x434f4d50u, 0);
+        float acc[3] = {0, 0, 0};
+        for (uint32_t k = 0; k < K; k++) {
+            float rr = R * sqrtf(((float)k + 0.5f) / (float)K), ang = rot + 2.39996323f * (float)k; /* golden angle */
+            int tx = (int)x + (int)lrintf(rr * cosf(ang)), ty = (int)y + (int)lrintf(rr * sinf(ang));
+            if (tx < 0 || ty < 0 || tx >= (int)w || ty >= (int)h) continue;
+            size_t j = (size_t)ty * w + (size_t)tx;
+            if (j == i || g->prim[j] == RS_GBUFFER_EMPTY) continue;
+            pf_vec3 py = pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), ny = pf_v3(g->nrm_x[j], g->nrm_y[j], g->nrm_z[j]);
+            pf_vec3 d = pf_v3_sub(py, px);
+            float r2 = pf_v3_dot(d, d);
+            if (!(r2 > 0.0f)) continue;
+            float cx = pf_v3_dot(nx, d), cy = -pf_v3_dot(ny, d);
+            if (!(cx > 0.0f) || !(cy > 0.0f)) continue;
+            float G = cx * cy / (r2 * r2); /* cos cos / r^2 with unnormalised d: / r^4 */
+            if (!(G > b)) continue;
+            /* the area pixel j covers: its footprint at its depth over the cosine to the view ray */
+            pf_vec3 v = pf_v3_sub(py, cam->eye);
+            float zy = pf_v3_dot(v, cam->forward), vl = sqrtf(pf_v3_dot(v, v));
+            float cv = fabsf(pf_v3_dot(ny, v)) / vl;
+            if (cv < 0.1f) cv = 0.1f;
+            float a = (zy * pix) * (zy * pix) / cv;
+            /* L(y): the frame pixel the sample is (s X, s Y) */
+            size_t fj = (size_t)ty * s * f->width + (size_t)tx * s;
+            float wgt = (G - b) * a;
+            for (int ch = 0; ch < 3; ch++) {
+                const float *alb = ch == 0 ? fg->alb_r : ch == 1 ? fg->alb_g : fg->alb_b;
+                float L = f->direct[3 * fj + ch] + alb[fj] * PF_INV_PI * ind->combined[3 * j + ch];
+                acc[ch] += L * wgt;
+            }
+        }
+        float area = PF_PI * R * R / (float)K;
+        out[0] = acc[0] * area, out[1] = acc[1] * area, out[2] = acc[2] * area;
+    }
+}
+
+static void gi__compensate_add(void *p, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_indirect *ind = &((gi_frame *)p)->ind;
+    for (size_t i = (size_t)y * ind->w * 3; i < (size_t)(y + 1) * ind->w * 3; i++) ind->combined[i] += ind->comp[i];
+}
+
+void gi_stage_compensate(gi_frame *f)
+{
+    gi_indirect *ind = &f->ind;
+    if (!ind->opt.compensate || !(ind->b < INFINITY)) return;
+    gi__comp_ctx c = {f, tanf(0.5f * f->camera.yfov), 1.0f / sqrtf(ind->b)};
+    pf_jobs_parallel_for(f->jobs, gi__compensate_row, &c, ind->h, 4);
+    pf_jobs_parallel_for(f->jobs, gi__compensate_add, f, ind->h, 16);
+}
 
 /* ---------------------------------------------------------- 9. filter */
 

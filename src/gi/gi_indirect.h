@@ -86,6 +86,9 @@ typedef struct gi_indirect_options {
     uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
     gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
     int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
+    int compensate;              /* 1: screen-space compensation of the energy the clamp removes
+                                    (gi_stage_compensate; the survey's Sec. 5.2, after Novak 2011) */
+    uint32_t compensate_taps;    /* samples per pixel (0: 32) */
     uint32_t temporal;           /* 0: off; N >= 2: temporal accumulation of the filtered irradiance over
                                     up to N frames, with reprojection (gi_stage_temporal; beyond Laine
                                     2007) and the tiles' VPL groups rotated every frame */
@@ -149,6 +152,7 @@ typedef struct gi_indirect {
     uint32_t *hist_prim[2];
     pf_camera hist_camera;
     int hist_cur;             /* which of [2] holds last frame's */
+    float *comp;              /* opt.compensate: the residual irradiance, w x h RGB */
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */
@@ -185,6 +189,9 @@ void gi_stage_assign(struct gi_frame *f);
 void gi_stage_accumulate(struct gi_frame *f);
 void gi_stage_combine(struct gi_frame *f);
 void gi_stage_filter(struct gi_frame *f);
+/* opt.compensate: adds the screen-space estimate of the clamped-away
+ * irradiance to `combined` (between combine and filter). */
+void gi_stage_compensate(struct gi_frame *f);
 /* scale > 1: filtered_low to the frame's size (a no-op at scale 1). */
 void gi_stage_upsample(struct gi_frame *f);
 /* opt.temporal > 0: filtered blended with last frame's reprojected output. */

@@ -70,7 +70,7 @@ static void cmp__usage(FILE *f)
           "                      [--track X,Y ...] [--tracked K] [--plot OUT.svg] [--table OUT.md]\n"
           "                      [--exposure EV] [--depth-tolerance F] [--tid-tonemapped]\n"
           "\n"
-          "Two images: RMSE and MAE over linear RGB, and |E|, the mean absolute difference of\n"
+          "Two images: RMSE and MAE over linear RGB; |E|, the mean absolute difference of\n"
           "Reinhard-tone-mapped luminance Y/(1+Y) (Rec. 709 Y) over all pixels.\n"
           "\n"
           "Sequences: folders of frame_0000.pfm, frame_0001.pfm, ... For each method, against\n"
@@ -250,6 +250,11 @@ static int cmp__images(const cmp__args *a)
     printf("MAE        %.6g\n", gi_metrics_mae(img, ref, n));
     printf("|E|        %.6g   (mean |T(Y) - T(Y_ref)| over all %zu pixels, T(Y) = Y/(1+Y))\n",
            gi_metrics_abs_error_image(img, ref, n, a->exposure_scale), n);
+    size_t counted = 0;
+    double mre = gi_metrics_mean_relative_error(img, ref, n, GI_METRICS_MRE_FLOOR, &counted);
+    printf("MRE        %.6g   (mean |Y - Y_ref| / Y_ref over the %zu pixels with Y_ref > %g)\n", mre, counted,
+           (double)GI_METRICS_MRE_FLOOR);
+    printf("energy     %.6g   (sum of Y over sum of Y_ref)\n", gi_metrics_energy_ratio(img, ref, n));
     status = 0;
 done:
     free(img);

@@ -67,6 +67,28 @@ double gi_metrics_mae(const float *rgb, const float *ref, size_t pixel_count)
     return s / (3.0 * (double)pixel_count);
 }
 
+double gi_metrics_mean_relative_error(const float *rgb, const float *ref, size_t pixel_count, float floor,
+                                      size_t *counted)
+{
+    double s = 0.0;
+    size_t n = 0;
+    for (size_t i = 0; i < pixel_count; i++) {
+        double yr = gi_metrics_luminance(ref + 3 * i), y = gi_metrics_luminance(rgb + 3 * i);
+        if (!(yr > floor)) continue;
+        s += fabs(y - yr) / yr;
+        n++;
+    }
+    if (counted) *counted = n;
+    return n ? s / (double)n : 0.0;
+}
+
+double gi_metrics_energy_ratio(const float *rgb, const float *ref, size_t pixel_count)
+{
+    double a = 0.0, b = 0.0;
+    for (size_t i = 0; i < pixel_count; i++) a += gi_metrics_luminance(rgb + 3 * i), b += gi_metrics_luminance(ref + 3 * i);
+    return b > 0.0 ? a / b : NAN;
+}
+
 double gi_metrics_abs_error_image(const float *rgb, const float *ref, size_t pixel_count, float exposure_scale)
 {
     if (pixel_count == 0) return 0.0;

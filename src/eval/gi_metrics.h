@@ -93,6 +93,16 @@ float gi_metrics_display_luminance(const float *rgb, float exposure_scale);
  * channels of linear RGB. 0 for pixel_count 0. */
 double gi_metrics_rmse(const float *rgb, const float *ref, size_t pixel_count);
 double gi_metrics_mae(const float *rgb, const float *ref, size_t pixel_count);
+/* The mean relative error per pixel the quality targets use (issue 18):
+ * mean over the pixels whose reference luminance Y_ref exceeds `floor` of
+ * |Y - Y_ref| / Y_ref (Rec. 709 luminance of linear RGB); *counted (may be
+ * NULL) gets how many pixels took part. 0 when none does. */
+#define GI_METRICS_MRE_FLOOR 1e-4f
+double gi_metrics_mean_relative_error(const float *rgb, const float *ref, size_t pixel_count, float floor,
+                                      size_t *counted);
+/* Energy ratio: the sum of luminance of rgb over that of ref (NaN when the
+ * reference is black). */
+double gi_metrics_energy_ratio(const float *rgb, const float *ref, size_t pixel_count);
 /* Mean over all pixels of |T(Y) - T(Y_ref)| (Hedman's |E| for one frame,
  * every pixel tracked). */
 double gi_metrics_abs_error_image(const float *rgb, const float *ref, size_t pixel_count, float exposure_scale);

@@ -1,0 +1,810 @@
+/* softgi_api: the public C API (include/softgi/softgi.h) over the modules
+ * `softgi render` uses, so that a frame rendered here is, bit for bit, the
+ * frame the program renders with the same options.
+ *
+ * The set-up follows src/app/app_scene.c and src/app/app_render.c step by
+ * step (the program's layer, which the library cannot link):
+ *
+ *   softgi_create       options checked, ISA resolved (pf_isa), jobs started (pf_jobs)
+ *   softgi_load_scene   pf_gltf_load with the memory budget -> the file's camera, or
+ *                       app_defaults_camera -> pf_scene_validate -> app_defaults_light
+ *                       when nothing lights the scene -> the frame's budget
+ *                       (app_budget_check) -> pf_rt_create -> rs_context_create
+ *   softgi_set_camera   pf_camera_look_at, as --camera
+ *   softgi_set_lights   the scene's lights replaced, as --light
+ *   softgi_render       gi_frame_init + gi_frame_enable_indirect at the first frame
+ *                       (app_frame_init), then gi_frame_render_raster (or _raytraced)
+ *
+ * Duplicated from src/app/app_scene.c until it is factored below the
+ * program (each marked "as app_scene.c" below): the automatic camera's and
+ * light's round trip through their --camera / --light text (the program
+ * prints them with 5 significant digits, or 9, and parses them back, so the
+ * copied line gives the same image; the library must round the same way to
+ * give the same image), app__has_emitters, the frame's budget check, and the
+ * many-light options with their defaults. The automatic camera and light
+ * themselves are app_defaults.c, compiled into this library unchanged.
+ *
+ * Deviation from the program: the camera and lights are set after the
+ * scene is loaded (the program applies --camera / --light while loading).
+ * The only difference that could make is the automatic light, which the
+ * program places at the given camera; softgi_set_camera therefore re-places
+ * an automatic light at the new camera, which gives the program's scene. */
+#include "softgi/softgi.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <xmmintrin.h>
+#endif
+
+#include "app_defaults.h"
+#include "gi_frame.h"
+#include "gi_indirect.h"
+#include "pf_budget.h"
+#include "pf_fpenv.h"
+#include "pf_gltf.h"
+#include "pf_imageio.h"
+#include "pf_isa.h"
+#include "pf_jobs.h"
+#include "pf_rt.h"
+#include "pf_timer.h"
+#include "rs_raster.h"
+
+#ifndef SOFTGI_VERSION
+#define SOFTGI_VERSION "unknown"
+#endif
+
+/* The codes are the program's, value for value. */
+_Static_assert(SOFTGI_OK == (int)PF_OK && SOFTGI_ERR_IO == (int)PF_ERR_IO &&
+                   SOFTGI_ERR_ARGUMENT == (int)PF_ERR_ARGUMENT && SOFTGI_ERR_ARGUMENT + 1 == (int)PF_ERR_COUNT &&
+                   SOFTGI_ERR_OUT_OF_MEMORY == (int)PF_ERR_OUT_OF_MEMORY && SOFTGI_ERR_EMBREE == (int)PF_ERR_EMBREE,
+               "softgi_result must equal pf_result value for value");
+_Static_assert(sizeof(((softgi_error *)0)->message) == sizeof(((pf_error *)0)->message), "message sizes");
+
+/* The built-in scene (scenes/cornell-box, embedded by CMake). */
+extern const unsigned char softgi_api_default_scene[];
+extern const unsigned long softgi_api_default_scene_size;
+
+/* The program's limits on the same values (src/app/pf_cli.c). */
+#define API__MAX_SIDE 16384u
+#define API__MAX_THREADS 256u
+#define API__MAX_VPLS (1u << 20)
+#define API__MAX_BOUNCES 64u
+#define API__MAX_PARAMS 32u
+#define API__MAX_LIGHTS 64u /* PF_CLI_MAX_LIGHTS */
+#define API__MIN_MEMORY (64ull << 20)
+
+struct softgi_context {
+    /* options (softgi_create) */
+    uint32_t width, height, threads, flags;
+    pf_isa isa;
+    uint64_t max_memory;
+    const gi_vpl_method *method;
+    uint32_t vpls, bounces;
+    uint32_t param_count;
+    char *params[API__MAX_PARAMS]; /* owned copies: gi_params keeps pointers */
+    pf_jobs *jobs;
+    /* scene lifetime (softgi_load_scene) */
+    int loaded;
+    pf_scene scene;
+    pf_camera camera;
+    int auto_camera, auto_light;
+    pf_rt *rt;
+    rs_context *raster;
+    pf_stage_times load_times;
+    /* frame lifetime (the first softgi_render after a load or a change of the light count) */
+    int frame_ready;
+    gi_frame frame;
+    uint32_t frames;
+    float exposure;
+};
+
+/* ---------------------------------------------------------------- small helpers */
+
+static softgi_result api__fail(softgi_error *err, const pf_error *e)
+{
+    if (err) {
+        err->code = (softgi_result)e->code;
+        memcpy(err->message, e->message, sizeof err->message);
+    }
+    return (softgi_result)e->code;
+}
+
+static softgi_result api__error(softgi_error *err, softgi_result code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static softgi_result api__error(softgi_error *err, softgi_result code, const char *fmt, ...)
+{
+    if (err) {
+        err->code = code;
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err->message, sizeof err->message, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+static void api__ok(softgi_error *err)
+{
+    if (err) {
+        err->code = SOFTGI_OK;
+        err->message[0] = 0;
+    }
+}
+
+/* The floating-point environment every softgi thread computes with
+ * (pf_fpenv.h), on the caller's thread for one call, then the caller's own
+ * back: the calling thread runs jobs too, and FTZ/DAZ are part of the
+ * determinism contract, but a library must not leave them changed. */
+typedef struct api__fpenv {
+    unsigned int csr;
+} api__fpenv;
+
+static api__fpenv api__fpenv_enter(void)
+{
+    api__fpenv s = {0};
+#if defined(__x86_64__) || defined(__i386__)
+    s.csr = _mm_getcsr();
+#endif
+    pf_fpenv_set();
+    return s;
+}
+
+static void api__fpenv_leave(api__fpenv s)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    _mm_setcsr(s.csr);
+#else
+    (void)s;
+#endif
+}
+
+const char *softgi_result_name(softgi_result code) { return pf_result_name((pf_result)code); }
+
+const char *softgi_version(void) { return SOFTGI_VERSION; }
+
+const char *softgi_method_names(void) { return gi_vpl_method_names(); }
+
+/* ---------------------------------------------------------------- create, destroy */
+
+static void api__scene_free(softgi_context *c)
+{
+    if (c->frame_ready) gi_frame_free(&c->frame);
+    c->frame_ready = 0;
+    rs_context_destroy(c->raster);
+    c->raster = NULL;
+    pf_rt_destroy(c->rt);
+    c->rt = NULL;
+    if (c->loaded) pf_scene_free(&c->scene);
+    memset(&c->scene, 0, sizeof c->scene);
+    c->loaded = 0;
+    c->auto_camera = c->auto_light = 0;
+    c->frames = 0;
+    memset(&c->load_times, 0, sizeof c->load_times);
+}
+
+void softgi_destroy(softgi_context *c)
+{
+    if (!c) return;
+    api__scene_free(c);
+    if (c->jobs) pf_jobs_destroy(c->jobs);
+    for (uint32_t i = 0; i < c->param_count; i++) free(c->params[i]);
+    free(c);
+}
+
+/* The method's own checks of its parameters (its create), now rather
+ * than at the first frame. */
+static pf_result api__check_params(const softgi_context *c, pf_error *e)
+{
+    gi_params p;
+    memset(&p, 0, sizeof p);
+    for (uint32_t i = 0; i < c->param_count; i++) {
+        pf_result r = gi_params_add(&p, c->params[i], e);
+        if (r != PF_OK) return r;
+    }
+    void *state = NULL;
+    pf_result r = c->method->create(&state, &p, e);
+    if (r == PF_OK && c->method->destroy) c->method->destroy(state);
+    return r;
+}
+
+softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
+{
+    static const softgi_desc defaults;
+    const softgi_desc *d = desc ? desc : &defaults;
+    if ((d->width == 0) != (d->height == 0)) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: width %u x height %u: give both (1..%u) or neither "
+                   "(640 x 480)", d->width, d->height, API__MAX_SIDE);
+        return NULL;
+    }
+    if (d->width > API__MAX_SIDE || d->height > API__MAX_SIDE) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: width %u x height %u: each must be 1..%u", d->width,
+                   d->height, API__MAX_SIDE);
+        return NULL;
+    }
+    if (d->threads > API__MAX_THREADS) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: threads %u: must be 1..%u (0: the number of cores)",
+                   d->threads, API__MAX_THREADS);
+        return NULL;
+    }
+    if (d->vpls > API__MAX_VPLS || d->bounces > API__MAX_BOUNCES) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: vpls %u, bounces %u: must be 1..%u and 1..%u (0: default)",
+                   d->vpls, d->bounces, API__MAX_VPLS, API__MAX_BOUNCES);
+        return NULL;
+    }
+    if (d->max_memory && d->max_memory < API__MIN_MEMORY) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: max_memory %llu bytes: at least 64 MiB (0: half of this "
+                   "machine's memory)", (unsigned long long)d->max_memory);
+        return NULL;
+    }
+    if (d->flags & ~(SOFTGI_DIRECT_ONLY | SOFTGI_INDIRECT_ONLY | SOFTGI_RAYTRACE)) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: flags 0x%x: unknown bits", d->flags);
+        return NULL;
+    }
+    if ((d->flags & SOFTGI_DIRECT_ONLY) && (d->flags & SOFTGI_INDIRECT_ONLY)) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: SOFTGI_DIRECT_ONLY and SOFTGI_INDIRECT_ONLY exclude each "
+                   "other");
+        return NULL;
+    }
+    if (d->param_count > API__MAX_PARAMS || (d->param_count && !d->params)) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: param_count %u: at most %u, with params not NULL",
+                   d->param_count, API__MAX_PARAMS);
+        return NULL;
+    }
+    const char *method = d->method ? d->method : "ir";
+    const gi_vpl_method *m = gi_vpl_method_find(method);
+    if (!m) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: method '%s': softgi knows %s", method,
+                   gi_vpl_method_names());
+        return NULL;
+    }
+    pf_error e;
+    pf_isa isa = PF_ISA_AUTO;
+    if (d->isa && pf_isa_parse(d->isa, &isa, &e) != PF_OK) {
+        api__fail(err, &e);
+        return NULL;
+    }
+    pf_isa resolved;
+    if (pf_isa_resolve(isa, &resolved, &e) != PF_OK) {
+        api__fail(err, &e);
+        return NULL;
+    }
+
+    softgi_context *c = calloc(1, sizeof *c);
+    if (!c) {
+        api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory creating a softgi context");
+        return NULL;
+    }
+    c->width = d->width ? d->width : 640;
+    c->height = d->height ? d->height : 480;
+    c->threads = d->threads ? d->threads : pf_jobs_core_count();
+    c->flags = d->flags;
+    c->isa = resolved;
+    c->max_memory = d->max_memory;
+    c->method = m;
+    c->vpls = d->vpls;
+    c->bounces = d->bounces;
+    for (uint32_t i = 0; i < d->param_count; i++) {
+        if (!d->params[i]) {
+            softgi_destroy(c);
+            api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: params[%u] is NULL", i);
+            return NULL;
+        }
+        size_t len = strlen(d->params[i]) + 1;
+        if (!(c->params[i] = malloc(len))) {
+            softgi_destroy(c);
+            api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory copying the method's parameters");
+            return NULL;
+        }
+        memcpy(c->params[i], d->params[i], len);
+        c->param_count = i + 1;
+    }
+    if (!(c->flags & SOFTGI_DIRECT_ONLY) && api__check_params(c, &e) != PF_OK) {
+        softgi_destroy(c);
+        api__fail(err, &e);
+        return NULL;
+    }
+    if (!(c->jobs = pf_jobs_create(c->threads))) {
+        api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "cannot start %u threads", c->threads);
+        softgi_destroy(c);
+        return NULL;
+    }
+    api__ok(err);
+    return c;
+}
+
+/* ---------------------------------------------------------------- the scene */
+
+/* As app_scene.c: whether any triangle's material emits (an area light). */
+static int api__has_emitters(const pf_scene *scene)
+{
+    for (uint32_t t = 0; t < scene->tri_count; t++) {
+        const float *e = scene->materials[scene->tri_material[t]].emission;
+        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) return 1;
+    }
+    return 0;
+}
+
+/* One number as the program prints it (printf `fmt` with `digits`) and
+ * parses it back (strtof, pf_cli.c). */
+static float api__text_round(const char *fmt, int digits, float v)
+{
+    char buf[64];
+    snprintf(buf, sizeof buf, fmt, digits, (double)v);
+    return strtof(buf, NULL);
+}
+
+/* As app_scene.c (app__default_camera): app_defaults_camera's camera as the
+ * program prints it (5 significant digits, or 9 when 5 merge eye and
+ * target) and parses it back, with pf_cli_parse_camera's checks. */
+static pf_result api__default_camera(const pf_scene *scene, pf_camera *camera, pf_error *err)
+{
+    app_default_camera dc;
+    app_defaults_camera(&dc, scene);
+    pf_result r = PF_OK;
+    for (int digits = 5; digits <= 9; digits += 4) {
+        pf_vec3 eye = pf_v3(api__text_round("%.*g", digits, dc.eye.x), api__text_round("%.*g", digits, dc.eye.y),
+                            api__text_round("%.*g", digits, dc.eye.z));
+        pf_vec3 target =
+            pf_v3(api__text_round("%.*g", digits, dc.target.x), api__text_round("%.*g", digits, dc.target.y),
+                  api__text_round("%.*g", digits, dc.target.z));
+        float fovy = api__text_round("%.*g", 6, dc.fovy_deg); /* "%g" */
+        if (!pf_scene_coord_ok(eye) || !pf_scene_coord_ok(target) || !(fovy > 0.0f && fovy < 180.0f) ||
+            (eye.x == target.x && eye.y == target.y && eye.z == target.z))
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "the automatic camera is not a valid camera");
+        else r = pf_camera_look_at(camera, eye, target, pf_radians(fovy), err);
+        if (r == PF_OK) break;
+    }
+    if (r != PF_OK) return r;
+    snprintf(camera->name, sizeof camera->name, "default");
+    return PF_OK;
+}
+
+/* As app_scene.c (app__default_light): app_defaults_light's light as the
+ * program prints it ("point:x,y,z:1,1,1:I", 5 digits unless they move the
+ * light by more than 1% of the median distance, then 9; I with 3) and
+ * parses it back (pf_cli_parse_light's checks). */
+static pf_result api__default_light(const softgi_context *c, const pf_camera *camera, pf_light *out,
+                                    pf_error *err)
+{
+    pf_light l;
+    float median;
+    app_defaults_light(&l, &median, &c->scene, camera, c->width, c->height);
+    pf_light parsed;
+    pf_result r = PF_OK;
+    for (int digits = 5; digits <= 9; digits += 4) {
+        memset(&parsed, 0, sizeof parsed);
+        parsed.type = PF_LIGHT_POINT;
+        parsed.position = pf_v3(api__text_round("%.*g", digits, l.position.x),
+                                api__text_round("%.*g", digits, l.position.y),
+                                api__text_round("%.*g", digits, l.position.z));
+        parsed.color = pf_v3(1.0f, 1.0f, 1.0f);
+        parsed.intensity = api__text_round("%.*g", 3, l.intensity);
+        if (!pf_scene_coord_ok(parsed.position) || !isfinite(parsed.intensity) || !(parsed.intensity >= 0.0f) ||
+            (double)parsed.intensity > PF_MAX_RADIANCE) {
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "the automatic light is not a valid light");
+            continue;
+        }
+        r = PF_OK;
+        pf_vec3 moved = pf_v3_sub(parsed.position, l.position);
+        if (pf_v3_max_comp(pf_v3(fabsf(moved.x), fabsf(moved.y), fabsf(moved.z))) <= 0.01f * median) break;
+    }
+    if (r != PF_OK) return r;
+    *out = parsed;
+    snprintf(out->name, sizeof out->name, "default");
+    return PF_OK;
+}
+
+/* As app_scene.c (app_budget_check for a frame with indirect light): the
+ * scene as loaded plus the frame the context will allocate, before either
+ * the Embree scene or the frame is built. */
+static pf_result api__budget_check(const softgi_context *c, pf_error *err)
+{
+    pf_budget b;
+    pf_budget_init(&b, c->max_memory);
+    pf_result r = pf_budget_take(&b, c->scene.memory_bytes, "the scene", err);
+    if (r != PF_OK) return r;
+    const uint32_t width = c->width, height = c->height;
+    uint32_t vpls = !(c->flags & SOFTGI_DIRECT_ONLY) ? (c->vpls ? c->vpls : 256) : 0;
+    uint32_t area = api__has_emitters(&c->scene) ? GI_AREA_DEFAULT_POINTS : 0;
+    char what[160];
+    snprintf(what, sizeof what, "the frame (%ux%u, %u lights with shadow maps of %u^2, %u VPLs)", width, height,
+             c->scene.light_count, RS_SHADOW_DEFAULT_SIZE, vpls);
+    uint64_t all = gi_frame_memory_estimate(&c->scene, width, height, 0, vpls, 0, area);
+    r = pf_budget_take(&b, all, what, err);
+    if (r != PF_OK) { /* say which knob helps */
+        uint64_t no_vpls = gi_frame_memory_estimate(&c->scene, width, height, 0, 0, 0, area);
+        uint64_t no_shadows = all - gi_frame_memory_estimate(&c->scene, 0, 0, 0, 0, 0, 0);
+        const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs"
+                           : all - no_shadows > all / 2 ? "use fewer lights"
+                                                        : "use a smaller image";
+        size_t n = strlen(err->message);
+        snprintf(err->message + n, sizeof err->message - n, "; %s", hint);
+    }
+    return r;
+}
+
+/* The scene of softgi_load_scene, before Embree: load, camera, validate,
+ * light (app_scene_load's order). */
+static pf_result api__scene_load(softgi_context *c, const char *path, pf_error *e)
+{
+    pf_gltf_options go = {.max_memory = c->max_memory};
+    pf_result r = path ? pf_gltf_load(&c->scene, path, &go, e)
+                       : pf_gltf_load_memory(&c->scene, softgi_api_default_scene, softgi_api_default_scene_size,
+                                             NULL, "embedded scenes/cornell-box", &go, e);
+    if (r != PF_OK) return r;
+    c->loaded = 1;
+    if (c->scene.camera_count > 0) c->camera = c->scene.cameras[0];
+    if ((r = pf_scene_validate(&c->scene, e)) != PF_OK) return r;
+    if (c->scene.camera_count == 0) {
+        if ((r = api__default_camera(&c->scene, &c->camera, e)) != PF_OK) return r;
+        c->auto_camera = 1;
+    }
+    /* emissive triangles are lights too (gi_area.h) */
+    if (c->scene.light_count == 0 && !api__has_emitters(&c->scene)) {
+        pf_light l;
+        if ((r = api__default_light(c, &c->camera, &l, e)) != PF_OK) return r;
+        if ((r = pf_scene_add_light(&c->scene, &l, e)) != PF_OK) return r;
+        c->auto_light = 1;
+    }
+    return api__budget_check(c, e);
+}
+
+softgi_result softgi_load_scene(softgi_context *c, const char *path, softgi_error *err)
+{
+    if (!c) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_load_scene: the context is NULL");
+    api__fpenv env = api__fpenv_enter();
+    api__scene_free(c);
+    pf_error e;
+    double t0 = pf_time_now();
+    pf_result r = api__scene_load(c, path, &e);
+    pf_stage_add(&c->load_times, "load scene", (pf_time_now() - t0) * 1e3);
+    if (r == PF_OK) {
+        t0 = pf_time_now();
+        r = pf_rt_create(&c->rt, &c->scene, c->isa, c->threads, &e);
+        pf_stage_add(&c->load_times, "embree build", (pf_time_now() - t0) * 1e3);
+    }
+    if (r == PF_OK && !(c->flags & SOFTGI_RAYTRACE)) {
+        t0 = pf_time_now();
+        r = rs_context_create(&c->raster, &c->scene, c->jobs, rs_simd_for_isa(c->isa), &e);
+        pf_stage_add(&c->load_times, "raster setup", (pf_time_now() - t0) * 1e3);
+    }
+    api__fpenv_leave(env);
+    if (r != PF_OK) {
+        api__scene_free(c);
+        return api__fail(err, &e);
+    }
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+softgi_result softgi_set_camera(softgi_context *c, const softgi_camera *cam, softgi_error *err)
+{
+    if (!c || !cam) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_camera: the context or camera is NULL");
+    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_camera: no scene loaded");
+    /* pf_cli_parse_camera's checks */
+    pf_vec3 eye = pf_v3(cam->eye[0], cam->eye[1], cam->eye[2]);
+    pf_vec3 target = pf_v3(cam->target[0], cam->target[1], cam->target[2]);
+    if (!pf_scene_coord_ok(eye) || !pf_scene_coord_ok(target))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_camera: coordinates must be finite and lie within +-%g",
+                          (double)PF_SCENE_MAX_COORD);
+    if (!(cam->fovy_deg > 0.0f && cam->fovy_deg < 180.0f))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_camera: fovy_deg %g must be in (0, 180) degrees",
+                          (double)cam->fovy_deg);
+    if (eye.x == target.x && eye.y == target.y && eye.z == target.z)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_camera: eye and target must differ");
+    pf_camera next;
+    pf_error e;
+    if (pf_camera_look_at(&next, eye, target, pf_radians(cam->fovy_deg), &e) != PF_OK) return api__fail(err, &e);
+    if (c->auto_light) { /* the program places its light at the camera it renders with */
+        api__fpenv env = api__fpenv_enter();
+        pf_light l;
+        pf_result r = api__default_light(c, &next, &l, &e);
+        api__fpenv_leave(env);
+        if (r != PF_OK) return api__fail(err, &e);
+        c->scene.lights[0] = l;
+    }
+    c->camera = next;
+    c->auto_camera = 0;
+    if (c->frame_ready) c->frame.camera = next;
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+/* One API light as pf_cli_parse_light makes it from the same numbers. */
+static softgi_result api__light(const softgi_light *in, uint32_t i, pf_light *out, softgi_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (in->type != SOFTGI_LIGHT_POINT && in->type != SOFTGI_LIGHT_SPOT && in->type != SOFTGI_LIGHT_DIRECTIONAL)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: type %d is not point, spot or "
+                          "directional", i, (int)in->type);
+    if (in->type != SOFTGI_LIGHT_DIRECTIONAL) {
+        out->position = pf_v3(in->position[0], in->position[1], in->position[2]);
+        if (!pf_scene_coord_ok(out->position))
+            return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: position must be finite and lie "
+                              "within +-%g", i, (double)PF_SCENE_MAX_COORD);
+    }
+    if (in->type != SOFTGI_LIGHT_POINT) {
+        /* normalised in double: (1e38, 1e38, 0) overflows a float length */
+        const float *d = in->direction;
+        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+        if (!(len > 0.0) || !isfinite(len))
+            return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: direction must be finite and "
+                              "not zero", i);
+        out->direction = pf_v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
+    }
+    if (in->type == SOFTGI_LIGHT_SPOT) {
+        if (!(in->inner_deg >= 0.0f && in->inner_deg < in->outer_deg && in->outer_deg <= 90.0f))
+            return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: need 0 <= inner_deg < outer_deg "
+                              "<= 90", i);
+        out->inner_cone = pf_radians(in->inner_deg);
+        out->outer_cone = pf_radians(in->outer_deg);
+    }
+    const float *col = in->color;
+    if (!isfinite(col[0]) || !isfinite(col[1]) || !isfinite(col[2]) || !isfinite(in->intensity) || col[0] < 0 ||
+        col[1] < 0 || col[2] < 0 || in->intensity < 0)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: colour and intensity must be finite "
+                          "and >= 0", i);
+    double cmax = fmax(col[0], fmax(col[1], col[2]));
+    if (cmax * in->intensity > PF_MAX_RADIANCE)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: light %u: intensity x colour must be at most %g",
+                          i, (double)PF_MAX_RADIANCE);
+    out->type = in->type == SOFTGI_LIGHT_POINT  ? PF_LIGHT_POINT
+                : in->type == SOFTGI_LIGHT_SPOT ? PF_LIGHT_SPOT
+                                                : PF_LIGHT_DIRECTIONAL;
+    out->color = pf_v3(col[0], col[1], col[2]);
+    out->intensity = in->intensity;
+    snprintf(out->name, sizeof out->name, "%s", in->type == SOFTGI_LIGHT_POINT  ? "cli-point"
+                                                : in->type == SOFTGI_LIGHT_SPOT ? "cli-spot"
+                                                                                : "cli-dir");
+    return SOFTGI_OK;
+}
+
+softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, uint32_t count, softgi_error *err)
+{
+    if (!c || !lights) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
+    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: no scene loaded");
+    if (count == 0 || count > API__MAX_LIGHTS)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: count %u: give 1..%u lights", count,
+                          API__MAX_LIGHTS);
+    pf_light *next = malloc(count * sizeof *next);
+    if (!next) return api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory setting %u lights", count);
+    for (uint32_t i = 0; i < count; i++) {
+        softgi_result r = api__light(&lights[i], i, &next[i], err);
+        if (r != SOFTGI_OK) {
+            free(next);
+            return r;
+        }
+    }
+    if (count == c->scene.light_count) {
+        /* moved in place, as `softgi sequence` moves them: the frame sees
+         * the same array and re-renders the maps of the lights that changed */
+        memcpy(c->scene.lights, next, count * sizeof *next);
+        free(next);
+    } else {
+        if (c->frame_ready) { /* the frame's shadow maps are per light: rebuilt at the next render */
+            gi_frame_free(&c->frame);
+            c->frame_ready = 0;
+        }
+        free(c->scene.lights);
+        c->scene.lights = next;
+        c->scene.light_count = count;
+    }
+    c->auto_light = 0;
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+/* ---------------------------------------------------------------- frames */
+
+/* As app_frame_init with the program's defaults for every option the API
+ * does not take: the budget, gi_frame_init, then the many-light stages
+ * (app_indirect_options) unless SOFTGI_DIRECT_ONLY. */
+static pf_result api__frame_init(softgi_context *c, pf_error *e)
+{
+    pf_result r = api__budget_check(c, e);
+    if (r != PF_OK) return r;
+    r = gi_frame_init(&c->frame, &c->scene, c->rt, c->raster, c->jobs, &c->camera, c->width, c->height, 0, e);
+    if (r != PF_OK) return r;
+    if (!(c->flags & SOFTGI_DIRECT_ONLY)) {
+        gi_indirect_options io;
+        memset(&io, 0, sizeof io);
+        io.method = c->method;
+        io.vpls = c->vpls;
+        io.bounces = c->bounces;
+        for (uint32_t i = 0; i < c->param_count && r == PF_OK; i++) r = gi_params_add(&io.params, c->params[i], e);
+        io.clamp = -1.0f;          /* the default b = 400 / diagonal^2 */
+        io.pipeline = 0;           /* the program's default */
+        io.filter = GI_FILTER_BOX; /* Laine 2007's */
+        if (r == PF_OK) r = gi_frame_enable_indirect(&c->frame, &io, (c->flags & SOFTGI_INDIRECT_ONLY) != 0, e);
+    }
+    if (r != PF_OK) gi_frame_free(&c->frame);
+    return r;
+}
+
+static softgi_result api__check_target(const softgi_context *c, const softgi_target *t, softgi_error *err)
+{
+    if (!t) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: the target is NULL");
+    if (!t->rgb && !t->rgba8)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: the target has neither rgb nor rgba8");
+    if (t->rgb && t->rgb_stride && t->rgb_stride < (size_t)3 * c->width)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: rgb_stride %zu is less than 3 x width (%u)",
+                          t->rgb_stride, 3 * c->width);
+    if (t->rgba8 && t->rgba8_stride && t->rgba8_stride < (size_t)4 * c->width)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: rgba8_stride %zu is less than 4 x width (%u)",
+                          t->rgba8_stride, 4 * c->width);
+    if (!t->auto_exposure && !(fabsf(t->exposure) <= 64.0f))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: exposure %g: must be within +-64 stops",
+                          (double)t->exposure);
+    return SOFTGI_OK;
+}
+
+softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_error *err)
+{
+    if (!c) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: the context is NULL");
+    softgi_result sr = api__check_target(c, t, err);
+    if (sr != SOFTGI_OK) return sr;
+    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: no scene loaded (softgi_load_scene)");
+    api__fpenv env = api__fpenv_enter();
+    pf_error e;
+    pf_result r = PF_OK;
+    if (!c->frame_ready) {
+        if ((r = api__frame_init(c, &e)) == PF_OK) c->frame_ready = 1;
+    }
+    if (r == PF_OK) {
+        if (c->flags & SOFTGI_RAYTRACE) gi_frame_render_raytraced(&c->frame);
+        else gi_frame_render_raster(&c->frame);
+        c->frames++;
+        /* what the program refuses to write is not returned either */
+        r = pf_imageio_check("the frame", c->frame.final, c->width, c->height, PF_IMAGEIO_RADIANCE, &e);
+    }
+    if (r == PF_OK) {
+        const float *src = c->frame.final;
+        const uint32_t w = c->width, h = c->height;
+        if (t->rgb) {
+            size_t stride = t->rgb_stride ? t->rgb_stride : (size_t)3 * w;
+            for (uint32_t y = 0; y < h; y++)
+                memcpy(t->rgb + y * stride, src + (size_t)y * w * 3, (size_t)w * 3 * sizeof(float));
+        }
+        if (t->rgba8) {
+            c->exposure = t->auto_exposure ? app_defaults_exposure(src, w, h, NULL) : t->exposure;
+            const float scale = exp2f(c->exposure); /* as pf_imageio_stage_png */
+            size_t stride = t->rgba8_stride ? t->rgba8_stride : (size_t)4 * w;
+            for (uint32_t y = 0; y < h; y++) {
+                uint8_t *o = t->rgba8 + y * stride;
+                const float *p = src + (size_t)y * w * 3;
+                for (uint32_t x = 0; x < w; x++) {
+                    o[4 * x + 0] = pf_imageio_display(p[3 * x + 0], scale);
+                    o[4 * x + 1] = pf_imageio_display(p[3 * x + 1], scale);
+                    o[4 * x + 2] = pf_imageio_display(p[3 * x + 2], scale);
+                    o[4 * x + 3] = 255;
+                }
+            }
+        }
+    }
+    api__fpenv_leave(env);
+    if (r != PF_OK) return api__fail(err, &e);
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+/* ---------------------------------------------------------------- reading back */
+
+uint32_t softgi_stage_channels(softgi_stage stage)
+{
+    if ((unsigned)stage >= SOFTGI_STAGE_COUNT) return 0;
+    return stage == SOFTGI_STAGE_DEPTH ? 1 : 3;
+}
+
+softgi_result softgi_read_stage(const softgi_context *c, softgi_stage stage, float *dst, size_t stride,
+                                softgi_error *err)
+{
+    if (!c || !dst) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_read_stage: the context or dst is NULL");
+    const uint32_t ch = softgi_stage_channels(stage);
+    if (!ch) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_read_stage: unknown stage %d", (int)stage);
+    if (!c->frame_ready || !c->frames)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_read_stage: no frame rendered yet (softgi_render)");
+    const gi_frame *f = &c->frame;
+    const uint32_t w = f->width, h = f->height;
+    if (stride && stride < (size_t)ch * w)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_read_stage: stride %zu is less than %u x width (%u)",
+                          stride, ch, ch * w);
+    if (!stride) stride = (size_t)ch * w;
+    const rs_gbuffer *g = &f->gbuf;
+    const float *planes[3] = {NULL, NULL, NULL}, *rgb = NULL;
+    switch (stage) {
+    case SOFTGI_STAGE_DEPTH: planes[0] = g->depth; break;
+    case SOFTGI_STAGE_POSITION: planes[0] = g->pos_x, planes[1] = g->pos_y, planes[2] = g->pos_z; break;
+    case SOFTGI_STAGE_NORMAL: planes[0] = g->nrm_x, planes[1] = g->nrm_y, planes[2] = g->nrm_z; break;
+    case SOFTGI_STAGE_ALBEDO: planes[0] = g->alb_r, planes[1] = g->alb_g, planes[2] = g->alb_b; break;
+    case SOFTGI_STAGE_DIRECT: rgb = f->direct; break;
+    case SOFTGI_STAGE_IRRADIANCE: rgb = f->indirect ? f->ind.combined : NULL; break;
+    case SOFTGI_STAGE_FILTERED: rgb = f->indirect ? f->ind.filtered : NULL; break;
+    default: rgb = f->final; break;
+    }
+    if (!planes[0] && !rgb)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_read_stage: the frame has no indirect light "
+                          "(SOFTGI_DIRECT_ONLY)");
+    for (uint32_t y = 0; y < h; y++) {
+        float *o = dst + y * stride;
+        if (rgb) {
+            memcpy(o, rgb + (size_t)y * w * 3, (size_t)w * 3 * sizeof(float));
+        } else if (ch == 1) {
+            memcpy(o, planes[0] + (size_t)y * w, (size_t)w * sizeof(float));
+        } else { /* as gi_dump.c: 0 where no surface was hit */
+            for (uint32_t x = 0; x < w; x++) {
+                size_t i = (size_t)y * w + x;
+                int hit = g->prim[i] != RS_GBUFFER_EMPTY;
+                for (uint32_t k = 0; k < 3; k++) o[3 * x + k] = hit ? planes[k][i] : 0.0f;
+            }
+        }
+    }
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+uint32_t softgi_get_timings(const softgi_context *c, softgi_timing *out, uint32_t max)
+{
+    if (!c) return 0;
+    uint32_t n = 0;
+    const pf_stage_times *tables[2] = {&c->load_times, c->frame_ready && c->frames ? &c->frame.times : NULL};
+    for (int k = 0; k < 2; k++) {
+        if (!tables[k]) continue;
+        for (uint32_t i = 0; i < tables[k]->count; i++, n++)
+            if (out && n < max) out[n] = (softgi_timing){tables[k]->name[i], tables[k]->ms[i]};
+    }
+    return n;
+}
+
+softgi_result softgi_get_info(const softgi_context *c, softgi_info *info, softgi_error *err)
+{
+    if (!c || !info) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_get_info: the context or info is NULL");
+    memset(info, 0, sizeof *info);
+    info->width = c->width;
+    info->height = c->height;
+    info->threads = c->threads;
+    info->isa = pf_isa_name(c->isa);
+    info->method = c->flags & SOFTGI_DIRECT_ONLY ? NULL : c->method->name;
+    info->scene_loaded = c->loaded;
+    info->warnings = "";
+    info->exposure = c->exposure;
+    if (c->loaded) {
+        info->triangles = c->scene.tri_count;
+        info->lights = c->scene.light_count;
+        info->auto_camera = c->auto_camera;
+        info->auto_light = c->auto_light;
+        info->warnings = c->scene.warnings;
+        const pf_camera *cam = &c->camera;
+        pf_vec3 t = pf_v3_add(cam->eye, cam->forward);
+        info->camera = (softgi_camera){{cam->eye.x, cam->eye.y, cam->eye.z}, {t.x, t.y, t.z},
+                                       cam->yfov * (180.0f / PF_PI)};
+        info->frames = c->frames;
+        if (c->frame_ready && c->frame.indirect) info->vpls = c->frame.ind.vpls.count;
+    }
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+uint64_t softgi_image_hash(const float *rgb, uint32_t width, uint32_t height, size_t stride)
+{
+    /* pf_imageio_hash over the rows in order: the same FNV-1a 64 state
+     * carried across rows, so a packed buffer gives the program's --hash */
+    uint64_t hsh = 0xcbf29ce484222325ull;
+    if (!rgb) return hsh;
+    if (!stride) stride = (size_t)3 * width;
+    for (uint32_t y = 0; y < height; y++) {
+        const uint8_t *b = (const uint8_t *)(rgb + y * stride);
+        for (size_t i = 0; i < (size_t)width * 3 * sizeof(float); i++) {
+            hsh ^= b[i];
+            hsh *= 0x100000001b3ull;
+        }
+    }
+    return hsh;
+}

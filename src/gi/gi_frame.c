@@ -196,6 +196,25 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
     return PF_OK;
 }
 
+pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err)
+{
+    memset(f, 0, sizeof *f);
+    if (!d || !d->scene || !d->rt || !d->jobs || d->width == 0 || d->height == 0)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "frame: a scene, its Embree scene, a job system and a size are required");
+    const pf_camera *cam = d->camera;
+    if (!cam) {
+        if (d->scene->camera_count == 0) return pf_error_set(err, PF_ERR_ARGUMENT, "frame: the scene has no camera");
+        cam = &d->scene->cameras[0];
+    }
+    pf_result r = gi_frame_init(f, d->scene, d->rt, d->raster, d->jobs, cam, d->width, d->height, d->shadow_size, err);
+    if (r == PF_OK && (d->area_strata || d->area_points))
+        r = gi_frame_set_area_sampling(f, d->area_strata ? d->area_strata : GI_AREA_DEFAULT_STRATA,
+                                       d->area_points ? d->area_points : GI_AREA_DEFAULT_POINTS, err);
+    if (r == PF_OK && d->indirect) r = gi_frame_enable_indirect(f, d->indirect, d->indirect_only, err);
+    if (r != PF_OK) gi_frame_free(f);
+    return r;
+}
+
 void gi_frame_free(gi_frame *f)
 {
     rs_gbuffer_free(&f->gbuf);

@@ -186,7 +186,27 @@ typedef struct gi_frame {
     pf_stage_times times;
 } gi_frame;
 
-/* shadow_size: texels per side of each direct-light shadow map (0: 1024). */
+/* What a frame is set up with (sokol style: zero means the default). */
+typedef struct gi_frame_desc {
+    const pf_scene *scene;       /* required; validated */
+    const pf_rt *rt;             /* required: Embree's scene of `scene` */
+    pf_jobs *jobs;               /* required */
+    rs_context *raster;          /* NULL: only the ray-traced frame is available */
+    const pf_camera *camera;     /* NULL: the scene's first camera (the scene must have one) */
+    uint32_t width, height;      /* required */
+    uint32_t shadow_size;        /* texels per side of each direct-light shadow map (0: 1024) */
+    uint32_t area_strata;        /* ray-traced area lights: strata per side (0: GI_AREA_DEFAULT_STRATA) */
+    uint32_t area_points;        /* rasterized area lights: K points (0: GI_AREA_DEFAULT_POINTS) */
+    const gi_indirect_options *indirect; /* NULL: no indirect light (steps 3-9 off) */
+    int indirect_only;           /* with indirect: no emission and direct light in the image */
+} gi_frame_desc;
+
+/* Sets up a frame from d: its buffers, the area-light sampling and, with
+ * d->indirect, the many-light stages. On failure everything allocated is
+ * freed and f is zeroed. */
+pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err);
+/* The same with positional arguments, no indirect light and the default
+ * area sampling (kept for the callers that predate gi_frame_desc). */
 pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
                         const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err);
 void gi_frame_free(gi_frame *f);

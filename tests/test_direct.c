@@ -21,6 +21,7 @@
 #include "gi_light.h"
 #include "pf_jobs.h"
 #include "pf_rt.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define W 96
@@ -28,38 +29,24 @@
 
 static const float k_albedo[3] = {0.8f, 0.6f, 0.4f};
 
-typedef struct fixture {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    gi_frame frame;
-} fixture;
+typedef tu_fx fixture;
 
+/* The floor under `light`, ray traced (Embree at the CPU's best ISA). */
 static void setup_floor(fixture *fx, const pf_light *light)
 {
     tu_quad floor = {{0, 0, 0}, {10, 0, 0}, {0, 0, -10}, {k_albedo[0], k_albedo[1], k_albedo[2], 1}, PF_ALPHA_OPAQUE, 0.5f};
     tu_make_scene(&fx->scene, &floor, 1);
     pf_error err;
     assert_int_equal(pf_scene_add_light(&fx->scene, light, &err), PF_OK);
-    assert_int_equal(pf_scene_validate(&fx->scene, &err), PF_OK);
-    pf_isa isa;
-    assert_int_equal(pf_isa_resolve(PF_ISA_AUTO, &isa, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&fx->rt, &fx->scene, isa, 1, &err), PF_OK);
-    fx->jobs = pf_jobs_create(2);
-    assert_non_null(fx->jobs);
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0.1f, 3.0f, 0.2f), pf_v3(0, 0, 0), pf_radians(70.0f), &err), PF_OK);
-    assert_int_equal(gi_frame_init(&fx->frame, &fx->scene, fx->rt, NULL, fx->jobs, &cam, W, H, 0, &err), PF_OK);
-    gi_frame_render_raytraced(&fx->frame);
+    tu_fx_desc d = {.threads = 2, .no_raster = 1, .isa = pf_isa_detect(), .w = W, .h = H, .cam = &cam,
+                    .shadow_size = 1024};
+    tu_fx_begin_with(fx, &d);
+    gi_frame_render_raytraced(&fx->f);
 }
 
-static void teardown(fixture *fx)
-{
-    gi_frame_free(&fx->frame);
-    pf_jobs_destroy(fx->jobs);
-    pf_rt_destroy(fx->rt);
-    pf_scene_free(&fx->scene);
-}
+static void teardown(fixture *fx) { tu_fx_end(fx); }
 
 /* Analytic irradiance (double) at p on the floor (normal +Y). */
 static double analytic_e(const pf_light *L, double px, double py, double pz, double *spot_factor)
@@ -88,7 +75,7 @@ static void check_against_analytic(const pf_light *light, int *lit_pixels, int *
 {
     fixture fx;
     setup_floor(&fx, light);
-    const rs_gbuffer *g = &fx.frame.gbuf;
+    const rs_gbuffer *g = &fx.f.gbuf;
     double peak = 0.0;
     for (int i = 0; i < W * H; i++) {
         double f;
@@ -104,17 +91,17 @@ static void check_against_analytic(const pf_light *light, int *lit_pixels, int *
         for (int c = 0; c < 3; c++) {
             double col = c == 0 ? light->color.x : (c == 1 ? light->color.y : light->color.z);
             double want = k_albedo[c] * col * e / M_PI;
-            double got = fx.frame.direct[3 * i + c];
+            double got = fx.f.direct[3 * i + c];
             double tol = f >= 0.01 ? 1e-4 * want : 1e-6 * peak;
             if (fabs(got - want) > tol)
                 fail_msg("pixel %d channel %d: got %.9g, analytic %.9g (spot factor %.4g)", i, c, got, want, f);
             /* final = direct for a non-emissive surface */
-            assert_true(fx.frame.final[3 * i + c] == fx.frame.direct[3 * i + c]);
+            assert_true(fx.f.final[3 * i + c] == fx.f.direct[3 * i + c]);
         }
         if (e > 0) (*lit_pixels)++;
         else {
             (*dark_pixels)++;
-            assert_true(fx.frame.direct[3 * i] == 0.0f);
+            assert_true(fx.f.direct[3 * i] == 0.0f);
         }
     }
     teardown(&fx);
@@ -177,28 +164,26 @@ static void test_shadow_and_backside(void **state)
     assert_int_equal(pf_scene_add_light(&fx.scene, &L, &err), PF_OK);
     pf_light below = {.type = PF_LIGHT_POINT, .position = {0, -1, 0}, .color = {1, 1, 1}, .intensity = 100};
     assert_int_equal(pf_scene_add_light(&fx.scene, &below, &err), PF_OK);
-    assert_int_equal(pf_scene_validate(&fx.scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&fx.rt, &fx.scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    fx.jobs = pf_jobs_create(1);
     pf_camera cam;
     /* look at the floor from the side, below the occluder */
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0.5f, 3.0f), pf_v3(0, 0, 0), pf_radians(60.0f), &err), PF_OK);
-    assert_int_equal(gi_frame_init(&fx.frame, &fx.scene, fx.rt, NULL, fx.jobs, &cam, W, H, 0, &err), PF_OK);
-    gi_frame_render_raytraced(&fx.frame);
+    tu_fx_desc d = {.threads = 1, .no_raster = 1, .w = W, .h = H, .cam = &cam, .shadow_size = 1024};
+    tu_fx_begin_with(&fx, &d);
+    gi_frame_render_raytraced(&fx.f);
     int shadowed = 0, lit = 0;
     for (int i = 0; i < W * H; i++) {
-        const rs_gbuffer *g = &fx.frame.gbuf;
+        const rs_gbuffer *g = &fx.f.gbuf;
         if (g->prim[i] == RS_GBUFFER_EMPTY || g->prim[i] >= 2) continue; /* floor only */
         double x = g->pos_x[i], z = g->pos_z[i];
         /* the occluder's shadow from (0,2,0) through |x|,|z| <= 0.25 at y=1 is |x|,|z| <= 0.5 at y=0 */
         int in_shadow = fabs(x) < 0.499 && fabs(z) < 0.499;
         int out_shadow = fabs(x) > 0.501 || fabs(z) > 0.501;
         if (in_shadow) {
-            assert_true(fx.frame.direct[3 * i] == 0.0f);
+            assert_true(fx.f.direct[3 * i] == 0.0f);
             shadowed++;
         } else if (out_shadow) {
             double f, e = analytic_e(&L, x, 0, z, &f);
-            assert_true(fabs(fx.frame.direct[3 * i] - e / M_PI) <= 1e-4 * e / M_PI);
+            assert_true(fabs(fx.f.direct[3 * i] - e / M_PI) <= 1e-4 * e / M_PI);
             lit++;
         }
     }

@@ -23,9 +23,9 @@
  * - area lights (the extension): the VPL fluxes add up to the emitter's
  *   power in a closed box;
  * - local vertex deletion gives the same triangulation as a rebuild;
- * - bad --param values are errors;
- * - the VPL-management time with a moving point light in Sibenik (printed,
- *   not asserted). */
+ * - bad --param values are errors.
+ * Timing is not a test's job: `softgi bench frame --method iir
+ * --moving-light` times the VPL update (docs/perf.md). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -33,7 +33,6 @@
 
 #include <cmocka.h>
 #include <math.h>
-#include <time.h>
 
 #include "gi_delaunay.h"
 #include "gi_frame.h"
@@ -45,7 +44,6 @@
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
-#define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
 #define PI 3.14159265358979323846
 
 static uint64_t rng_state;
@@ -783,83 +781,6 @@ static void test_bad_params(void **state)
                      "no such parameter");
 }
 
-/* VPL management time (steps 1-4, one core) with a light moving through
- * Sibenik around (0,0,0): printed, not asserted. Thread CPU time, so the
- * figure is the one core's work even on a loaded machine. */
-static void test_timing_sibenik(void **state)
-{
-    (void)state;
-    pf_scene s;
-    pf_error err;
-    if (!tu_load_or_skip(&s, SIBENIK)) return;
-    pf_light L = {.type = PF_LIGHT_POINT, .position = {0, 0, 0}, .color = {1, 1, 1}, .intensity = 50};
-    assert_int_equal(pf_scene_add_light(&s, &L, &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_light *Lp = &s.lights[s.light_count - 1];
-    static uint8_t seen[1 << 20];
-    const uint32_t budgets[2] = {256, 1024};
-    const float speeds[2] = {0.1f, 0.25f};
-    for (int bi = 0; bi < 2; bi++)
-        for (int type = 0; type < 2; type++)
-            for (int sp = 0; sp < 2; sp++) {
-                Lp->type = type ? PF_LIGHT_SPOT : PF_LIGHT_POINT;
-                Lp->direction = pf_v3_normalize(pf_v3(0.3f, -1, 0.2f));
-                Lp->outer_cone = 1.2f;
-                Lp->inner_cone = 0.8f;
-                void *st;
-                assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
-                gi_area_lights area = {0};
-                gi_vpl_set v = {0};
-                gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, budgets[bi], 1, NULL, 0, 0, &area};
-                double total = 0.0, worst = 0.0, first = 0.0;
-                uint64_t moved = 0, gone = 0, occluded = 0, lit = 0;
-                const uint32_t N = 100;
-                for (uint32_t k = 0; k <= N; k++) {
-                    /* back and forth through the origin, diagonally across the nave
-                     * and its column rows, speeds[sp] m a frame */
-                    float u = ((float)(k % 40 < 20 ? k % 40 : 40 - k % 40) - 10.0f) * speeds[sp];
-                    Lp->position = pf_v3(0.6f * u, 0.0f, 0.8f * u);
-                    if (k > 0) /* last frame's VPLs the light no longer sees */
-                        for (uint32_t i = 0; i < v.count; i++) {
-                            if (v.v[i].id == UINT32_MAX) continue;
-                            pf_ray r = {Lp->position, 0.0f, pf_v3_sub(v.v[i].pos, Lp->position), 0.9999f};
-                            occluded += (uint64_t)pf_rt_occluded1(rt, r);
-                            lit += 1;
-                        }
-                    struct timespec t0, t1;
-                    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
-                    in.frame = k;
-                    assert_int_equal(gi_method_iir.update(st, &in, &v, &err), PF_OK);
-                    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
-                    double ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) * 1e-6;
-                    /* VPLs of the last frame that are gone (invalid or deleted) */
-                    uint32_t alive = 0;
-                    for (uint32_t i = 0; i < v.count; i++)
-                        if (v.v[i].id != UINT32_MAX && !v.v[i].moved) alive++;
-                    uint32_t before = 0;
-                    for (uint32_t i = 0; i < (1u << 20); i += 1) before += seen[i];
-                    memset(seen, 0, sizeof seen);
-                    for (uint32_t i = 0; i < v.count; i++)
-                        if (v.v[i].id != UINT32_MAX) seen[v.v[i].id & ((1u << 20) - 1)] = 1;
-                    if (k == 0) first = ms;
-                    else {
-                        total += ms, worst = fmax(worst, ms);
-                        for (uint32_t i = 0; i < v.count; i++) moved += v.v[i].moved;
-                        gone += before - alive;
-                    }
-                }
-                print_message("TIMING sibenik %s light, %u VPLs, %.2f m/frame: first frame %.2f ms, then mean %.3f ms, "
-                              "worst %.3f ms; %.1f of %.0f VPLs newly occluded, %.1f removed, %.1f created per frame\n",
-                              type ? "spot " : "point", budgets[bi], speeds[sp], first, total / N, worst,
-                              (double)occluded / N, (double)lit / N, (double)gone / N, (double)moved / N);
-                gi_method_iir.destroy(st);
-                gi_vpl_set_free(&v);
-            }
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -881,8 +802,6 @@ int main(void)
         cmocka_unit_test(test_directional_power),
         cmocka_unit_test(test_area_light_power),
         cmocka_unit_test(test_bad_params),
-        cmocka_unit_test(test_timing_sibenik),
     };
-    if (getenv("IIR_TEST_FILTER")) cmocka_set_test_filter(getenv("IIR_TEST_FILTER"));
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

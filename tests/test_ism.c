@@ -12,12 +12,8 @@
  * - the same ISM frame is byte-identical for 1 and 2 threads, and with the
  *   scalar and the SIMD accumulation;
  * - bad option values are errors (API and CLI).
- * SOFTGI_ISM_BENCH=1 adds the timing of README "ISM": the ISMs of 256 VPLs
- * against the exact 128x128 paraboloid maps of the same VPLs, 1 and 2
- * threads, on Sibenik (median of 5, ISM and exact maps alternated).
- * SOFTGI_ISM_BIAS, SOFTGI_ISM_POINTS, SOFTGI_ISM_RES and SOFTGI_PARA_RES
- * override the agreement tests' settings (how the defaults were chosen; the
- * bounds hold for the defaults only). */
+ * Timing is not a test's job: `softgi bench frame --visibility ism` times
+ * the ISM frame stage by stage (docs/perf.md). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -30,7 +26,6 @@
 #include "gi_frame.h"
 #include "gi_ism.h"
 #include "pf_gltf.h"
-#include "pf_timer.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
 
@@ -248,18 +243,14 @@ static double agreement(gi_frame *f, uint64_t *pairs, double *lit_ray, double *l
 /* ISM and exact-map agreement with ray-traced visibility on one scene:
  * min_ism bounds the ISMs' agreement. */
 static void agreement_on(const char *name, pf_scene *scene_in, const pf_camera *cam, double min_exact,
-                         double min_ism, float bias_scale)
+                         double min_ism)
 {
     double a[2];
     for (int ism = 0; ism < 2; ism++) {
         fx x;
-        x.scene = *scene_in; /* fx_end frees it: load a copy per run */
+        x.scene = *scene_in;
         gi_indirect_options io = ism_options();
         io.visibility_ism = ism;
-        io.ism.bias_scale = bias_scale;
-        if (getenv("SOFTGI_ISM_POINTS")) io.ism.points = (uint32_t)atol(getenv("SOFTGI_ISM_POINTS"));
-        if (getenv("SOFTGI_ISM_RES")) io.ism.resolution = (uint32_t)atol(getenv("SOFTGI_ISM_RES"));
-        if (getenv("SOFTGI_PARA_RES")) io.para_res = (uint32_t)atol(getenv("SOFTGI_PARA_RES"));
         fx_begin(&x, 2, RS_SIMD_SCALAR, 64, 48, cam, &io);
         gi_frame_render_raster(&x.f);
         uint64_t n;
@@ -269,10 +260,7 @@ static void agreement_on(const char *name, pf_scene *scene_in, const pf_camera *
                       "visible: rays %.4f, maps %.4f\n",
                       name, ism ? "ISM" : "exact paraboloid maps", x.f.ind.opt.para_res, a[ism],
                       (unsigned long long)n, lr, lm);
-        gi_frame_free(&x.f);
-        rs_context_destroy(x.rs);
-        pf_jobs_destroy(x.jobs);
-        pf_rt_destroy(x.rt);
+        tu_fx_end_frame(&x); /* the scene is the caller's */
     }
     assert_true(a[0] > min_exact); /* the exact maps */
     assert_true(a[1] > min_ism);   /* the ISMs */
@@ -286,9 +274,7 @@ static void test_agreement_cornell(void **state)
     pf_error err;
     assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
     pf_camera cam = s.cameras[0];
-    const char *env = getenv("SOFTGI_ISM_BIAS"); /* for choosing the default (README) */
-    float bias = env ? strtof(env, NULL) : 0.0f;
-    agreement_on("Cornell box", &s, &cam, 0.98, 0.93, bias); /* measured 0.985, 0.952 */
+    agreement_on("Cornell box", &s, &cam, 0.98, 0.93); /* measured 0.985, 0.952 */
     pf_scene_free(&s);
 }
 
@@ -299,9 +285,7 @@ static void test_agreement_sibenik(void **state)
     if (!tu_load_or_skip(&s, SIBENIK)) return;
     pf_camera cam;
     sibenik_setup(&s, &cam);
-    const char *env = getenv("SOFTGI_ISM_BIAS");
-    float bias = env ? strtof(env, NULL) : 0.0f;
-    agreement_on("Sibenik", &s, &cam, 0.92, 0.72, bias); /* measured 0.935, 0.762 */
+    agreement_on("Sibenik", &s, &cam, 0.92, 0.72); /* measured 0.935, 0.762 */
     pf_scene_free(&s);
 }
 
@@ -343,9 +327,10 @@ static void test_threads_deterministic(void **state)
 static void test_bad_options(void **state)
 {
     (void)state;
-    pf_scene s;
+    tu_fx x;
     pf_error err;
-    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    tu_load(&x.scene, CORNELL);
+    const pf_scene *s = &x.scene;
     const gi_ism_options bad[] = {
         {48, 0, 0},      {4, 0, 0},          {1024, 0, 0},       {0, 10, 0},     {0, 200000000, 0},
         {0, 0, 0.5f},    {0, 0, 100.0f},     {0, 0, NAN},        {0, 0, -2.0f},
@@ -353,12 +338,12 @@ static void test_bad_options(void **state)
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         gi_ism *m = (gi_ism *)&err; /* must be set to NULL */
         memset(&err, 0, sizeof err);
-        assert_int_equal(gi_ism_create(&m, &s, &bad[k], 2, &err), PF_ERR_ARGUMENT);
+        assert_int_equal(gi_ism_create(&m, s, &bad[k], 2, &err), PF_ERR_ARGUMENT);
         assert_null(m);
         assert_true(strlen(err.message) > 0);
     }
     gi_ism *m = NULL;
-    assert_int_equal(gi_ism_create(&m, &s, NULL, 2, &err), PF_OK);
+    assert_int_equal(gi_ism_create(&m, s, NULL, 2, &err), PF_OK);
     assert_int_equal(gi_ism_resolution(m), GI_ISM_DEFAULT_RES);
     assert_int_equal(gi_ism_points(m), GI_ISM_DEFAULT_POINTS);
     gi_ism_destroy(m);
@@ -366,18 +351,12 @@ static void test_bad_options(void **state)
     memset(&empty, 0, sizeof empty);
     assert_int_equal(gi_ism_create(&m, &empty, NULL, 1, &err), PF_ERR_ARGUMENT);
     /* through the frame: the error reaches gi_frame_enable_indirect */
-    pf_rt *rt;
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, rt, NULL, NULL, &s.cameras[0], 16, 16, 64, &err), PF_OK);
+    tu_fx_begin(&x, 2, RS_SIMD_SCALAR, 16, 16, NULL, NULL, 0);
     gi_indirect_options io = ism_options();
     io.ism.resolution = 100;
-    assert_int_equal(gi_frame_enable_indirect(&f, &io, 1, &err), PF_ERR_ARGUMENT);
+    assert_int_equal(gi_frame_enable_indirect(&x.f, &io, 1, &err), PF_ERR_ARGUMENT);
     assert_non_null(strstr(err.message, "power of two"));
-    gi_frame_free(&f);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&x);
     /* the CLI */
     tu_softgi_expect("render --visibility ism --ism-res 48 -q", 2, "--ism-res '48': expected a power of two");
     tu_softgi_expect("render --visibility ism --ism-res 1024 -q", 2, "--ism-res");
@@ -400,81 +379,13 @@ static void test_bad_options(void **state)
     tu_softgi_expect("render --visibility raytrace --ism-bias 2 -q", 2, "need --visibility ism");
 }
 
-/* ------------------------------------------------------------------ bench */
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* SOFTGI_ISM_BENCH=1: ms per frame for the maps of 256 IR VPLs on Sibenik,
- * all maps rebuilt: ISMs (defaults) vs the exact 128x128 paraboloid maps
- * (rs_para_render of every VPL), 1 and 2 threads, median of 5. */
-static void test_bench(void **state)
-{
-    (void)state;
-    if (!getenv("SOFTGI_ISM_BENCH")) {
-        print_message("SKIP: set SOFTGI_ISM_BENCH=1 for the ISM timing\n");
-        return;
-    }
-    enum { REPS = 5 };
-    for (uint32_t threads = 1; threads <= 2; threads++) {
-        fx x;
-        if (!tu_load_or_skip(&x.scene, SIBENIK)) return;
-        pf_camera cam;
-        sibenik_setup(&x.scene, &cam);
-        gi_indirect_options io = ism_options();
-        fx_begin(&x, threads, RS_SIMD_AVX2, 64, 48, &cam, &io);
-        gi_frame *f = &x.f;
-        gi_frame_render_raster(f);
-        uint32_t N = f->ind.vpls.count;
-        double t_ism[REPS], t_clear[REPS], t_splat[REPS], t_pp[REPS], t_exact[REPS];
-        gi_ism *m = f->ind.ism;
-        pf_error err;
-        rs_para_context *para;
-        assert_int_equal(rs_para_context_create(&para, &x.scene, NULL, &err), PF_OK);
-        uint16_t *atlas = malloc(rs_para_atlas_bytes(128, N) + 64);
-        pf_vec3 *pos = malloc(sizeof(pf_vec3) * N), *nrm = malloc(sizeof(pf_vec3) * N);
-        for (uint32_t i = 0; i < N; i++) pos[i] = f->ind.vpls.v[i].pos, nrm[i] = f->ind.vpls.v[i].nrm;
-        /* alternated, so that a change of the machine's load hits both */
-        for (int r = 0; r < REPS; r++) {
-            double t0 = pf_time_now();
-            gi_ism_render(m, f->ind.atlas, f->jobs, f->ind.frames, N, f->ind.range, (uint32_t)r, NULL);
-            t_ism[r] = (pf_time_now() - t0) * 1e3;
-            t0 = pf_time_now();
-            rs_para_render(atlas, para, f->jobs, pos, nrm, N, f->ind.range, NULL);
-            t_exact[r] = (pf_time_now() - t0) * 1e3;
-            t0 = pf_time_now();
-            gi_ism_stage_clear(m, f->ind.atlas, f->jobs, N);
-            double t1 = pf_time_now();
-            gi_ism_stage_splat(m, f->ind.atlas, f->jobs, f->ind.frames, N, f->ind.range, (uint32_t)r, NULL);
-            double t2 = pf_time_now();
-            gi_ism_stage_pull_push(m, f->ind.atlas, f->jobs, N, NULL);
-            double t3 = pf_time_now();
-            t_clear[r] = (t1 - t0) * 1e3, t_splat[r] = (t2 - t1) * 1e3, t_pp[r] = (t3 - t2) * 1e3;
-        }
-        qsort(t_ism, REPS, sizeof(double), cmp_double), qsort(t_exact, REPS, sizeof(double), cmp_double);
-        qsort(t_clear, REPS, sizeof(double), cmp_double), qsort(t_splat, REPS, sizeof(double), cmp_double);
-        qsort(t_pp, REPS, sizeof(double), cmp_double);
-        print_message("bench Sibenik, %u VPLs, %u thread(s): ISM %ux%u, %u points: %.2f ms per frame (clear %.2f, "
-                      "splat %.2f, pull-push %.2f); exact 128x128 paraboloid maps (%s): %.2f ms; ratio %.1fx\n",
-                      N, threads, gi_ism_resolution(m), gi_ism_resolution(m), gi_ism_points(m), t_ism[REPS / 2],
-                      t_clear[REPS / 2], t_splat[REPS / 2], t_pp[REPS / 2], rs_simd_name(rs_para_simd(para)),
-                      t_exact[REPS / 2], t_exact[REPS / 2] / t_ism[REPS / 2]);
-        free(atlas), free(pos), free(nrm);
-        rs_para_context_destroy(para);
-        fx_end(&x);
-    }
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pull_push_constant), cmocka_unit_test(test_pull_push_plane),
         cmocka_unit_test(test_point_budget),       cmocka_unit_test(test_agreement_cornell),
         cmocka_unit_test(test_agreement_sibenik),  cmocka_unit_test(test_threads_deterministic),
-        cmocka_unit_test(test_bad_options),        cmocka_unit_test(test_bench),
+        cmocka_unit_test(test_bad_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,44 +10,15 @@
  *   the right distance; a plane meshed along the texel rays of an odd-sized
  *   map (edges and a vertex exactly on texel centres) has no holes;
  * - the same bytes for 1 and 2 threads and for the scalar and SIMD paths;
- * - a golden FNV-1a 64 hash of one Cornell-box map;
+ * - a golden FNV-1a 64 hash of one Cornell-box map, with its picture
+ *   (tests/data/golden/paraboloid-cornell.png, tu_golden.h);
  * - lookups (rs_para_visible) against Embree shadow rays;
  * - the simplified-scene path: it works, and its measured disagreement with
  *   the full-scene map stays below a stated bound.
  *
- * The bench (not a test: SOFTGI_PARA_BENCH=1 ./build/tests/test_paraboloid)
- * prints per-map timings of the exact maps vs the Embree reference on
- * Sibenik and the conference room, and the simplification table.
- *
- * Measured with the bench (Intel Xeon with AVX-512, 2 cores, Release build,
- * gcc 12; 64 VPLs per scene: random points on random triangles, seed 1,
- * 1e-3 of the diagonal off the surface along its normal; per-map time, best
- * of 5 runs of all 64 maps; the machine was shared, so +-10%):
- *
- *                      exact                        Embree (1 ray/texel)
- *   scene        avx512  avx2  scalar  2 thr     avx512  avx2  2 thr
- *   sibenik       1.14   1.26   2.8    0.58       2.31   2.45  1.18  ms/map
- *   conference    0.81   0.92   2.4    0.40       2.00   2.27  1.02  ms/map
- *   agreement with Embree: sibenik 100.0000%, conference 99.9996% of texels
- *
- * Simplified shadow geometry (rs_simplify, same 64 VPLs, AVX-512, 1 thread;
- * disagreement with the full-scene map over all inside texels: covered/empty
- * state differs, or depth differs by more than the bias w = one texel
- * footprint + one code step; "w + eps" adds the simplifier's absolute error):
- *
- *   scene       ratio  triangles  ms/map  speed-up  state   >w      >w+eps  median map
- *   sibenik     1      75275      1.14    1         0       0       0       0
- *               0.5    37545      0.90    1.27x     0.37%   12.7%   5.0%    7.1%
- *               0.25   18707      0.63    1.8x      1.8%    32.8%   17.8%   28.7%
- *               0.1     7415      0.38    3.0x      5.9%    62.8%   38.8%   57.0%
- *   conference  1      277552     0.81    1         0       0       0       0
- *               0.5    137677     0.63    1.3x      0.000%  4.2%    1.7%    0.30%
- *               0.25   68970      0.52    1.56x     0.001%  7.9%    4.1%    1.1%
- *               0.1    27629      0.40    2.0x      0.002%  10.4%   5.4%    2.4%
- * (meshopt relative errors: sibenik 0.057%, 0.154%, 0.514% of the extent;
- * conference 0.007%, 0.013%, 0.030%.) Sibenik's ornate geometry loses a lot
- * at any ratio below ~0.75 (0.37% disagree there): the VPLs sit 5 cm off
- * the surfaces, comparable to what the simplifier moves them. */
+ * Timing is not a test's job: `softgi bench raster` times the maps against
+ * Embree (docs/perf.md); docs/raster.md has the measured per-map times and
+ * the simplification table. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -59,10 +30,10 @@
 #include "pf_gltf.h"
 #include "pf_jobs.h"
 #include "pf_rt.h"
-#include "pf_timer.h"
 #include "rs_paraboloid.h"
 #include "rs_simplify.h"
 #include "test_util.h"
+#include "tu_golden.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define SPHERE SOFTGI_SOURCE_DIR "/scenes/closed-sphere/closed-sphere.gltf"
@@ -509,8 +480,12 @@ static void test_golden_hash(void **state)
         bytes[2 * k + 1] = (uint8_t)(m[k] >> 8);
     }
     uint64_t h = fnv1a(bytes, sizeof bytes);
-    print_message("cornell golden map hash: 0x%016llx\n", (unsigned long long)h);
-    if (GOLDEN_CORNELL != 0x0ull) assert_true(h == GOLDEN_CORNELL);
+    /* the picture: the map's codes as grey (their high byte) */
+    tu_golden_picture pic;
+    tu_golden_picture_init(&pic, 128, 128);
+    for (int k = 0; k < 128 * 128; k++) pic.rgb[3 * k] = pic.rgb[3 * k + 1] = pic.rgb[3 * k + 2] = bytes[2 * k + 1];
+    tu_golden_check("paraboloid-cornell", h, GOLDEN_CORNELL, &pic);
+    tu_golden_picture_free(&pic);
     free(m);
     rs_para_context_destroy(ctx);
     pf_scene_free(&s);
@@ -745,142 +720,6 @@ static void test_simplified(void **state)
     pf_scene_free(&full);
 }
 
-/* ------------------------------------------------------------------ bench */
-
-/* Best of 5 runs of all n maps, per map (the machine may be shared). */
-static double ms_per_map_exact(rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *pos, const pf_vec3 *nrm,
-                               uint32_t n, float range, uint16_t *out, rs_para_stats *st)
-{
-    double best = 1e30;
-    for (int rep = 0; rep < 5; rep++) {
-        double t0 = pf_time_now();
-        rs_para_render(out, ctx, jobs, pos, nrm, n, range, st);
-        double t = (pf_time_now() - t0) * 1e3 / n;
-        best = t < best ? t : best;
-    }
-    return best;
-}
-
-static double ms_per_map_traced(const pf_rt *rt, pf_jobs *jobs, const pf_vec3 *pos, const pf_vec3 *nrm, uint32_t n,
-                                float range, uint16_t *out)
-{
-    double best = 1e30;
-    for (int rep = 0; rep < 5; rep++) {
-        double t0 = pf_time_now();
-        rs_para_render_traced(out, 128, rt, jobs, pos, nrm, n, range);
-        double t = (pf_time_now() - t0) * 1e3 / n;
-        best = t < best ? t : best;
-    }
-    return best;
-}
-
-/* The bench: 64 VPLs (sample_vpls, seed 1), 128x128 maps, per-map times
- * (best of 5 runs of all 64 maps): the exact maps on every SIMD path the CPU
- * has and Embree (its best ISA, and pinned to AVX2), 1 and 2 threads; then
- * the simplified scenes at ratios 0.5, 0.25, 0.1. */
-static void bench_scene(const char *path, const char *name)
-{
-    pf_scene s;
-    if (!tu_load_or_skip(&s, path)) return;
-    enum { N = 64 };
-    pf_error err;
-    pf_vec3 pos[N], nrm[N];
-    sample_vpls(&s, N, 1, pos, nrm);
-    float range = rs_para_default_range(&s);
-    uint16_t *a = malloc(rs_para_atlas_bytes(128, N)), *b = malloc(rs_para_atlas_bytes(128, N)),
-             *c = malloc(rs_para_atlas_bytes(128, N));
-    pf_jobs *j1 = pf_jobs_create(1), *j2 = pf_jobs_create(2);
-    rs_para_context *ctx;
-    double t0 = pf_time_now();
-    assert_int_equal(rs_para_context_create(&ctx, &s, NULL, &err), PF_OK);
-    double t_ctx = (pf_time_now() - t0) * 1e3;
-    pf_rt *rt;
-    t0 = pf_time_now();
-    pf_isa best_isa = pf_isa_detect();
-    assert_int_equal(pf_rt_create(&rt, &s, best_isa, 1, &err), PF_OK);
-    double t_bvh = (pf_time_now() - t0) * 1e3;
-    print_message("BENCH %s (%u triangles, %u maps 128x128): context %.1f ms, Embree BVH %.1f ms\n", name,
-                  s.tri_count, N, t_ctx, t_bvh);
-
-    rs_para_stats st;
-    rs_simd best = rs_para_simd(ctx);
-    double ex1 = ms_per_map_exact(ctx, j1, pos, nrm, N, range, a, &st);
-    double ex2 = ms_per_map_exact(ctx, j2, pos, nrm, N, range, a, NULL);
-    double rt1 = ms_per_map_traced(rt, j1, pos, nrm, N, range, b);
-    double rt2 = ms_per_map_traced(rt, j2, pos, nrm, N, range, b);
-    print_message("BENCH %s   exact %-7s %.3f ms/map (1 thread)  %.3f ms/map (2 threads)\n", name, rs_simd_name(best),
-                  ex1, ex2);
-    print_message("BENCH %s   Embree %-6s %.3f ms/map (1 thread)  %.3f ms/map (2 threads); exact/Embree %.2f\n",
-                  name, pf_isa_name(best_isa), rt1, rt2, ex1 / rt1);
-    const rs_simd paths[2] = {RS_SIMD_AVX2, RS_SIMD_SCALAR};
-    for (int p = 0; p < 2; p++) {
-        rs_para_set_simd(ctx, paths[p]);
-        if (rs_para_simd(ctx) != paths[p] || paths[p] == best) continue;
-        double t = ms_per_map_exact(ctx, j1, pos, nrm, N, range, c, NULL);
-        assert_memory_equal(a, c, rs_para_atlas_bytes(128, N));
-        print_message("BENCH %s   exact %-7s %.3f ms/map (1 thread)\n", name, rs_simd_name(paths[p]), t);
-    }
-    rs_para_set_simd(ctx, best);
-    if (best_isa > PF_ISA_AVX2) {
-        pf_rt *rt2x;
-        assert_int_equal(pf_rt_create(&rt2x, &s, PF_ISA_AVX2, 1, &err), PF_OK);
-        double t = ms_per_map_traced(rt2x, j1, pos, nrm, N, range, c);
-        print_message("BENCH %s   Embree avx2   %.3f ms/map (1 thread)\n", name, t);
-        pf_rt_destroy(rt2x);
-    }
-    agreement g = compare_maps(a, b, 128, N, 1);
-    print_message("BENCH %s   agreement %.4f%%; per map: clusters %.0f in, %.0f behind, %.0f occluded; triangles "
-                  "%.0f in, %.0f behind, %.0f between texels, %.0f occluded, %.0f drawn; texels tested %.0f, "
-                  "fallbacks %.1f\n",
-                  name, 100.0 * g.agree / g.inside, (double)st.clusters_in / N, (double)st.clusters_behind / N,
-                  (double)st.clusters_occluded / N, (double)st.triangles_in / N, (double)st.triangles_behind / N,
-                  (double)st.triangles_between_texels / N, (double)st.triangles_occluded / N,
-                  (double)st.triangles_drawn / N, (double)st.texels_tested / N, (double)st.texels_exact_fallback / N);
-
-    /* simplification table */
-    const float ratios[3] = {0.5f, 0.25f, 0.1f};
-    for (int r = 0; r < 3; r++) {
-        pf_scene simple;
-        rs_simplify_options so = {.ratio = ratios[r]};
-        rs_simplify_report rep;
-        t0 = pf_time_now();
-        assert_int_equal(rs_simplify_scene(&simple, &s, &so, &rep, &err), PF_OK);
-        double t_simp = (pf_time_now() - t0) * 1e3;
-        rs_para_context *cs;
-        assert_int_equal(rs_para_context_create(&cs, &simple, NULL, &err), PF_OK);
-        double ts = ms_per_map_exact(cs, j1, pos, nrm, N, range, c, NULL);
-        simpl_cmp cm = compare_simplified(a, c, 128, N, range, rep.error_absolute);
-        print_message("BENCH %s   simplify %.2f: %u -> %u tris in %.0f ms, error %.3f%% of extent (%g); %.3f ms/map "
-                      "(x%.2f); disagree %.3f%% (covered/empty %.3f%%, depth > w %.3f%%), with bias w + eps %.3f%%, "
-                      "median map %.3f%%\n",
-                      name, (double)ratios[r], rep.tri_in, rep.tri_out, t_simp, 100.0 * rep.error_relative,
-                      (double)rep.error_absolute, ts, ex1 / ts, 100.0 * (cm.state_diff + cm.depth_diff) / cm.total,
-                      100.0 * cm.state_diff / cm.total, 100.0 * cm.depth_diff / cm.total,
-                      100.0 * (cm.state_diff + cm.depth_diff_eps) / cm.total, 100.0 * cm.median_map);
-        rs_para_context_destroy(cs);
-        pf_scene_free(&simple);
-    }
-    pf_jobs_destroy(j1);
-    pf_jobs_destroy(j2);
-    free(a);
-    free(b);
-    free(c);
-    pf_rt_destroy(rt);
-    rs_para_context_destroy(ctx);
-    pf_scene_free(&s);
-}
-
-static void test_bench(void **state)
-{
-    (void)state;
-    if (!getenv("SOFTGI_PARA_BENCH")) {
-        print_message("SKIP: the bench runs with SOFTGI_PARA_BENCH=1\n");
-        return;
-    }
-    bench_scene(SIBENIK, "sibenik");
-    bench_scene(CONFERENCE, "conference");
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -895,7 +734,6 @@ int main(void)
         cmocka_unit_test(test_golden_hash),
         cmocka_unit_test(test_lookup_vs_shadow_rays),
         cmocka_unit_test(test_simplified),
-        cmocka_unit_test(test_bench),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -24,6 +24,7 @@
 
 #include "gi_frame.h"
 #include "pf_gltf.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -47,27 +48,17 @@ static pf_result probe_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *
 }
 static const gi_vpl_method k_probe = {"probe", "test", NULL, probe_update, NULL, NULL, 0};
 
+/* The fixture (test_frame_fixture.h) and the light's first position. */
 typedef struct fx {
-    pf_scene scene;
+    tu_fx t;
     pf_vec3 light0;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
 } fx;
 
 static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis, int probe)
 {
-    pf_error err;
-    assert_int_equal(pf_gltf_load(&x->scene, CORNELL, NULL, &err), PF_OK);
-    assert_true(x->scene.light_count >= 1 && x->scene.camera_count >= 1);
-    x->light0 = x->scene.lights[0].position;
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_non_null(x->jobs);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, &x->scene.cameras[0], W, H, 64, &err),
-                     PF_OK);
+    tu_load(&x->t.scene, CORNELL);
+    assert_true(x->t.scene.light_count >= 1 && x->t.scene.camera_count >= 1);
+    x->light0 = x->t.scene.lights[0].position;
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.vpls = 48;
@@ -83,26 +74,19 @@ static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis, in
         io.method = &m;
         assert_false(gi_vpl_method_gbuffer_free(&m));
     }
-    assert_int_equal(gi_frame_enable_indirect(&x->f, &io, 0, &err), PF_OK);
+    tu_fx_begin(&x->t, threads, RS_SIMD_SCALAR, W, H, &x->t.scene.cameras[0], &io, 0);
 }
 
-static void fx_end(fx *x)
-{
-    gi_frame_free(&x->f);
-    rs_context_destroy(x->rs);
-    pf_jobs_destroy(x->jobs);
-    pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(&x->t); }
 
 /* The light of frame n: a small circle under the ceiling light's spot; the
  * camera steps sideways. */
 static void fx_set_frame(fx *x, uint32_t n)
 {
     float a = 0.9f * (float)n;
-    x->scene.lights[0].position = pf_v3_add(x->light0, pf_v3(0.06f * cosf(a), -0.02f * (float)n, 0.06f * sinf(a)));
-    x->f.camera = x->scene.cameras[0];
-    x->f.camera.eye = pf_v3_add(x->f.camera.eye, pf_v3_scale(x->f.camera.right, 0.03f * (float)n));
+    x->t.scene.lights[0].position = pf_v3_add(x->light0, pf_v3(0.06f * cosf(a), -0.02f * (float)n, 0.06f * sinf(a)));
+    x->t.f.camera = x->t.scene.cameras[0];
+    x->t.f.camera.eye = pf_v3_add(x->t.f.camera.eye, pf_v3_scale(x->t.f.camera.right, 0.03f * (float)n));
 }
 
 /* gi_frame_render_raster without step 3: the frame shades with whatever
@@ -153,16 +137,16 @@ static void lag_case(int raytrace_vis, int probe)
     fx_begin(&p, 2, 1, raytrace_vis, probe);
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&p, n);
-        gi_frame_render_raster(&p.f);
+        gi_frame_render_raster(&p.t.f);
         piped[n] = malloc(sizeof(float) * px);
         assert_non_null(piped[n]);
-        memcpy(piped[n], p.f.final, sizeof(float) * px);
-        assert_int_equal(gi_vpl_set_reserve(&sets[n], p.f.ind.vpls.count, &err), PF_OK);
-        memcpy(sets[n].v, p.f.ind.vpls.v, sizeof(gi_vpl) * p.f.ind.vpls.count);
-        sets[n].count = p.f.ind.vpls.count;
+        memcpy(piped[n], p.t.f.final, sizeof(float) * px);
+        assert_int_equal(gi_vpl_set_reserve(&sets[n], p.t.f.ind.vpls.count, &err), PF_OK);
+        memcpy(sets[n].v, p.t.f.ind.vpls.v, sizeof(gi_vpl) * p.t.f.ind.vpls.count);
+        sets[n].count = p.t.f.ind.vpls.count;
         /* the update is recorded as its own stage in both modes */
         int found = 0;
-        for (uint32_t s = 0; s < p.f.times.count; s++) found |= !strcmp(p.f.times.name[s], "VPL update");
+        for (uint32_t s = 0; s < p.t.f.times.count; s++) found |= !strcmp(p.t.f.times.name[s], "VPL update");
         assert_true(found);
     }
     fx_end(&p);
@@ -172,9 +156,9 @@ static void lag_case(int raytrace_vis, int probe)
     fx_begin(&q, 1, 1, raytrace_vis, probe);
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&q, n);
-        gi_frame_render_raster(&q.f);
-        if (!images_equal(q.f.final, piped[n])) fail_msg("pipelined frame %u differs between 1 and 2 threads", n);
-        assert_sets_equal(&q.f.ind.vpls, &sets[n], "pipelined, 1 vs 2 threads", n, 0);
+        gi_frame_render_raster(&q.t.f);
+        if (!images_equal(q.t.f.final, piped[n])) fail_msg("pipelined frame %u differs between 1 and 2 threads", n);
+        assert_sets_equal(&q.t.f.ind.vpls, &sets[n], "pipelined, 1 vs 2 threads", n, 0);
     }
     fx_end(&q);
 
@@ -186,24 +170,24 @@ static void lag_case(int raytrace_vis, int probe)
     for (uint32_t n = 0; n < FRAMES; n++) {
         fx_set_frame(&u, n);
         if (n > 0) {
-            render_without_update(&u.f); /* frame N's inputs, frame N-1's set */
-            if (!images_equal(u.f.final, piped[n]))
+            render_without_update(&u.t.f); /* frame N's inputs, frame N-1's set */
+            if (!images_equal(u.t.f.final, piped[n]))
                 fail_msg("pipelined frame %u != unpipelined frame %u with frame %u's VPLs", n, n, n - 1);
             /* frame 1 shades with frame 0's set a second time: nothing in it moved */
             assert_sets_equal(&sets[n], &prev, "pipelined frame N vs unpipelined frame N-1", n, n == 1);
             if (n == 1)
                 for (uint32_t i = 0; i < sets[1].count; i++) assert_int_equal(sets[1].v[i].moved, 0);
         }
-        gi_frame_render_raster(&u.f);
+        gi_frame_render_raster(&u.t.f);
         if (n == 0) {
-            if (!images_equal(u.f.final, piped[0])) fail_msg("pipelined frame 0 != unpipelined frame 0");
-            assert_sets_equal(&u.f.ind.vpls, &sets[0], "frame 0, pipelined vs not", n, 0);
-        } else if (images_equal(u.f.final, piped[n])) {
+            if (!images_equal(u.t.f.final, piped[0])) fail_msg("pipelined frame 0 != unpipelined frame 0");
+            assert_sets_equal(&u.t.f.ind.vpls, &sets[0], "frame 0, pipelined vs not", n, 0);
+        } else if (images_equal(u.t.f.final, piped[n])) {
             fail_msg("frame %u: pipelined equals unpipelined although the light moved (no lag?)", n);
         }
-        assert_int_equal(gi_vpl_set_reserve(&prev, u.f.ind.vpls.count, &err), PF_OK);
-        memcpy(prev.v, u.f.ind.vpls.v, sizeof(gi_vpl) * u.f.ind.vpls.count);
-        prev.count = u.f.ind.vpls.count;
+        assert_int_equal(gi_vpl_set_reserve(&prev, u.t.f.ind.vpls.count, &err), PF_OK);
+        memcpy(prev.v, u.t.f.ind.vpls.v, sizeof(gi_vpl) * u.t.f.ind.vpls.count);
+        prev.count = u.t.f.ind.vpls.count;
     }
     fx_end(&u);
     gi_vpl_set_free(&prev);
@@ -241,21 +225,21 @@ static void test_maps_reused(void **state)
     uint32_t maps[3];
     for (uint32_t n = 0; n < 3; n++) {
         fx_set_frame(&p, n);
-        gi_frame_render_raster(&p.f);
-        maps[n] = p.f.ind.maps_rendered;
+        gi_frame_render_raster(&p.t.f);
+        maps[n] = p.t.f.ind.maps_rendered;
     }
-    assert_int_equal(maps[0], p.f.ind.vpls.count);
+    assert_int_equal(maps[0], p.t.f.ind.vpls.count);
     assert_int_equal(maps[1], 0);
     assert_true(maps[2] > 0); /* frame 1's set: the light moved, IR regenerated it */
     fx_end(&p);
     /* a static light: after frame 0 nothing moves and no map is rendered */
     fx_begin(&p, 2, 1, 0, 0);
     for (uint32_t n = 0; n < 4; n++) {
-        gi_frame_render_raster(&p.f);
+        gi_frame_render_raster(&p.t.f);
         uint32_t moved = 0;
-        for (uint32_t i = 0; i < p.f.ind.vpls.count; i++) moved += p.f.ind.vpls.v[i].moved != 0;
-        assert_int_equal(moved, n ? 0 : p.f.ind.vpls.count);
-        assert_int_equal(p.f.ind.maps_rendered, n ? 0 : p.f.ind.vpls.count);
+        for (uint32_t i = 0; i < p.t.f.ind.vpls.count; i++) moved += p.t.f.ind.vpls.v[i].moved != 0;
+        assert_int_equal(moved, n ? 0 : p.t.f.ind.vpls.count);
+        assert_int_equal(p.t.f.ind.maps_rendered, n ? 0 : p.t.f.ind.vpls.count);
     }
     fx_end(&p);
 }

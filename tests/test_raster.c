@@ -7,7 +7,9 @@
  * - scalar vs AVX2 vs AVX-512 and 1 vs 2 vs 5 threads: identical bytes;
  * - rasterized vs Embree G-buffer (Cornell box, Sibenik, conference room):
  *   depth and normal agree on >= 99.5% of pixels;
- * - golden hash of the Cornell box G-buffer (scalar path);
+ * - golden hash of the Cornell box G-buffer (scalar path), with its picture
+ *   (tests/data/golden/raster-gbuffer-cornell.png: depth, position, normal,
+ *   albedo and triangle id side by side);
  * - the AVX2 G-buffer resolve gives the scalar resolve's planes bit for bit. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -22,7 +24,9 @@
 #include "pf_imageio.h"
 #include "pf_rt.h"
 #include "rs_raster.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
+#include "tu_golden.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
@@ -436,30 +440,29 @@ static void test_paths_sibenik(void **state)
 
 static void check_vs_embree(const char *path)
 {
-    pf_scene s;
-    if (!tu_load_or_skip(&s, path)) return;
+    tu_fx x;
+    if (!tu_load_or_skip(&x.scene, path)) return;
     enum { W = 320, H = 240 };
     pf_error err;
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, pf_isa_detect(), 2, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    rs_context *ctx;
-    assert_int_equal(rs_context_create(&ctx, &s, jobs, rs_simd_for_isa(pf_isa_detect()), &err), PF_OK);
-    pf_camera cam = scene_camera(&s);
-    gi_frame a, b;
-    assert_int_equal(gi_frame_init(&a, &s, rt, ctx, jobs, &cam, W, H, 0, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&b, &s, rt, ctx, jobs, &cam, W, H, 0, &err), PF_OK);
-    gi_stage_gbuffer_raster(&a);
-    gi_stage_gbuffer_resolve(&a);
+    pf_camera cam = scene_camera(&x.scene);
+    /* frame a rasterized (the fixture's), frame b ray traced, on one Embree
+     * scene and one rasterizer at the CPU's best ISA */
+    tu_fx_desc d = {.threads = 2, .simd = rs_simd_for_isa(pf_isa_detect()), .isa = pf_isa_detect(),
+                    .build_threads = 2, .w = W, .h = H, .cam = &cam, .shadow_size = 1024};
+    tu_fx_begin_with(&x, &d);
+    gi_frame *a = &x.f, b;
+    assert_int_equal(gi_frame_init(&b, &x.scene, x.rt, x.rs, x.jobs, &cam, W, H, 0, &err), PF_OK);
+    gi_stage_gbuffer_raster(a);
+    gi_stage_gbuffer_resolve(a);
     gi_stage_gbuffer_raytrace(&b);
     uint32_t agree = 0, hits = 0;
     for (uint32_t i = 0; i < W * H; i++) {
-        float da = a.gbuf.depth[i], db = b.gbuf.depth[i];
+        float da = a->gbuf.depth[i], db = b.gbuf.depth[i];
         int ok;
         if (isinf(da) || isinf(db)) ok = isinf(da) && isinf(db);
         else {
-            float dn = a.gbuf.nrm_x[i] * b.gbuf.nrm_x[i] + a.gbuf.nrm_y[i] * b.gbuf.nrm_y[i] +
-                       a.gbuf.nrm_z[i] * b.gbuf.nrm_z[i];
+            float dn = a->gbuf.nrm_x[i] * b.gbuf.nrm_x[i] + a->gbuf.nrm_y[i] * b.gbuf.nrm_y[i] +
+                       a->gbuf.nrm_z[i] * b.gbuf.nrm_z[i];
             ok = fabsf(da - db) <= 1e-3f * db && dn > 0.999f;
             hits++;
         }
@@ -469,12 +472,8 @@ static void check_vs_embree(const char *path)
     print_message("%s: raster vs Embree G-buffer agree on %.4f%% of pixels (%u hit)\n", path, 100.0 * frac, hits);
     assert_true(hits > W * H / 4);
     assert_true(frac >= 0.995);
-    gi_frame_free(&a);
     gi_frame_free(&b);
-    rs_context_destroy(ctx);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&x);
 }
 
 static void test_vs_embree_cornell(void **state)
@@ -586,27 +585,36 @@ static void test_gbuffer_simd_resolve(void **state)
 static void test_golden_gbuffer(void **state)
 {
     (void)state;
-    pf_scene s;
-    pf_error err;
-    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    rs_context *ctx;
-    assert_int_equal(rs_context_create(&ctx, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, NULL, ctx, jobs, &s.cameras[0], 160, 120, 0, &err), PF_OK);
-    gi_stage_gbuffer_raster(&f);
-    gi_stage_gbuffer_resolve(&f);
-    const rs_gbuffer *g = &f.gbuf;
+    tu_fx x;
+    tu_load(&x.scene, CORNELL);
+    const pf_scene *s = &x.scene;
+    tu_fx_desc d = {.threads = 2, .w = 160, .h = 120, .shadow_size = 1024};
+    tu_fx_begin_with(&x, &d);
+    gi_stage_gbuffer_raster(&x.f);
+    gi_stage_gbuffer_resolve(&x.f);
+    const rs_gbuffer *g = &x.f.gbuf;
     const float *planes[] = {g->depth, g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y,
                              g->nrm_z, g->alb_r, g->alb_g, g->alb_b, (const float *)g->prim};
     uint64_t h = 0;
     for (size_t i = 0; i < sizeof planes / sizeof planes[0]; i++) h = h * 31 + pf_imageio_hash(planes[i], 160 * 120);
-    print_message("cornell-box raster G-buffer 160x120 hash %016llx\n", (unsigned long long)h);
-    assert_true(h == GOLDEN_GBUFFER_CORNELL);
-    gi_frame_free(&f);
-    rs_context_destroy(ctx);
-    pf_jobs_destroy(jobs);
-    pf_scene_free(&s);
+    /* the picture: depth (nearest to farthest surface), position (over the
+     * box's bounds), normal, albedo and triangle id */
+    enum { W = 160, H = 120 };
+    float dlo = INFINITY, dhi = 0.0f;
+    for (int i = 0; i < W * H; i++)
+        if (isfinite(g->depth[i])) dlo = fminf(dlo, g->depth[i]), dhi = fmaxf(dhi, g->depth[i]);
+    float lo = fminf(fminf(s->bounds_min.x, s->bounds_min.y), s->bounds_min.z);
+    float hi = fmaxf(fmaxf(s->bounds_max.x, s->bounds_max.y), s->bounds_max.z);
+    tu_golden_picture pic;
+    tu_golden_picture_init(&pic, 5 * W, H);
+    tu_golden_put_plane(&pic, 0, 0, g->depth, 1, W, H, dlo, dhi);
+    tu_golden_put_planes3(&pic, W, 0, g->pos_x, g->pos_y, g->pos_z, 1, W, H, lo, hi);
+    tu_golden_put_planes3(&pic, 2 * W, 0, g->nrm_x, g->nrm_y, g->nrm_z, 1, W, H, -1.0f, 1.0f);
+    tu_golden_put_planes3(&pic, 3 * W, 0, g->alb_r, g->alb_g, g->alb_b, 1, W, H, 0.0f, 1.0f);
+    tu_golden_put_ids(&pic, 4 * W, 0, g->prim, W, H, RS_GBUFFER_EMPTY);
+    tu_golden_check("raster-gbuffer-cornell", h, GOLDEN_GBUFFER_CORNELL, &pic);
+    tu_golden_picture_free(&pic);
+    tu_fx_end(&x);
 }
 
 int main(void)

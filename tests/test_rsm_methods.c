@@ -17,7 +17,8 @@
  *   point light's map is bit for bit the one made without area lights;
  * - each method: 30 frames (moving camera, a light that moves for a few
  *   frames) give bit-identical VPL sets with 1 and 2 threads, equal to the
- *   hashes recorded before area lights had RSMs, and a static frame moves
+ *   hashes recorded before area lights had RSMs (golden pictures of the VPLs
+ *   in tests/data/golden/rsm-*.png, tu_golden.h), and a static frame moves
  *   no VPL; under a camera pan TCAS moves fewer than half as many VPLs as
  *   InvTM (Barak 2013's temporal coherence);
  * - each method converges to Instant Radiosity (1 bounce, many VPLs) on the
@@ -30,10 +31,8 @@
  * Chi-square critical values: Wilson-Hilferty, chi2_{df, 1-a} ~ df (1 -
  * 2/(9 df) + z sqrt(2/(9 df)))^3 with z = 3.0902 (a = 0.001), within 0.5%
  * of the tables for df >= 15.
- *
- * Measurement (not a test; skipped unless asked): with
- * SOFTGI_BENCH_RSM=1 the last case times the VPL update of both methods on
- * Sibenik (see bench_rsm_sibenik). */
+ * Timing is not a test's job: `softgi bench frame --method invtm` (or tcas)
+ * times the VPL update (docs/perf.md). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -53,9 +52,9 @@
 #include "gi_vpl.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
-#include "pf_timer.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
+#include "tu_golden.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
@@ -570,7 +569,7 @@ static void fx_end(fx *x) { tu_fx_end(x); }
  * hash of all VPL sets; *static_moved counts moved VPLs on frames 21-24. */
 static uint32_t g_pan_moved; /* moved VPLs on frames 1-9 of the last method_frames (camera turning, light static) */
 static uint64_t method_frames(const gi_vpl_method *method, const char *param, uint32_t threads,
-                              uint32_t *static_moved)
+                              uint32_t *static_moved, tu_golden_picture *pic)
 /* (small RSMs and few camera points keep the 4 x 30 frames fast; the code
  * paths are the same at any size) */
 {
@@ -591,6 +590,12 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
     g_pan_moved = 0;
     pf_camera cam0 = x.scene.cameras[0];
     pf_vec3 light0 = x.scene.lights[0].position;
+    /* the picture: the VPLs of frames 0, 9 (camera turned), 14 (light moved)
+     * and 29 from above (x, z; top row) and from the front (x, y) */
+    const float lo[3] = {x.scene.bounds_min.x, x.scene.bounds_min.y, x.scene.bounds_min.z};
+    const float hi[3] = {x.scene.bounds_max.x, x.scene.bounds_max.y, x.scene.bounds_max.z};
+    uint32_t panel = 0;
+    if (pic) tu_golden_picture_init(pic, 4 * 64, 2 * 64);
     for (uint32_t frame = 0; frame < 30; frame++) {
         uint32_t cf = frame < 20 ? frame : (frame < 25 ? 20 : frame);
         pf_vec3 target = pf_v3_add(cam0.eye, cam0.forward);
@@ -611,6 +616,12 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
             if (frame == 0) assert_int_equal(set.v[i].moved, 1);
         }
         hash = hash * 1099511628211ull ^ pf_imageio_hash((const float *)set.v, set.count * (sizeof(gi_vpl) / 4));
+        if (pic && (frame == 0 || frame == 9 || frame == 14 || frame == 29)) {
+            const float *xyz = &set.v[0].pos.x;
+            tu_golden_put_points(pic, 64 * panel, 0, 64, 64, xyz, sizeof(gi_vpl) / 4, set.count, 0, 2, lo, hi);
+            tu_golden_put_points(pic, 64 * panel, 64, 64, 64, xyz, sizeof(gi_vpl) / 4, set.count, 0, 1, lo, hi);
+            panel++;
+        }
     }
     method->destroy(st);
     gi_vpl_set_free(&set);
@@ -620,14 +631,15 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
 
 /* golden: the hash the point-lit Cornell box gave before the area lights'
  * map existed (gi_rsm_area.h): scenes without emitters must not change. */
-static void check_deterministic(const gi_vpl_method *m, const char *param, uint64_t golden)
+static void check_deterministic(const gi_vpl_method *m, const char *param, const char *name, uint64_t golden)
 {
     uint32_t moved1, moved2;
-    uint64_t h1 = method_frames(m, param, 1, &moved1), h2 = method_frames(m, param, 2, &moved2);
-    print_message("%s %s: 30 frames, hash %016llx (1 thread) %016llx (2 threads); moved on static frames %u\n",
-                  m->name, param ? param : "", (unsigned long long)h1, (unsigned long long)h2, moved2);
+    tu_golden_picture pic;
+    uint64_t h1 = method_frames(m, param, 1, &moved1, &pic), h2 = method_frames(m, param, 2, &moved2, NULL);
+    print_message("%s %s: moved on static frames %u\n", m->name, param ? param : "", moved2);
     assert_true(h1 == h2);
-    assert_true(h1 == golden);
+    tu_golden_check(name, h1, golden, &pic);
+    tu_golden_picture_free(&pic);
     assert_int_equal(moved1, 0);
     assert_int_equal(moved2, 0);
 }
@@ -635,14 +647,14 @@ static void check_deterministic(const gi_vpl_method *m, const char *param, uint6
 static void test_invtm_deterministic(void **state)
 {
     (void)state;
-    check_deterministic(&gi_method_invtm, NULL, 0x42ec617c0ca5d89eull);
-    check_deterministic(&gi_method_invtm, "dims=2", 0x609e45a35d342518ull);
+    check_deterministic(&gi_method_invtm, NULL, "rsm-invtm-cornell", 0x42ec617c0ca5d89eull);
+    check_deterministic(&gi_method_invtm, "dims=2", "rsm-invtm-dims2-cornell", 0x609e45a35d342518ull);
 }
 
 static void test_tcas_deterministic(void **state)
 {
     (void)state;
-    check_deterministic(&gi_method_tcas, NULL, 0xae7c8a7d38a9b58full);
+    check_deterministic(&gi_method_tcas, NULL, "rsm-tcas-cornell", 0xae7c8a7d38a9b58full);
 }
 
 /* Barak 2013's claim (Sec. 4.3, 6.2): under a moving camera IM-H keeps most
@@ -653,9 +665,9 @@ static void test_tcas_more_coherent(void **state)
 {
     (void)state;
     uint32_t unused;
-    method_frames(&gi_method_invtm, NULL, 2, &unused);
+    method_frames(&gi_method_invtm, NULL, 2, &unused, NULL);
     uint32_t inv = g_pan_moved;
-    method_frames(&gi_method_tcas, NULL, 2, &unused);
+    method_frames(&gi_method_tcas, NULL, 2, &unused, NULL);
     uint32_t tc = g_pan_moved;
     print_message("moved VPLs over 9 frames of a camera pan (128 VPLs): invtm %u, tcas %u\n", inv, tc);
     assert_true(inv > 0);
@@ -807,10 +819,8 @@ static void test_area_energy_vs_reference(void **state)
         ro.bounces = 1;
         ro.indirect_only = 1;
         pf_error err;
-        double t0 = pf_time_now();
         assert_int_equal(gi_reference_render(ref, &x.scene, x.rt, x.jobs, &cam, W, H, &ro, &err), PF_OK);
         ref_mean = mean_lum(ref, W * H);
-        print_message("area-lit room: reference %.2f s\n", pf_time_now() - t0);
         fx_end(&x);
     }
     const struct {
@@ -834,13 +844,12 @@ static void test_area_energy_vs_reference(void **state)
         tu_fx_begin(&x, 2, RS_SIMD_SCALAR, W, H, &cam, &io, 1);
         assert_int_equal(x.f.area.count, 2);
         assert_int_equal(x.scene.light_count, 0);
-        double t0 = pf_time_now();
         gi_frame_render_raster(&x.f);
         memcpy(img, x.f.final, sizeof img);
         double ratio = mean_lum(img, W * H) / ref_mean;
         print_message("area-lit room, %s %s, 8192 VPLs, 1 bounce, indirect only, ray-traced visibility, no clamp: "
-                      "image mean / reference mean = %.4f (%.2f s)\n",
-                      cases[c].m->name, cases[c].param ? cases[c].param : "", ratio, pf_time_now() - t0);
+                      "image mean / reference mean = %.4f\n",
+                      cases[c].m->name, cases[c].param ? cases[c].param : "", ratio);
         assert_true(fabs(ratio - 1.0) < 0.03);
         fx_end(&x);
     }
@@ -958,143 +967,6 @@ static void test_bad_params(void **state)
     pf_scene_free(&s);
 }
 
-/* Measurement, not a test: VPL update time of both methods on Sibenik at
- * 1024 x 768 with 256 VPLs, the `softgi bench frame` camera and point light
- * ((0, 0, 0), 50 W/sr), 1 and 2 threads; the median over 15 frames after a
- * warm-up frame, the camera turning slightly every frame (so the importance
- * map and the VPLs are recomputed; the light is static, so the RSM is
- * rendered only in the warm-up frame: the RSM render time is reported on its
- * own, from a frame where the light moves). Runs only with
- * SOFTGI_BENCH_RSM=1 (both methods) or SOFTGI_BENCH_RSM=invtm / tcas. */
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* The bench's frame: Sibenik with one point light at (0, 0, 0), 50 W/sr, at
- * 1024 x 768 from the bench camera. 0 when the scene is not there. */
-static int bench_fx_begin(fx *x, uint32_t threads)
-{
-    if (!tu_load_or_skip(&x->scene, SIBENIK)) return 0;
-    pf_light L;
-    memset(&L, 0, sizeof L);
-    L.type = PF_LIGHT_POINT;
-    L.color = pf_v3(1, 1, 1);
-    L.intensity = 50.0f;
-    x->scene.lights = realloc(x->scene.lights, sizeof L);
-    assert_non_null(x->scene.lights);
-    x->scene.lights[0] = L;
-    x->scene.light_count = 1;
-    pf_error err;
-    fx_begin(x, threads, 1024, 768, NULL);
-    assert_int_equal(pf_camera_look_at(&x->f.camera, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70), &err),
-                     PF_OK);
-    return 1;
-}
-
-static void bench_rsm_sibenik(void **state)
-{
-    (void)state;
-    const char *which = getenv("SOFTGI_BENCH_RSM");
-    if (!which) {
-        print_message("SKIP: set SOFTGI_BENCH_RSM=1 to time the RSM methods on Sibenik\n");
-        return;
-    }
-    const char *params[] = {NULL, "dims=2", NULL};
-    const gi_vpl_method *methods[] = {&gi_method_invtm, &gi_method_invtm, &gi_method_tcas};
-    for (uint32_t threads = 1; threads <= 2; threads++)
-        for (int k = 0; k < 3; k++) {
-            if (strcmp(which, "1") != 0 && strcmp(which, methods[k]->name) != 0) continue;
-            fx x;
-            if (!bench_fx_begin(&x, threads)) return;
-            pf_error err;
-            gi_params p;
-            memset(&p, 0, sizeof p);
-            if (params[k]) assert_int_equal(gi_params_add(&p, params[k], &err), PF_OK);
-            void *st;
-            assert_int_equal(methods[k]->create(&st, &p, &err), PF_OK);
-            gi_vpl_set set = {0};
-            enum { F = 16 };
-            double t[F], moved_light = 0.0;
-            for (uint32_t frame = 0; frame <= F; frame++) {
-                pf_vec3 target = pf_v3(10.0f, -8.0f, 0.02f * (float)frame);
-                assert_int_equal(pf_camera_look_at(&x.f.camera, pf_v3(-18, -11, 0), target, pf_radians(70), &err),
-                                 PF_OK);
-                if (frame == F) x.scene.lights[0].position.y += 0.01f; /* the last frame: a moved light */
-                gi_stage_gbuffer_raster(&x.f);
-                gi_stage_gbuffer_resolve(&x.f);
-                gi_vpl_inputs in = {&x.scene, x.rt, x.jobs, &x.f.camera, frame, 256, 1, &x.f.gbuf, 1024, 768, &x.f.area};
-                double t0 = (1000.0 * pf_time_now());
-                assert_int_equal(methods[k]->update(st, &in, &set, &err), PF_OK);
-                double dt = (1000.0 * pf_time_now()) - t0;
-                if (frame >= 1 && frame < F) t[frame - 1] = dt;
-                if (frame == F) moved_light = dt;
-            }
-            qsort(t, F - 1, sizeof t[0], cmp_d);
-            print_message("bench: sibenik 1024x768, %s %s, 256 VPLs, %u thread(s): VPL update median %.2f ms "
-                          "(min %.2f, max %.2f) over %d frames; with a moved light (RSM re-rendered) %.2f ms\n",
-                          methods[k]->name, params[k] ? params[k] : "(defaults)", threads, t[(F - 1) / 2], t[0],
-                          t[F - 2], F - 1, moved_light);
-            methods[k]->destroy(st);
-            gi_vpl_set_free(&set);
-            fx_end(&x);
-        }
-    /* The stages on their own (Barak 2013 Table 2 times the sampling
-     * without the importance map): the importance map, InvTM's CDFs plus
-     * 256 samples, and 256 IM-H chains of M = 16, on the last frame's
-     * G-buffer; median of 15 repetitions. */
-    for (uint32_t threads = 1; threads <= 2; threads++) {
-        fx x;
-        if (!bench_fx_begin(&x, threads)) return;
-        pf_error err;
-        gi_stage_gbuffer_raster(&x.f);
-        gi_stage_gbuffer_resolve(&x.f);
-        gi_rsm_set rsm;
-        gi_rsm_set_init(&rsm, 0);
-        double t0 = 1000.0 * pf_time_now();
-        assert_int_equal(gi_rsm_set_update(&rsm, &x.scene, NULL, NULL, x.jobs, &err), PF_OK);
-        double t_rsm = 1000.0 * pf_time_now() - t0;
-        gi_importance im;
-        gi_importance_init(&im, 0);
-        gi_invtm_cdf cdf;
-        memset(&cdf, 0, sizeof cdf);
-        float diag = pf_v3_length(pf_v3_sub(x.scene.bounds_max, x.scene.bounds_min));
-        enum { R = 15 };
-        double ti[R], tc[R], th[R];
-        volatile uint32_t sink = 0;
-        for (int r = 0; r < R; r++) {
-            t0 = 1000.0 * pf_time_now();
-            assert_int_equal(gi_importance_update(&im, &rsm, &x.f.gbuf, diag, x.jobs, &err), PF_OK);
-            double t1 = 1000.0 * pf_time_now();
-            assert_int_equal(gi_invtm_build(&cdf, &im.domain, im.f, x.jobs, &err), PF_OK);
-            for (uint32_t i = 0; i < 256; i++)
-                sink += gi_invtm_sample(&cdf, &im.domain, 3, gi_halton(i + 1, 2), gi_halton(i + 1, 3),
-                                        gi_halton(i + 1, 5));
-            double t2 = 1000.0 * pf_time_now();
-            for (uint32_t j = 0; j < 256; j++) {
-                double w;
-                float fv;
-                sink += gi_imh_chain(&im.domain, im.f, j, 256, 16, &w, &fv, NULL);
-            }
-            double t3 = 1000.0 * pf_time_now();
-            ti[r] = t1 - t0, tc[r] = t2 - t1, th[r] = t3 - t2;
-        }
-        qsort(ti, R, sizeof ti[0], cmp_d);
-        qsort(tc, R, sizeof tc[0], cmp_d);
-        qsort(th, R, sizeof th[0], cmp_d);
-        print_message("bench stages: sibenik, %u texels, %u camera points, %u thread(s): RSM render+resolve %.2f ms "
-                      "(once); importance map %.2f ms; InvTM CDFs + 256 samples %.3f ms; 256 IM-H chains (M=16, "
-                      "serial) %.3f ms (medians of %d)\n",
-                      rsm.texel_count, im.count, threads, t_rsm, ti[R / 2], tc[R / 2], th[R / 2], R);
-        (void)sink;
-        gi_invtm_free(&cdf);
-        gi_importance_free(&im);
-        gi_rsm_set_free(&rsm);
-        fx_end(&x);
-    }
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1113,7 +985,6 @@ int main(void)
         cmocka_unit_test(test_area_energy_vs_reference),
         cmocka_unit_test(test_area_methods_deterministic),
         cmocka_unit_test(test_bad_params),
-        cmocka_unit_test(bench_rsm_sibenik),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -19,9 +19,7 @@
  *   a boundary a shadow map differs from exact rays by construction (edges
  *   snap to texel centres, PCF blurs 2 texels, thin shadows under 2 texels
  *   fade), and on Sibenik, at 3-4 cm texels, 15-18% of the samples lie that
- *   close to one. Every figure is printed; set SOFTGI_SHADOW_IMAGES=<dir>
- *   for PPM images of the disagreements, SOFTGI_SHADOW_DEBUG=1 to list the
- *   ones away from boundaries.
+ *   close to one. Every figure is printed.
  * - The maps hold what rays cast from the light through each texel centre
  *   hit, at the same depth (the lookup's axes match the matrices).
  * - Determinism: identical map bytes with 1 and 2 threads and on the scalar,
@@ -35,8 +33,8 @@
  * - Bias: every floor point a spot, a point light or a low sun reaches
  *   (up to 83 degrees from the normal) is fully lit: no acne.
  * - Frustum and box edges, cube face selection, bad input.
- * - Timing of each map kind on Sibenik at 1024 with 1 and 2 threads
- *   (printed only). */
+ * Timing is not a test's job: `softgi bench raster` times the cube map
+ * (docs/perf.md). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -53,7 +51,6 @@
 #include "pf_gltf.h"
 #include "pf_jobs.h"
 #include "pf_rt.h"
-#include "pf_timer.h"
 #include "rs_raster.h"
 #include "rs_shadow.h"
 #include "test_util.h"
@@ -246,8 +243,6 @@ static int shadow_ray(const pf_light *L, pf_vec3 p, pf_vec3 ng, pf_ray *r)
  * rasterized edge may lie off the true one, rounded up. */
 #define BOUNDARY_TEXELS 3.0f
 
-static const char *g_scene = "x";
-
 typedef struct agreement {
     uint32_t samples, lit_rt, agree1, agree16, fractional; /* all samples */
     uint32_t away, away_agree1, away_agree16;              /* samples away from shadow boundaries */
@@ -304,7 +299,6 @@ static agreement measure(const world *w, uint32_t light, const sample *smp, uint
     agreement a;
     memset(&a, 0, sizeof a);
     a.samples = m;
-    unsigned char *img = getenv("SOFTGI_SHADOW_IMAGES") ? calloc((size_t)VIEW * VIEW * 3 * 3, 1) : NULL;
     for (uint32_t i = 0; i < m; i++) {
         const sample *s = &smp[which[i]];
         int lit_rt = !occ[i * per];
@@ -324,30 +318,6 @@ static agreement measure(const world *w, uint32_t light, const sample *smp, uint
             a.away_agree1 += (uint32_t)ok1;
             a.away_agree16 += (uint32_t)ok16;
         }
-        if (img) { /* grey: lit, dark: shadow, blue: near a boundary, red: leak, yellow: false shadow */
-            unsigned char *px = img + 3 * s->pixel;
-            unsigned char g = lit_rt ? 120 : 30;
-            px[0] = !ok16 ? 255 : g;
-            px[1] = !ok16 ? (lit_rt ? 255 : 0) : g;
-            px[2] = !ok16 ? 0 : (near ? 200 : g);
-        }
-        if (getenv("SOFTGI_SHADOW_DEBUG") && !near && (!ok1 || !ok16)) {
-            float c = fabsf(pf_v3_dot(s->ng, rays[i * per].dir));
-            print_message("  disagree%s%s: ray %s cos %.4f p (%.4f %.4f %.4f) ng (%.3f %.3f %.3f) 1-tap %g PCF %g\n",
-                          ok1 ? "" : " 1-tap", ok16 ? "" : " PCF", lit_rt ? "lit" : "shadow", c, s->p.x, s->p.y,
-                          s->p.z, s->ng.x, s->ng.y, s->ng.z, v1, v16);
-        }
-    }
-    if (img) {
-        char name[256];
-        snprintf(name, sizeof name, "%s/shadow_%s_%u.ppm", getenv("SOFTGI_SHADOW_IMAGES"), g_scene, light);
-        FILE *f = fopen(name, "wb");
-        if (f) {
-            fprintf(f, "P6 %u %u 255\n", VIEW, 3 * VIEW);
-            fwrite(img, 1, (size_t)VIEW * VIEW * 3 * 3, f);
-            fclose(f);
-        }
-        free(img);
     }
     free(rays);
     free(valid);
@@ -397,7 +367,6 @@ static void check_scene(const char *path, const pf_light lights[3], const view *
         free(part);
     }
     const char *name = strrchr(path, '/') + 1;
-    g_scene = name;
     for (uint32_t l = 0; l < 3; l++) {
         assert_int_equal(w.set.maps[l].kind, want_kind[l]);
         assert_int_equal(w.set.maps[l].size, RS_SHADOW_DEFAULT_SIZE);
@@ -898,49 +867,6 @@ static void test_bad_input(void **state)
     pf_scene_free(&s);
 }
 
-/* Render times of each map kind on Sibenik at 1024, 1 and 2 threads, best
- * of 5, printed, not asserted (skipped in debug builds, whose times mean
- * nothing and which must stay fast under the sanitizers). */
-static void test_timing(void **state)
-{
-    (void)state;
-#ifndef NDEBUG
-    print_message("SKIP: timing in a debug build\n");
-    return;
-#endif
-    world w;
-    if (!load(&w, SIBENIK_PATH)) return;
-    const pf_light lights[3] = {
-        make_spot(pf_v3(12.0f, -4.0f, 2.0f), pf_v3(-5.0f, -15.0f, -2.0f), 25.0f, 35.0f),
-        make_point(pf_v3(-2.0f, -6.0f, 0.5f)),
-        make_directional(pf_v3(0.5f, -1.0f, 0.3f)),
-    };
-    world_lights(&w, lights, 3);
-    const int reps = 5;
-    rs_simd simd = rs_simd_for_isa(pf_isa_detect());
-    pf_error err;
-    rs_shadow_set set;
-    assert_int_equal(rs_shadow_set_init(&set, &w.scene, NULL, &err), PF_OK);
-    for (uint32_t threads = 1; threads <= 2; threads++) {
-        pf_jobs *jobs = pf_jobs_create(threads);
-        rs_context *ctx;
-        assert_int_equal(rs_context_create(&ctx, &w.scene, jobs, simd, &err), PF_OK);
-        double best[3] = {INFINITY, INFINITY, INFINITY};
-        for (int r = 0; r < reps; r++)
-            for (uint32_t l = 0; l < 3; l++) {
-                double t0 = pf_time_now();
-                rs_shadow_render(ctx, &set.maps[l], 1, NULL);
-                best[l] = fmin(best[l], 1000.0 * (pf_time_now() - t0));
-            }
-        print_message("sibenik 1024, %u thread(s), %s: spot %.1f ms, cube (6 faces) %.1f ms, ortho %.1f ms\n",
-                      threads, rs_simd_name(simd), best[0], best[1], best[2]);
-        rs_context_destroy(ctx);
-        pf_jobs_destroy(jobs);
-    }
-    rs_shadow_set_free(&set);
-    world_free(&w);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -949,7 +875,7 @@ int main(void)
         cmocka_unit_test(test_pcf_edge),          cmocka_unit_test(test_map_matches_rays),
         cmocka_unit_test(test_deterministic),     cmocka_unit_test(test_simd_matches_scalar),
         cmocka_unit_test(test_agreement_cornell), cmocka_unit_test(test_agreement_maze),
-        cmocka_unit_test(test_agreement_sibenik), cmocka_unit_test(test_timing),
+        cmocka_unit_test(test_agreement_sibenik),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

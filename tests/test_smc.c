@@ -27,14 +27,13 @@
 
 #include <cmocka.h>
 #include <math.h>
-#include <time.h>
 
 #include "gi_frame.h"
 #include "gi_knn.h"
 #include "gi_radiosity.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
-#include "pf_timer.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -43,20 +42,12 @@
 
 /* ---------------------------------------------------------------- fixture */
 
-typedef struct fx {
-    pf_scene scene;
-    pf_rt *rt;
-    pf_jobs *jobs;
-    rs_context *rs;
-    gi_frame f;
-    int has_frame;
-} fx;
+typedef tu_fx fx;
 
 static void fx_load(fx *x, const char *path)
 {
-    pf_error err;
     memset(x, 0, sizeof *x);
-    if (pf_gltf_load(&x->scene, path, NULL, &err) != PF_OK) fail_msg("%s", err.message);
+    tu_load(&x->scene, path);
 }
 
 /* A frame with the smc method and `params` (NULL-terminated KEY=VALUE). */
@@ -64,29 +55,16 @@ static void fx_begin(fx *x, uint32_t threads, uint32_t w, uint32_t h, const pf_c
                      const char *const *params)
 {
     pf_error err;
-    assert_int_equal(pf_scene_validate(&x->scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&x->rt, &x->scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x->jobs = pf_jobs_create(threads);
-    assert_int_equal(rs_context_create(&x->rs, &x->scene, x->jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, w, h, 64, &err), PF_OK);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = gi_vpl_method_find("smc");
     io.vpls = vpls;
     io.visibility_raytrace = 1; /* these tests look at the VPL sets only */
     for (const char *const *p = params; p && *p; p++) assert_int_equal(gi_params_add(&io.params, *p, &err), PF_OK);
-    if (gi_frame_enable_indirect(&x->f, &io, 1, &err) != PF_OK) fail_msg("%s", err.message);
-    x->has_frame = 1;
+    tu_fx_begin(x, threads, RS_SIMD_SCALAR, w, h, cam, &io, 1);
 }
 
-static void fx_end(fx *x)
-{
-    if (x->has_frame) gi_frame_free(&x->f);
-    if (x->rs) rs_context_destroy(x->rs);
-    if (x->jobs) pf_jobs_destroy(x->jobs);
-    if (x->rt) pf_rt_destroy(x->rt);
-    pf_scene_free(&x->scene);
-}
+static void fx_end(fx *x) { tu_fx_end(x); }
 
 /* G-buffer and VPL update of one frame (the stages SMC depends on). */
 static void fx_update(fx *x)
@@ -412,12 +390,6 @@ static double furnace_irradiance(uint32_t vpls, const char *const *params)
     fx_load(&x, SPHERE);
     x.scene.light_count = 0;
     pf_error err;
-    assert_int_equal(pf_scene_validate(&x.scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&x.rt, &x.scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x.jobs = pf_jobs_create(2);
-    assert_int_equal(rs_context_create(&x.rs, &x.scene, x.jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x.f, &x.scene, x.rt, x.rs, x.jobs, &x.scene.cameras[0], 48, 48, 64, &err), PF_OK);
-    x.has_frame = 1;
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = gi_vpl_method_find("smc");
@@ -428,7 +400,7 @@ static double furnace_irradiance(uint32_t vpls, const char *const *params)
     io.filter = GI_FILTER_NONE;
     io.clamp = -1.0f;
     for (const char *const *p = params; p && *p; p++) assert_int_equal(gi_params_add(&io.params, *p, &err), PF_OK);
-    assert_int_equal(gi_frame_enable_indirect(&x.f, &io, 1, &err), PF_OK);
+    tu_fx_begin(&x, 2, RS_SIMD_SCALAR, 48, 48, &x.scene.cameras[0], &io, 1);
     gi_frame_render_raster(&x.f);
     double sum = 0.0;
     for (uint32_t i = 0; i < 48 * 48; i++) sum += x.f.ind.combined[3 * i + 1];
@@ -504,12 +476,6 @@ static void test_units_cornell(void **state)
     fx_load(&x, CORNELL);
     x.scene.lights[0].position = pf_v3(0.278f, 0.35f, 0.15f);
     pf_error err;
-    assert_int_equal(pf_scene_validate(&x.scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&x.rt, &x.scene, PF_ISA_SSE2, 1, &err), PF_OK);
-    x.jobs = pf_jobs_create(2);
-    assert_int_equal(rs_context_create(&x.rs, &x.scene, x.jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    assert_int_equal(gi_frame_init(&x.f, &x.scene, x.rt, x.rs, x.jobs, &x.scene.cameras[0], W, H, 64, &err), PF_OK);
-    x.has_frame = 1;
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = gi_vpl_method_find("smc");
@@ -518,7 +484,7 @@ static void test_units_cornell(void **state)
     io.visibility_raytrace = 1;
     io.filter = GI_FILTER_NONE;
     io.clamp = 0.0f;
-    assert_int_equal(gi_frame_enable_indirect(&x.f, &io, 1, &err), PF_OK);
+    tu_fx_begin(&x, 2, RS_SIMD_SCALAR, W, H, &x.scene.cameras[0], &io, 1);
     gi_frame_render_raster(&x.f);
     static float ref[3 * W * H];
     gi_reference_options ro;
@@ -531,97 +497,6 @@ static void test_units_cornell(void **state)
     print_message("Cornell box, 256 VPLs: SMC image mean / reference %.4f\n", a / b);
     assert_true(fabs(a / b - 1.0) < 0.03);
     fx_end(&x);
-}
-
-/* ---------------------------------------------------------------- timing */
-
-/* CPU seconds of the whole process (all threads): on a shared machine the
- * wall clock includes time other processes took the cores; this does not. */
-static double cpu_now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : (x > y);
-}
-
-/* Opt-in timing (SOFTGI_SMC_BENCH=1 ./build/tests/test_smc): the SMC update
- * on Sibenik (../shared/scenes) with one point light at (0, 0, 0), 50 W/sr,
- * and the camera of `softgi bench frame` at 1024x768, for I = 256 and 2048
- * on 1 and 2 threads: the first update (line 1 + 100 warm-up iterations)
- * and the median and minimum of 10 later updates (one iteration each; the
- * G-buffer stages are not timed). It also checks each later frame returns
- * I VPLs of which at most M_max are new. */
-static void test_bench_sibenik(void **state)
-{
-    (void)state;
-    if (!getenv("SOFTGI_SMC_BENCH")) {
-        print_message("SKIP: timing only with SOFTGI_SMC_BENCH=1\n");
-        return;
-    }
-    const uint32_t budgets[2] = {256, 2048}, threads[2] = {1, 2};
-    for (int bi = 0; bi < 2; bi++)
-        for (int ti = 0; ti < 2; ti++) {
-            fx x;
-            memset(&x, 0, sizeof x);
-            if (!tu_load_or_skip(&x.scene, SOFTGI_SOURCE_DIR "/../shared/scenes/sibenik/sibenik.gltf")) return;
-            pf_error err;
-            pf_light L;
-            memset(&L, 0, sizeof L);
-            L.type = PF_LIGHT_POINT;
-            L.position = pf_v3(0, 0, 0);
-            L.color = pf_v3(1, 1, 1);
-            L.intensity = 50.0f;
-            x.scene.light_count = 0;
-            assert_int_equal(pf_scene_add_light(&x.scene, &L, &err), PF_OK);
-            pf_camera cam;
-            pf_vec3 eye = pf_v3(-18, -11, 0), target = pf_v3(10, -8, 0);
-            assert_int_equal(pf_camera_look_at(&cam, eye, target, pf_radians(70), &err), PF_OK);
-            pf_isa isa;
-            assert_int_equal(pf_isa_resolve(PF_ISA_AUTO, &isa, &err), PF_OK);
-            assert_int_equal(pf_scene_validate(&x.scene, &err), PF_OK);
-            assert_int_equal(pf_rt_create(&x.rt, &x.scene, isa, 1, &err), PF_OK);
-            x.jobs = pf_jobs_create(threads[ti]);
-            assert_int_equal(rs_context_create(&x.rs, &x.scene, x.jobs, rs_simd_for_isa(isa), &err), PF_OK);
-            assert_int_equal(gi_frame_init(&x.f, &x.scene, x.rt, x.rs, x.jobs, &cam, 1024, 768, 0, &err), PF_OK);
-            x.has_frame = 1;
-            gi_indirect_options io;
-            memset(&io, 0, sizeof io);
-            io.method = gi_vpl_method_find("smc");
-            io.vpls = budgets[bi];
-            io.visibility_raytrace = 1;
-            assert_int_equal(gi_frame_enable_indirect(&x.f, &io, 0, &err), PF_OK);
-            gi_stage_gbuffer_raster(&x.f);
-            gi_stage_gbuffer_resolve(&x.f);
-            double t0 = pf_time_now();
-            gi_stage_vpl_update(&x.f);
-            double first = (pf_time_now() - t0) * 1e3, ms[10], cpu[10];
-            for (int fr = 0; fr < 10; fr++) {
-                gi_stage_gbuffer_raster(&x.f);
-                gi_stage_gbuffer_resolve(&x.f);
-                t0 = pf_time_now();
-                double c0 = cpu_now();
-                gi_stage_vpl_update(&x.f);
-                ms[fr] = (pf_time_now() - t0) * 1e3;
-                cpu[fr] = (cpu_now() - c0) * 1e3;
-                uint32_t moved = 0;
-                for (uint32_t i = 0; i < x.f.ind.vpls.count; i++) moved += x.f.ind.vpls.v[i].moved;
-                assert_int_equal(x.f.ind.vpls.count, budgets[bi]);
-                assert_true(moved <= 16);
-            }
-            qsort(ms, 10, sizeof ms[0], cmp_double);
-            qsort(cpu, 10, sizeof cpu[0], cmp_double);
-            print_message("smc update, sibenik 1024x768, I = %4u, %u thread%s: first (warm-up) %8.1f ms, then median "
-                          "%7.1f ms, min %7.1f ms per frame (CPU time, all threads: median %7.1f ms)\n",
-                          budgets[bi], threads[ti], threads[ti] > 1 ? "s" : " ", first, 0.5 * (ms[4] + ms[5]), ms[0],
-                          0.5 * (cpu[4] + cpu[5]));
-            fx_end(&x);
-        }
 }
 
 /* ---------------------------------------------------------------- errors */
@@ -674,7 +549,7 @@ int main(void)
         cmocka_unit_test(test_static_converges),      cmocka_unit_test(test_corridor_hidden_room),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_units_furnace),
         cmocka_unit_test(test_no_drift),              cmocka_unit_test(test_units_cornell),
-        cmocka_unit_test(test_bad_input),             cmocka_unit_test(test_bench_sibenik),
+        cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -24,12 +24,10 @@
 
 #include <cmocka.h>
 #include <math.h>
-#include <time.h>
 
 #include "gi_frame.h"
 #include "gi_kmeans.h"
 #include "pf_gltf.h"
-#include "pf_timer.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
 
@@ -139,15 +137,11 @@ typedef struct ctx {
     gi_vpl_inputs in;
 } ctx;
 
-/* Embree's ISA: sse2 in the tests (the golden-test convention: the same
- * bits on every x86-64 CPU), the CPU's best in the bench. */
-static pf_isa g_isa = PF_ISA_SSE2;
-
 static void ctx_begin(ctx *c, uint32_t threads, const char *const *kv, uint32_t nkv, uint32_t budget)
 {
     pf_error err;
     assert_int_equal(pf_scene_validate(&c->scene, &err), PF_OK);
-    assert_int_equal(pf_rt_create(&c->rt, &c->scene, g_isa, 1, &err), PF_OK);
+    assert_int_equal(pf_rt_create(&c->rt, &c->scene, PF_ISA_SSE2, 1, &err), PF_OK); /* the tests' pin */
     c->jobs = pf_jobs_create(threads);
     memset(&c->area, 0, sizeof c->area);
     gi_params p;
@@ -373,17 +367,10 @@ typedef struct frame_means {
 static frame_means cornell_indirect(const gi_vpl_method *m, uint32_t vpls, uint32_t bounces, const char *const *kv,
                                     uint32_t nkv)
 {
-    pf_scene s;
+    tu_fx x;
     pf_error err;
-    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    gi_frame f;
+    tu_load(&x.scene, CORNELL);
     enum { W = 128, H = 128 };
-    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &s.cameras[0], W, H, 256, &err), PF_OK);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = m;
@@ -392,24 +379,22 @@ static frame_means cornell_indirect(const gi_vpl_method *m, uint32_t vpls, uint3
     io.visibility_raytrace = 1;
     io.filter = GI_FILTER_NONE;
     for (uint32_t i = 0; i < nkv; i++) assert_int_equal(gi_params_add(&io.params, kv[i], &err), PF_OK);
-    assert_int_equal(gi_frame_enable_indirect(&f, &io, 0, &err), PF_OK);
-    gi_frame_render_raster(&f);
+    tu_fx_desc d = {.threads = 2, .w = W, .h = H, .shadow_size = 256, .io = &io};
+    tu_fx_begin_with(&x, &d);
+    gi_frame *f = &x.f;
+    gi_frame_render_raster(f);
     frame_means r = {0, 0, 0};
     uint32_t all = 0;
     for (uint32_t i = 0; i < W * H; i++) {
-        if (f.gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
-        const float *e = f.ind.filtered + 3 * i, *d = f.direct + 3 * i;
+        if (f->gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+        const float *e = f->ind.filtered + 3 * i, *dl = f->direct + 3 * i;
         double lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
         r.all += lum, all++;
-        if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) r.shadow += lum, r.shadow_px++;
+        if (dl[0] == 0.0f && dl[1] == 0.0f && dl[2] == 0.0f) r.shadow += lum, r.shadow_px++;
     }
     r.all /= all;
     r.shadow /= r.shadow_px ? r.shadow_px : 1;
-    gi_frame_free(&f);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&x);
     return r;
 }
 
@@ -549,95 +534,6 @@ static void test_errors(void **state)
                      "clusters");
 }
 
-/* ---------------------------------------------------------------- bench */
-
-/* Not a test: SOFTGI_SSVP_BENCH=1 ./build/tests/test_ssvp prints SSVP's
- * per-frame VPL management time (the method's update: light RSM, first
- * bounce, k-means, cluster maps, second bounce) on Sibenik with a spot light,
- * 1 and 2 threads: 30 frames with the light sweeping along the nave (every
- * frame re-renders the RSM and the moved clusters' maps), then 30 frames with
- * it still (maps reused). Paper defaults: 256 + 256 VPLs, 8 clusters,
- * 256^2 maps. */
-/* CPU seconds of the whole process (all its threads): on a shared machine
- * the wall clock also counts the time other jobs hold the cores. */
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static void bench_sibenik(uint32_t threads, const char *const *kv, uint32_t nkv, const char *label)
-{
-    ctx c;
-    if (!tu_load_or_skip(&c.scene, SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf")) return;
-    pf_light L;
-    memset(&L, 0, sizeof L);
-    snprintf(L.name, sizeof L.name, "spot");
-    L.type = PF_LIGHT_SPOT;
-    L.direction = pf_v3_normalize(pf_v3(-0.3f, -1.0f, 0.0f));
-    L.color = pf_v3(1, 1, 1);
-    L.intensity = 200.0f;
-    L.inner_cone = pf_radians(35.0f);
-    L.outer_cone = pf_radians(45.0f);
-    pf_error err;
-    free(c.scene.lights);
-    c.scene.lights = NULL;
-    c.scene.light_count = 0;
-    assert_int_equal(pf_scene_add_light(&c.scene, &L, &err), PF_OK);
-    ctx_begin(&c, threads, kv, nkv, 512);
-    enum { F = 30 };
-    double moving[F], still[F], first = 0.0, cpu_moving = 0.0;
-    gi_vpl_set v = {0};
-    uint32_t nv = 0;
-    for (int fr = 0; fr < 2 * F; fr++) {
-        float t = fr < F ? (float)fr / (F - 1) : 1.0f;
-        c.scene.lights[0].position = pf_v3(8.0f - 16.0f * t, 4.0f, 0.0f);
-        double t0 = pf_time_now(), c0 = cpu_now();
-        update(&c, &v);
-        double ms = (pf_time_now() - t0) * 1e3;
-        if (fr >= 1 && fr < F) cpu_moving += (cpu_now() - c0) * 1e3;
-        if (fr == 0) first = ms;
-        if (fr < F) moving[fr] = ms;
-        else still[fr - F] = ms;
-        nv = v.count;
-    }
-    double sum_m = 0.0;
-    for (int i = 1; i < F; i++) sum_m += moving[i];
-    qsort(moving + 1, F - 1, sizeof(double), cmp_double);
-    qsort(still, F, sizeof(double), cmp_double);
-    print_message("BENCH ssvp sibenik %-22s %u thread%s: first frame %.1f ms; moving light: median %.1f ms, mean %.1f "
-                  "ms, CPU %.1f ms (all threads) per frame (frames 1-29); still light: median %.2f ms; %u VPLs\n",
-                  label, threads, threads > 1 ? "s" : " ", first, moving[F / 2], sum_m / (F - 1),
-                  cpu_moving / (F - 1), still[F / 2], nv);
-    gi_vpl_set_free(&v);
-    ctx_end(&c);
-}
-
-static void test_bench(void **state)
-{
-    (void)state;
-    if (!getenv("SOFTGI_SSVP_BENCH")) {
-        print_message("SKIP: the bench runs with SOFTGI_SSVP_BENCH=1\n");
-        return;
-    }
-    const char *first_only[] = {"second=0"}, *lazy[] = {"lazy_maps=1"};
-    g_isa = pf_isa_detect();
-    print_message("BENCH Embree ISA %s\n", pf_isa_name(g_isa));
-    for (uint32_t t = 1; t <= 2; t++) {
-        bench_sibenik(t, NULL, 0, "256+256 (defaults)");
-        bench_sibenik(t, lazy, 1, "256+256 lazy_maps=1");
-        bench_sibenik(t, first_only, 1, "256 first bounce only");
-    }
-    g_isa = PF_ISA_SSE2;
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -646,7 +542,6 @@ int main(void)
         cmocka_unit_test(test_threads_30_frames), cmocka_unit_test(test_lazy_maps_identical),
         cmocka_unit_test(test_second_bounce_adds_light),
         cmocka_unit_test(test_gaussian_filter),   cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_bench),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

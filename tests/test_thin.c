@@ -53,6 +53,7 @@
 #include "pf_jobs.h"
 #include "pf_rt.h"
 #include "rs_raster.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define SIBENIK SOFTGI_SHARED_SCENES "/sibenik/sibenik.gltf"
@@ -195,23 +196,25 @@ static void write_sliver_floor(const char *dir, char *gltf_path, size_t size)
     assert_int_equal(fclose(f), 0);
 }
 
-/* Renders the floor from `eye` (ray-traced, then rasterized) and checks every
+/* Renders the floor from `eye` (ray-traced, then rasterized; the fixture's
+ * frame, built for this camera, on the scene x->scene) and checks every
  * pixel against the analytic direct light: albedo I cos / (pi r^2) seen from
  * above, 0 seen from below. */
-static void check_sliver_floor(const pf_scene *s, pf_rt *rt, rs_context *rs, pf_jobs *jobs, pf_vec3 eye,
-                               int from_above)
+static void check_sliver_floor(tu_fx *x, pf_vec3 eye, int from_above)
 {
+    const pf_scene *s = &x->scene;
     const pf_light *L = &s->lights[0];
     const float *albedo = s->materials[s->tri_material[0]].base_color;
     pf_error err;
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, eye, pf_v3(0, 0, 0), pf_radians(60.0f), &err), PF_OK);
+    tu_fx_desc d = {.threads = 2, .w = FW, .h = FH, .cam = &cam, .shadow_size = 1024};
+    tu_fx_begin_with(x, &d);
+    gi_frame *f = &x->f;
     for (int raster = 0; raster < 2; raster++) {
-        gi_frame f;
-        assert_int_equal(gi_frame_init(&f, s, rt, rs, jobs, &cam, FW, FH, 0, &err), PF_OK);
-        if (raster) gi_frame_render_raster(&f);
-        else gi_frame_render_raytraced(&f);
-        const rs_gbuffer *g = &f.gbuf;
+        if (raster) gi_frame_render_raster(f);
+        else gi_frame_render_raytraced(f);
+        const rs_gbuffer *g = &f->gbuf;
         double worst = 0.0;
         int black = 0;
         for (int i = 0; i < FW * FH; i++) {
@@ -221,7 +224,7 @@ static void check_sliver_floor(const pf_scene *s, pf_rt *rt, rs_context *rs, pf_
             double r2 = dx * dx + dy * dy + dz * dz;
             double e = from_above ? L->intensity * (dy / sqrt(r2)) / r2 : 0.0;
             for (int c = 0; c < 3; c++) {
-                double want = albedo[c] * e / M_PI, got = f.direct[3 * i + c];
+                double want = albedo[c] * e / M_PI, got = f->direct[3 * i + c];
                 if (from_above) {
                     double rel = fabs(got - want) / want;
                     worst = fmax(worst, rel);
@@ -233,12 +236,12 @@ static void check_sliver_floor(const pf_scene *s, pf_rt *rt, rs_context *rs, pf_
                              raster ? "rasterized" : "ray-traced", i % FW, i / FW, got);
                 }
             }
-            black += f.direct[3 * i] == 0.0f;
+            black += f->direct[3 * i] == 0.0f;
         }
         print_message("sliver floor seen from %s, %s: %d black pixels, worst relative error %.3g\n",
                       from_above ? "above" : "below", raster ? "rasterized" : "ray-traced", black, worst);
-        gi_frame_free(&f);
     }
+    tu_fx_end_frame(x); /* the scene stays for the next view */
 }
 
 static void test_sliver_floor(void **state)
@@ -247,30 +250,21 @@ static void test_sliver_floor(void **state)
     char dir[256], path[512];
     assert_int_equal(tu_tmpdir_create(dir, sizeof dir, "softgi-thin"), 0);
     write_sliver_floor(dir, path, sizeof path);
-    pf_scene s;
+    tu_fx x;
+    pf_scene *s = &x.scene;
     pf_error err;
-    if (pf_gltf_load(&s, path, NULL, &err) != PF_OK) fail_msg("%s", err.message);
+    tu_load(s, path);
     assert_int_equal(tu_tmpdir_remove(dir), 0);
-    assert_int_equal(s.tri_count, 2 * SLIVER_STRIPS);
-    for (uint32_t v = 0; v < s.vertex_count; v++) /* generated: +Y for a floor at y = 0 */
-        assert_true(fabsf(s.normals[v].x) < 1e-6f && fabsf(s.normals[v].y - 1.0f) < 1e-6f &&
-                    fabsf(s.normals[v].z) < 1e-6f);
+    assert_int_equal(s->tri_count, 2 * SLIVER_STRIPS);
+    for (uint32_t v = 0; v < s->vertex_count; v++) /* generated: +Y for a floor at y = 0 */
+        assert_true(fabsf(s->normals[v].x) < 1e-6f && fabsf(s->normals[v].y - 1.0f) < 1e-6f &&
+                    fabsf(s->normals[v].z) < 1e-6f);
     /* 10 cm above a 10 m floor: 1.1 degrees above the horizon at its far corners */
     pf_light L = {.type = PF_LIGHT_POINT, .position = {0.0f, 0.1f, 0.3f}, .color = {1, 1, 1}, .intensity = 1.0f};
-    assert_int_equal(pf_scene_add_light(&s, &L, &err), PF_OK);
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    assert_non_null(jobs);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
-    check_sliver_floor(&s, rt, rs, jobs, pf_v3(0.3f, 3.0f, 1.0f), 1);
-    check_sliver_floor(&s, rt, rs, jobs, pf_v3(0.3f, -3.0f, 1.0f), 0);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    assert_int_equal(pf_scene_add_light(s, &L, &err), PF_OK);
+    check_sliver_floor(&x, pf_v3(0.3f, 3.0f, 1.0f), 1);
+    check_sliver_floor(&x, pf_v3(0.3f, -3.0f, 1.0f), 0);
+    pf_scene_free(s);
 }
 
 /* ---------------------------------------------------------------- 2. Sibenik, the view */
@@ -281,42 +275,35 @@ static void test_sliver_floor(void **state)
 static void test_sibenik_black_pixels_unlit_at_centre(void **state)
 {
     (void)state;
-    pf_scene s;
-    if (!tu_load_or_skip(&s, SIBENIK)) return;
+    tu_fx x;
+    if (!tu_load_or_skip(&x.scene, SIBENIK)) return;
+    const pf_scene *s = &x.scene;
     pf_error err;
-    s.light_count = 0; /* --light replaces the scene's lights */
+    x.scene.light_count = 0; /* --light replaces the scene's lights */
     pf_light L = {.type = PF_LIGHT_POINT, .position = {0, 0, 0}, .color = {1, 1, 1}, .intensity = 50.0f};
-    assert_int_equal(pf_scene_add_light(&s, &L, &err), PF_OK);
-    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    assert_int_equal(pf_scene_add_light(&x.scene, &L, &err), PF_OK);
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(-18, -11, 0), pf_v3(10, -8, 0), pf_radians(70.0f), &err), PF_OK);
-    pf_rt *rt;
-    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
-    pf_jobs *jobs = pf_jobs_create(2);
-    assert_non_null(jobs);
-    rs_context *rs;
-    assert_int_equal(rs_context_create(&rs, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
 
     /* the two renders (direct light only, 1024^2 shadow maps as the CLI) and the box-filtered reference */
+    tu_fx_desc d = {.threads = 2, .w = SW, .h = SH, .cam = &cam, .shadow_size = 1024};
+    tu_fx_begin_with(&x, &d);
     size_t n = (size_t)SW * SH;
     float *rt_img = malloc(3 * n * sizeof(float)), *rs_img = malloc(3 * n * sizeof(float));
     float *ref = malloc(3 * n * sizeof(float));
     assert_true(rt_img && rs_img && ref);
-    gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, rt, rs, jobs, &cam, SW, SH, 0, &err), PF_OK);
-    gi_frame_render_raytraced(&f);
-    memcpy(rt_img, f.direct, 3 * n * sizeof(float));
-    gi_frame_render_raster(&f);
-    memcpy(rs_img, f.direct, 3 * n * sizeof(float));
-    gi_frame_free(&f);
+    gi_frame_render_raytraced(&x.f);
+    memcpy(rt_img, x.f.direct, 3 * n * sizeof(float));
+    gi_frame_render_raster(&x.f);
+    memcpy(rs_img, x.f.direct, 3 * n * sizeof(float));
     gi_reference_options o = {0};
     o.spp = 16;
     o.direct_only = 1;
-    assert_int_equal(gi_reference_render(ref, &s, rt, jobs, &cam, SW, SH, &o, &err), PF_OK);
+    assert_int_equal(gi_reference_render(ref, s, x.rt, x.jobs, &cam, SW, SH, &o, &err), PF_OK);
 
     /* the pixels, each decided exactly at its centre */
     tt_mesh mesh;
-    tt_mesh_init(&mesh, &s);
+    tt_mesh_init(&mesh, s);
     int candidates = 0, count[4] = {0};
     for (uint32_t y = 0; y < SH; y++)
         for (uint32_t x = 0; x < SW; x++) {
@@ -342,10 +329,7 @@ static void test_sibenik_black_pixels_unlit_at_centre(void **state)
     free(rt_img);
     free(rs_img);
     free(ref);
-    rs_context_destroy(rs);
-    pf_jobs_destroy(jobs);
-    pf_rt_destroy(rt);
-    pf_scene_free(&s);
+    tu_fx_end(&x);
 }
 
 int main(void)

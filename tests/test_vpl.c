@@ -9,7 +9,8 @@
  * - Instant Radiosity: a static scene keeps a static VPL set (nothing moved
  *   on the second frame), flux conservation for one bounce;
  * - every stage of the Cornell box GI frame identical with 1 and 2 threads,
- *   and golden hashes of every stage. */
+ *   and golden hashes of every stage, each with its picture in
+ *   tests/data/golden/vpl-cornell-STAGE.png (tu_golden.h). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -21,10 +22,12 @@
 #include "gi_frame.h"
 #include "gi_lightpath.h"
 #include "gi_reference.h"
+#include "gi_view.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
+#include "tu_golden.h"
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 
@@ -279,7 +282,62 @@ static void test_ir_static(void **state)
 }
 
 /* The GI frame with 1 and 2 threads: every stage's buffer identical; golden. */
-static uint64_t gi_hashes(uint32_t threads, uint64_t stage[8])
+static const char *const k_stage_names[8] = {"vpls",     "maps",     "split",  "accumulated",
+                                             "combined", "filtered", "direct", "final"};
+
+/* A split-layout buffer (3 floats a texel, or 1: nx) as the tile mosaic the
+ * viewer shows (gi_view_mosaic_index), into rgb (3 floats a pixel). */
+static void mosaic(const gi_frame *f, const float *split, int channels, float *rgb)
+{
+    for (uint32_t y = 0; y < f->height; y++)
+        for (uint32_t x = 0; x < f->width; x++) {
+            size_t k = gi_view_mosaic_index(f, x, y), o = 3 * ((size_t)y * f->width + x);
+            for (int c = 0; c < 3; c++)
+                rgb[o + c] = k == SIZE_MAX ? 0.0f : split[(size_t)channels * k + (channels == 3 ? c : 0)];
+        }
+}
+
+/* The pictures of the eight stage hashes: the VPLs from above (x, z) and
+ * from the front (x, y); the first 64 paraboloid maps, every 4th texel, in
+ * an 8 x 8 grid; the split normals' x and the accumulated irradiance as
+ * tile mosaics; combined, filtered, direct and final through the display
+ * transform. */
+static void stage_pictures(const gi_frame *f, tu_golden_picture pic[8])
+{
+    const gi_indirect *ind = &f->ind;
+    uint32_t W = f->width, H = f->height;
+    const float lo[3] = {f->scene->bounds_min.x, f->scene->bounds_min.y, f->scene->bounds_min.z};
+    const float hi[3] = {f->scene->bounds_max.x, f->scene->bounds_max.y, f->scene->bounds_max.z};
+    tu_golden_picture_init(&pic[0], 2 * W, H);
+    tu_golden_put_points(&pic[0], 0, 0, W, H, &ind->vpls.v[0].pos.x, sizeof(gi_vpl) / 4, ind->vpls.count, 0, 2, lo, hi);
+    tu_golden_put_points(&pic[0], W, 0, W, H, &ind->vpls.v[0].pos.x, sizeof(gi_vpl) / 4, ind->vpls.count, 0, 1, lo,
+                         hi);
+    tu_golden_picture_init(&pic[1], 8 * 32, 8 * 32);
+    for (uint32_t m = 0; m < ind->vpls.count && m < 64; m++)
+        for (uint32_t j = 0; j < 32; j++)
+            for (uint32_t i = 0; i < 32; i++) {
+                uint16_t code = ind->atlas[(size_t)m * 128 * 128 + (size_t)(4 * j) * 128 + 4 * i];
+                uint8_t *o = pic[1].rgb + 3 * ((size_t)((m / 8) * 32 + j) * pic[1].w + (m % 8) * 32 + i);
+                o[0] = o[1] = o[2] = (uint8_t)(code >> 8);
+            }
+    float *tmp = malloc(sizeof(float) * 3 * W * H);
+    assert_non_null(tmp);
+    tu_golden_picture_init(&pic[2], W, H);
+    mosaic(f, ind->split_nx, 1, tmp);
+    tu_golden_put_plane(&pic[2], 0, 0, tmp, 3, W, H, -1.0f, 1.0f);
+    tu_golden_picture_init(&pic[3], W, H);
+    mosaic(f, ind->split_e, 3, tmp);
+    tu_golden_put_linear(&pic[3], 0, 0, tmp, W, H, 0.0f);
+    free(tmp);
+    const float *linear[4] = {ind->combined, ind->filtered, f->direct, f->final};
+    for (int k = 0; k < 4; k++) {
+        tu_golden_picture_init(&pic[4 + k], W, H);
+        tu_golden_put_linear(&pic[4 + k], 0, 0, linear[k], W, H, 0.0f);
+    }
+}
+
+/* pics (may be NULL) gets the stages' pictures. */
+static uint64_t gi_hashes(uint32_t threads, uint64_t stage[8], tu_golden_picture *pics)
 {
     fx x;
     pf_error err;
@@ -301,6 +359,7 @@ static uint64_t gi_hashes(uint32_t threads, uint64_t stage[8])
     stage[7] = pf_imageio_hash(x.f.final, 3 * n);
     uint64_t all = 0;
     for (int k = 0; k < 8; k++) all = all * 31 + stage[k];
+    if (pics) stage_pictures(&x.f, pics);
     fx_end(&x);
     return all;
 }
@@ -491,15 +550,24 @@ static void test_frame_threads_and_golden(void **state)
 {
     (void)state;
     uint64_t s1[8], s2[8];
-    uint64_t h1 = gi_hashes(1, s1), h2 = gi_hashes(2, s2);
-    for (int k = 0; k < 8; k++) {
-        print_message("stage %d hash 0x%016llxull\n", k, (unsigned long long)s1[k]);
-        assert_true(s1[k] == s2[k]);
-    }
+    tu_golden_picture pics[8];
+    uint64_t h1 = gi_hashes(1, s1, pics), h2 = gi_hashes(2, s2, NULL);
+    for (int k = 0; k < 8; k++) assert_true(s1[k] == s2[k]);
     assert_true(h1 == h2);
-    for (int k = 0; k < 8; k++)
-        if (s1[k] != k_golden[k]) fail_msg("stage %d hash %016llx differs from the golden %016llx", k,
-                                           (unsigned long long)s1[k], (unsigned long long)k_golden[k]);
+    /* every stage checked (and its pictures written on a mismatch) before failing */
+    static char msg[8][8192];
+    int failed = 0;
+    for (int k = 0; k < 8; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "vpl-cornell-%s", k_stage_names[k]);
+        if (tu_golden_verify(SOFTGI_GOLDEN_DIR, SOFTGI_GOLDEN_FAILURES, name, s1[k], k_golden[k], &pics[k], msg[k],
+                             sizeof msg[k])) {
+            print_error("stage %d (%s): %s\n", k, k_stage_names[k], msg[k]);
+            failed++;
+        }
+        tu_golden_picture_free(&pics[k]);
+    }
+    if (failed) fail_msg("%d of the 8 stage goldens failed (above)", failed);
 }
 
 /* Instant Radiosity against the path-traced reference (issue 4's

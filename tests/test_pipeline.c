@@ -46,7 +46,7 @@ static pf_result probe_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *
     for (uint32_t i = 0; i < out->count; i++) out->v[i].intensity = pf_v3_scale(out->v[i].intensity, k);
     return PF_OK;
 }
-static const gi_vpl_method k_probe = {"probe", "test", NULL, probe_update, NULL, NULL, 0};
+static const gi_vpl_method k_probe = {.name = "probe", .paper = "test", .update = probe_update};
 
 /* The fixture (test_frame_fixture.h) and the light's first position. */
 typedef struct fx {

@@ -459,7 +459,8 @@ static pf_result bad_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *ou
 static void test_bad_vpls_are_inert(void **state)
 {
     (void)state;
-    static const gi_vpl_method bad = {"bad", "test", bad_create, bad_update, bad_destroy, NULL, 0};
+    static const gi_vpl_method bad = {.name = "bad", .paper = "test", .create = bad_create, .update = bad_update,
+                                      .destroy = bad_destroy};
     for (int k = 0; k < 3; k++) {
         if (!simd_runs(k_simds[k])) continue;
         fx x;
@@ -518,7 +519,8 @@ static pf_result origin_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
 static void test_vpl_at_pixel_position(void **state)
 {
     (void)state;
-    static const gi_vpl_method origin = {"origin", "test", bad_create, origin_update, bad_destroy, NULL, 0};
+    static const gi_vpl_method origin = {.name = "origin", .paper = "test", .create = bad_create,
+                                         .update = origin_update, .destroy = bad_destroy};
     uint64_t h0 = 0;
     for (int k = 0; k < 3; k++) {
         if (!simd_runs(k_simds[k])) continue;

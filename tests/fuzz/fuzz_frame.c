@@ -184,8 +184,11 @@ static pf_result fz_bytes_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
 
 static void fz_bytes_destroy(void *state) { (void)state; }
 
-static const gi_vpl_method fz_method_bytes = {"bytes", "fuzz_frame: VPLs from the input", fz_bytes_create,
-                                              fz_bytes_update, fz_bytes_destroy, NULL, 0};
+static const gi_vpl_method fz_method_bytes = {.name = "bytes",
+                                              .paper = "fuzz_frame: VPLs from the input",
+                                              .create = fz_bytes_create,
+                                              .update = fz_bytes_update,
+                                              .destroy = fz_bytes_destroy};
 
 static void fz_build_vpls(fz_in *in, const pf_scene *s, float scale, uint32_t count)
 {

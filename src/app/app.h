@@ -81,6 +81,54 @@ pf_result app_frame_init(const pf_options *o, struct gi_frame *f, const pf_scene
 /* `softgi render`: load, override, build, render, write. Returns the exit status. */
 int app_render(const pf_options *opts);
 
+/* ---------------------------------------------------------------- Amdahl (bench)
+ *
+ * Where each stage's time goes between one thread and many, from the job
+ * profile (pf_jobs.h, "profile"): per stage its wall time, its serial part
+ * (the calling thread's CPU time outside parallel-fors: set-up,
+ * reductions, single-threaded code), its parallel work (item time summed over items and threads), its
+ * span (each job's longest item, summed) and its predicted time on N cores,
+ * serial + the jobs' predicted time on N cores. Both benches print this
+ * table (app_bench_frame.c defines it). */
+#include "pf_jobs.h"
+#include "pf_timer.h"
+
+typedef struct app_amdahl {
+    uint32_t count;
+    const char *name[PF_MAX_STAGES]; /* static strings */
+    double wall[PF_MAX_STAGES], serial[PF_MAX_STAGES], work[PF_MAX_STAGES], span[PF_MAX_STAGES];
+    double predicted[PF_MAX_STAGES][PF_JOBS_PROFILE_CORES]; /* serial included */
+} app_amdahl;
+
+/* Reads the profile at stage boundaries into `out` (the caller has turned
+ * the pool's profile on, pf_jobs_profile_enable): app_amdahl_begin clears
+ * `out` and installs a pf_stage_hook, so
+ * every pf_stage_add on this thread (gi_frame's stages) closes a stage
+ * interval under its name; app_amdahl_mark closes one by hand,
+ * app_amdahl_skip starts the next interval now without recording, and
+ * app_amdahl_end closes the rest under `tail` (when it holds any time or
+ * work) and puts the previous hook back. Intervals with a name already
+ * recorded add to it. */
+typedef struct app_amdahl_probe {
+    pf_jobs *jobs;
+    app_amdahl *out;
+    double t, cpu; /* when the interval began: s, and this thread's CPU time, ms */
+    pf_jobs_profile p;
+    pf_stage_hook old;
+} app_amdahl_probe;
+void app_amdahl_begin(app_amdahl_probe *pr, pf_jobs *jobs, app_amdahl *out);
+void app_amdahl_mark(app_amdahl_probe *pr, const char *name);
+void app_amdahl_skip(app_amdahl_probe *pr);
+void app_amdahl_end(app_amdahl_probe *pr, const char *tail);
+/* The median over frames[0..n) of every figure, stage by stage (stages
+ * matched by name, in the order they first appear). */
+void app_amdahl_median(app_amdahl *out, const app_amdahl *frames, uint32_t n);
+/* The table on stdout: one row per stage, then the sum (`sum_label`), the
+ * predicted speed-ups on 2, 8, 16 and 64 cores and the serial share of
+ * the 1-core time (serial + work). `title` heads it; `threads` is the
+ * measured run's. */
+void app_amdahl_print(const app_amdahl *a, const char *title, uint32_t threads, const char *sum_label);
+
 /* `softgi bench raster`: per-stage medians of the rasterizer passes against
  * Embree, as a table and one JSON line. Returns the exit status. */
 int app_bench_raster(const pf_options *opts);

@@ -26,7 +26,14 @@
  * in even frames and Embree first in odd ones. The ratios are paired: per
  * frame, Embree's time over softgi's (and the 1-thread time over the
  * 2-thread time, adjacent turns), and their median over the frames.
- * Output: a table on stdout and one JSON line (prefix "json: "). */
+ * Output: a table on stdout and one JSON line (prefix "json: ").
+ *
+ * Scaling past two cores (issue 13 item 4): the job profile (pf_jobs.h) is
+ * on for every timed call, and per scene and thread count a table gives
+ * each pass's serial part (outside parallel-fors) beside its parallel work
+ * and span, and its predicted time and speed-up on 8, 16 and 64 cores
+ * (app_amdahl_print, app_bench_frame.c). --threads N may not exceed the
+ * cores: more threads than cores measure the scheduler, not softgi. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -83,6 +90,7 @@ typedef struct bench_result {
     double up[BENCH_JOBS];                        /* paired: 1-thread time / this time (2-thread rows) */
     double tris_per_s, pixels_per_s;
     bench_check check;
+    app_amdahl amdahl; /* the job profile, medians */
 } bench_result;
 
 static int bench__cmp(const void *a, const void *b)
@@ -169,6 +177,9 @@ typedef struct bench_run {
     int have_map, have_emap;
     /* samples, frames each: softgi's visibility, resolve and both; the jobs' */
     double *vis, *res, *sample[BENCH_JOBS], *esample[BENCH_JOBS];
+    /* the job profile of each timed frame (app.h), and the probe while one runs */
+    app_amdahl *am;
+    app_amdahl_probe *probe;
 } bench_run;
 
 static void bench__close(bench_run *r)
@@ -180,6 +191,7 @@ static void bench__close(bench_run *r)
     free(r->vis), free(r->res);
     for (int j = 0; j < BENCH_JOBS; j++) free(r->sample[j]), free(r->esample[j]);
     free(r->atlas), free(r->eatlas);
+    free(r->am);
     rs_para_context_destroy(r->para);
     rs_context_destroy(r->rs);
     if (r->jobs) pf_jobs_destroy(r->jobs);
@@ -208,7 +220,10 @@ static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *b
     r->have_frame = 1;
     if (rs_gbuffer_init(&r->eg, BENCH_W, BENCH_H, &err) != PF_OK) goto fail;
     r->have_eg = 1;
-    if (!(r->vis = calloc(frames, sizeof(double))) || !(r->res = calloc(frames, sizeof(double)))) goto oom;
+    pf_jobs_profile_enable(r->jobs, 1);
+    if (!(r->vis = calloc(frames, sizeof(double))) || !(r->res = calloc(frames, sizeof(double))) ||
+        !(r->am = calloc(frames, sizeof(app_amdahl))))
+        goto oom;
     for (int j = 0; j < BENCH_JOBS; j++)
         if (!(r->sample[j] = calloc(frames, sizeof(double))) || !(r->esample[j] = calloc(frames, sizeof(double))))
             goto oom;
@@ -238,58 +253,91 @@ fail:
     return 0;
 }
 
+/* The job profile around a timed call (outside its timing): a new
+ * interval starts, and the one that ends is recorded under `name`. No-ops
+ * outside the timed frames. */
+static void bench__skip(bench_run *r)
+{
+    if (r->probe) app_amdahl_skip(r->probe);
+}
+
+static void bench__mark(bench_run *r, const char *name)
+{
+    if (r->probe) app_amdahl_mark(r->probe, name);
+}
+
 /* The two sides of each job; each returns its milliseconds. */
 static void bench__softgi_gbuffer(bench_run *r, double *vis_ms, double *res_ms)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     rs_target tg = {BENCH_W, BENCH_H, r->f.gbuf.depth, r->f.gbuf.prim, NULL};
     rs_pass pass = {rs_mat4_camera(&r->cam, BENCH_W, BENCH_H), RS_CULL_NONE};
     rs_render(r->rs, &pass, &tg, &r->st);
     double t1 = pf_time_now();
+    bench__mark(r, "softgi visibility");
+    double t1b = pf_time_now();
     gi_stage_gbuffer_resolve(&r->f);
     double t2 = pf_time_now();
+    bench__mark(r, "softgi resolve (attributes)");
     *vis_ms = (t1 - t0) * 1e3;
-    *res_ms = (t2 - t1) * 1e3;
+    *res_ms = (t2 - t1b) * 1e3;
 }
 
 static void bench__embree_gbuffer(bench_run *r, double *vis_ms, double *gbuf_ms)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     app_embree_visibility(r->eg.depth, r->eg.prim, r->emb, r->jobs, &r->cam, BENCH_W, BENCH_H);
     double t1 = pf_time_now();
+    bench__mark(r, "Embree visibility");
+    double t1b = pf_time_now();
     app_embree_gbuffer(&r->eg, r->emb, r->jobs, &r->cam);
     double t2 = pf_time_now();
+    bench__mark(r, "Embree G-buffer");
     *vis_ms = (t1 - t0) * 1e3;
-    *gbuf_ms = (t2 - t1) * 1e3;
+    *gbuf_ms = (t2 - t1b) * 1e3;
 }
 
 static double bench__softgi_para(bench_run *r)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     rs_para_render(r->atlas, r->para, r->jobs, r->vp, r->vn, BENCH_VPLS, r->range, NULL);
-    return (pf_time_now() - t0) * 1e3 / BENCH_VPLS;
+    double ms = (pf_time_now() - t0) * 1e3 / BENCH_VPLS;
+    bench__mark(r, "softgi 64 paraboloid maps");
+    return ms;
 }
 
 static double bench__embree_para(bench_run *r)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     app_embree_paraboloid(r->eatlas, r->emb, r->jobs, rs_para_resolution(r->para), r->vp, r->vn, BENCH_VPLS,
                           r->range);
-    return (pf_time_now() - t0) * 1e3 / BENCH_VPLS;
+    double ms = (pf_time_now() - t0) * 1e3 / BENCH_VPLS;
+    bench__mark(r, "Embree 64 paraboloid maps");
+    return ms;
 }
 
 static double bench__softgi_cube(bench_run *r)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     rs_shadow_render(r->rs, &r->map, 1, NULL);
-    return (pf_time_now() - t0) * 1e3;
+    double ms = (pf_time_now() - t0) * 1e3;
+    bench__mark(r, "softgi cube map (6 x 1024^2)");
+    return ms;
 }
 
 static double bench__embree_cube(bench_run *r)
 {
+    bench__skip(r);
     double t0 = pf_time_now();
     app_embree_shadow(&r->emap, r->emb, r->jobs);
-    return (pf_time_now() - t0) * 1e3;
+    double ms = (pf_time_now() - t0) * 1e3;
+    bench__mark(r, "Embree cube map");
+    return ms;
 }
 
 /* One frame of every measurement; frame 0 is the warm-up (not recorded).
@@ -297,8 +345,13 @@ static double bench__embree_cube(bench_run *r)
  * finds the caches as the other left them. */
 static void bench__frame(bench_run *r, uint32_t i)
 {
-    double vis, res, evis, egbuf, para, epara, cube, ecube;
+    double vis = 0, res = 0, evis = 0, egbuf = 0, para = 0, epara = 0, cube = 0, ecube = 0;
     int embree_first = i & 1;
+    app_amdahl_probe probe;
+    if (i > 0) {
+        app_amdahl_begin(&probe, r->jobs, &r->am[i - 1]);
+        r->probe = &probe;
+    }
     if (embree_first) bench__embree_gbuffer(r, &evis, &egbuf);
     bench__softgi_gbuffer(r, &vis, &res);
     if (!embree_first) bench__embree_gbuffer(r, &evis, &egbuf);
@@ -310,6 +363,8 @@ static void bench__frame(bench_run *r, uint32_t i)
     if (!embree_first) ecube = bench__embree_cube(r);
     pf_jobs_wait_all(r->jobs);
     if (i == 0) return;
+    app_amdahl_end(&probe, NULL);
+    r->probe = NULL;
     uint32_t k = i - 1;
     r->vis[k] = vis;
     r->res[k] = res;
@@ -395,6 +450,7 @@ static void bench__result(bench_run *r, const bench_run *base, const char *scene
         out->embree_ms[j] = bench__median(r->esample[j], n);
     }
     out->resolve_ms = bench__median(r->res, n);
+    app_amdahl_median(&out->amdahl, r->am, n);
     out->tris = (uint32_t)r->st.triangles_in;
     out->tris_per_s = out->tris / (out->ms[BENCH_VIS] * 1e-3);
     out->pixels_per_s = (double)BENCH_W * BENCH_H / (out->ms[BENCH_GBUF] * 1e-3);
@@ -417,6 +473,12 @@ int app_bench_raster(const pf_options *o)
     uint32_t frames = o->frames ? o->frames : 15;
     uint32_t thread_list[2] = {1, 2}, nthreads = 2;
     if (o->threads) thread_list[0] = o->threads, nthreads = 1;
+    if (o->threads > pf_jobs_core_count()) {
+        fprintf(stderr, "softgi: bench raster: --threads %u: this machine has %u cores (the Amdahl table predicts "
+                        "more)\n",
+                o->threads, pf_jobs_core_count());
+        return 2;
+    }
     uint32_t build_threads = thread_list[nthreads - 1];
     bench_result results[8];
     uint32_t nres = 0, lanes = 0;
@@ -522,6 +584,14 @@ int app_bench_raster(const pf_options *o)
         printf("\n");
     }
     printf("  2048 paraboloid maps of 128x128: %.1f MB\n", rs_para_atlas_bytes(128, 2048) / (1024.0 * 1024.0));
+    printf("\nAmdahl's law per pass (job profile, pf_jobs.h): serial = outside parallel-fors; work = item CPU time\n"
+           "summed over threads; span = each job's longest item, summed; N cores = serial + the jobs' predicted\n"
+           "time on N cores (chunks, longest item); the rows are separate calls, so the sum is not a frame\n");
+    for (uint32_t i = 0; i < nres; i++) {
+        char title[96];
+        snprintf(title, sizeof title, "\n%s", results[i].scene);
+        app_amdahl_print(&results[i].amdahl, title, results[i].threads, "all passes (sum)");
+    }
     pf_cpu_ticks zero = {1, 0, 0};
     double steal_share = pf_cpu_steal_share(zero, steal);
     if (steal_share >= 0.0)

@@ -41,10 +41,23 @@
  * them: SMC's candidate sampling, resampling, indirect visibility,
  * radiosity and kNN), the target line (issue 4: IR with 256 VPLs and
  * a static light at >= 15 frames/s on 2 threads) and one JSON line (prefix
- * "json: "). */
+ * "json: ").
+ *
+ * Scaling past two cores (issue 13 item 4): the job profile (pf_jobs.h) is
+ * on for every frame of the run, and for each configuration without
+ * pipelining a table gives every stage's serial part (outside
+ * parallel-fors) beside its parallel work and span, with the frame's
+ * predicted time and speed-up on 8, 16 and 64 cores (app_amdahl_print,
+ * below, which `bench raster` uses too). With pipelining the VPL update
+ * overlaps the other stages, so its stage boundaries say nothing about a
+ * critical path and no table is printed. The profile costs two clock
+ * reads per job item (a few thousand items a frame). */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "app.h"
 #include "gi_frame.h"
@@ -63,6 +76,8 @@
 #define BF_TARGET_VPLS 256u
 #define BF_TARGET_THREADS 2u
 #define BF_MAPS_STAGE "VPL paraboloid maps" /* gi_frame.c's name for step 4 */
+#define BF_TAIL_STAGE "(end of frame: wait for jobs)"
+#define BF_SERIAL_TARGET 0.05 /* issue 13: serial part <= 5% of the 1-thread frame */
 
 typedef struct bf_scene {
     const char *name, *file;
@@ -95,7 +110,191 @@ typedef struct bf_result {
     uint32_t first_moved, first_maps;
     /* summed over the measured frames: should be 0 with a static light */
     uint64_t moved_after, maps_after;
+    /* pipelining off: the job profile per stage, medians (app_amdahl) */
+    int have_amdahl;
+    app_amdahl amdahl;
 } bf_result;
+
+/* ---------------------------------------------------------------- Amdahl (app.h) */
+
+/* This thread's CPU time, ms. */
+static double app__cpu_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* An interval of `wall` ms in which this (the external) thread used `cpu`
+ * ms of CPU time, and the profile moved by `d`. */
+static void app__amdahl_add(app_amdahl *a, const char *name, double wall, double cpu, const pf_jobs_profile *d)
+{
+    uint32_t i = 0;
+    while (i < a->count && strcmp(a->name[i], name)) i++;
+    if (i == a->count) {
+        if (i == PF_MAX_STAGES) return;
+        a->name[i] = name;
+        a->wall[i] = a->serial[i] = a->work[i] = a->span[i] = 0.0;
+        for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) a->predicted[i][k] = 0.0;
+        a->count++;
+    }
+    /* the external thread's CPU time outside every parallel region (not
+     * its wall time: on a loaded machine that counts other processes too);
+     * never below 0 (clock granularity) */
+    double serial = cpu - d->wait_cpu_ms > 0.0 ? cpu - d->wait_cpu_ms : 0.0;
+    a->wall[i] += wall;
+    a->serial[i] += serial;
+    a->work[i] += d->work_ms;
+    a->span[i] += d->span_ms;
+    for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) a->predicted[i][k] += serial + d->predicted_ms[k];
+}
+
+void app_amdahl_mark(app_amdahl_probe *pr, const char *name)
+{
+    double now = pf_time_now(), cpu = app__cpu_ms();
+    pf_jobs_profile p;
+    pf_jobs_profile_read(pr->jobs, &p);
+    pf_jobs_profile d = pf_jobs_profile_delta(&pr->p, &p);
+    app__amdahl_add(pr->out, name, (now - pr->t) * 1e3, cpu - pr->cpu, &d);
+    pr->p = p;
+    pr->cpu = app__cpu_ms(); /* the read itself is not the next stage's */
+    pr->t = pf_time_now();
+}
+
+void app_amdahl_skip(app_amdahl_probe *pr)
+{
+    pf_jobs_profile_read(pr->jobs, &pr->p);
+    pr->cpu = app__cpu_ms();
+    pr->t = pf_time_now();
+}
+
+static void app__amdahl_hook(void *user, const char *name, double ms)
+{
+    (void)ms; /* the interval since the last boundary: it includes what runs between two stages */
+    app_amdahl_mark(user, name);
+}
+
+void app_amdahl_begin(app_amdahl_probe *pr, pf_jobs *jobs, app_amdahl *out)
+{
+    pr->jobs = jobs;
+    pr->out = out;
+    out->count = 0;
+    pr->old = pf_stage_hook_set((pf_stage_hook){app__amdahl_hook, pr});
+    app_amdahl_skip(pr);
+}
+
+void app_amdahl_end(app_amdahl_probe *pr, const char *tail)
+{
+    double now = pf_time_now(), cpu = app__cpu_ms();
+    pf_jobs_profile p;
+    pf_jobs_profile_read(pr->jobs, &p);
+    pf_jobs_profile d = pf_jobs_profile_delta(&pr->p, &p);
+    double wall = (now - pr->t) * 1e3;
+    if (tail && (wall >= 0.01 || d.jobs)) app__amdahl_add(pr->out, tail, wall, cpu - pr->cpu, &d);
+    pf_stage_hook_set(pr->old);
+}
+
+static int app__cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The median over the frames of the double at byte `offset` + stage index
+ * x `stride` doubles in an app_amdahl, for stage `name` (0 where a frame
+ * lacks the stage); `tmp`: n doubles. */
+static double app__amdahl_field(const app_amdahl *frames, uint32_t n, const char *name, size_t offset, size_t stride,
+                                double *tmp)
+{
+    for (uint32_t j = 0; j < n; j++) {
+        const app_amdahl *a = &frames[j];
+        tmp[j] = 0.0;
+        for (uint32_t i = 0; i < a->count; i++)
+            if (!strcmp(a->name[i], name)) tmp[j] = *(const double *)((const char *)a + offset + i * stride * sizeof(double));
+    }
+    qsort(tmp, n, sizeof *tmp, app__cmp_double);
+    return n % 2 ? tmp[n / 2] : 0.5 * (tmp[n / 2 - 1] + tmp[n / 2]);
+}
+
+void app_amdahl_median(app_amdahl *out, const app_amdahl *frames, uint32_t n)
+{
+    memset(out, 0, sizeof *out);
+    double *tmp = malloc(sizeof(double) * (n ? n : 1));
+    if (!tmp || !n) {
+        free(tmp);
+        return;
+    }
+    for (uint32_t j = 0; j < n; j++)
+        for (uint32_t i = 0; i < frames[j].count; i++) {
+            uint32_t k = 0;
+            while (k < out->count && strcmp(out->name[k], frames[j].name[i])) k++;
+            if (k == out->count && k < PF_MAX_STAGES) out->name[out->count++] = frames[j].name[i];
+        }
+    for (uint32_t i = 0; i < out->count; i++) {
+        const char *nm = out->name[i];
+        out->wall[i] = app__amdahl_field(frames, n, nm, offsetof(app_amdahl, wall), 1, tmp);
+        out->serial[i] = app__amdahl_field(frames, n, nm, offsetof(app_amdahl, serial), 1, tmp);
+        out->work[i] = app__amdahl_field(frames, n, nm, offsetof(app_amdahl, work), 1, tmp);
+        out->span[i] = app__amdahl_field(frames, n, nm, offsetof(app_amdahl, span), 1, tmp);
+        for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++)
+            out->predicted[i][k] = app__amdahl_field(frames, n, nm, offsetof(app_amdahl, predicted) + k * sizeof(double),
+                                                     PF_JOBS_PROFILE_CORES, tmp);
+    }
+    free(tmp);
+}
+
+/* The profile's column for `cores` (pf_jobs_profile_cores), or -1. */
+static int app__amdahl_column(uint32_t cores)
+{
+    for (int k = 0; k < PF_JOBS_PROFILE_CORES; k++)
+        if (pf_jobs_profile_cores[k] == cores) return k;
+    return -1;
+}
+
+void app_amdahl_print(const app_amdahl *a, const char *title, uint32_t threads, const char *sum_label)
+{
+    static const uint32_t show[] = {2, 8, 16, 64};
+    enum { SHOW = sizeof show / sizeof show[0] };
+    printf("%s, measured with %u thread%s (ms, medians):\n", title, threads, threads > 1 ? "s" : "");
+    printf("  %-30s %8s %8s %8s %8s |", "stage", "wall", "serial", "work", "span");
+    for (int c = 0; c < SHOW; c++) printf(" %5u cores", show[c]);
+    printf("\n");
+    double wall = 0, serial = 0, work = 0, span = 0, pred[SHOW] = {0};
+    for (uint32_t i = 0; i < a->count; i++) {
+        printf("  %-30.30s %8.2f %8.2f %8.2f %8.2f |", a->name[i], a->wall[i], a->serial[i], a->work[i], a->span[i]);
+        for (int c = 0; c < SHOW; c++) {
+            double v = a->predicted[i][app__amdahl_column(show[c])];
+            printf(" %11.2f", v);
+            pred[c] += v;
+        }
+        printf("\n");
+        wall += a->wall[i], serial += a->serial[i], work += a->work[i], span += a->span[i];
+    }
+    double one = serial + work; /* the 1-core time: every item one after the other */
+    printf("  %-30s %8.2f %8.2f %8.2f %8.2f |", sum_label, wall, serial, work, span);
+    for (int c = 0; c < SHOW; c++) printf(" %11.2f", pred[c]);
+    printf("\n  %-30s %8s %8s %8s %8s |", "speed-up over 1 core", "", "", "", "");
+    for (int c = 0; c < SHOW; c++) printf(" %10.2fx", pred[c] > 0.0 ? one / pred[c] : 0.0);
+    double share = one > 0.0 ? serial / one : 0.0;
+    printf("\n  1 core (serial + work) %.2f ms; unlimited cores (serial + span) %.2f ms, %.1fx; serial part %.1f%% "
+           "of the 1-core time (target <= %.0f%%: %s)\n",
+           one, serial + span, serial + span > 0.0 ? one / (serial + span) : 0.0, 100.0 * share,
+           100.0 * BF_SERIAL_TARGET, share <= BF_SERIAL_TARGET ? "met" : "NOT met");
+    /* work is CPU time (pf_jobs.c takes preemption out of the items), wall is not */
+    if (threads == 1 && one > 0.0 && wall > 1.2 * one)
+        printf("  the wall clock took %.1fx the 1-core time: this core was shared with other processes (the\n"
+               "  predictions count CPU time and assume cores of their own)\n",
+               wall / one);
+}
+
+/* The frame's predicted time on `cores` cores (app__amdahl_column's), or 0. */
+static double bf__amdahl_frame(const app_amdahl *a, uint32_t cores)
+{
+    int k = app__amdahl_column(cores);
+    double t = 0.0;
+    for (uint32_t i = 0; i < a->count && k >= 0; i++) t += a->predicted[i][k];
+    return t;
+}
 
 static int bf__cmp(const void *a, const void *b)
 {
@@ -167,6 +366,7 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
     gi_frame f[2];
     double *frame_ms[2] = {NULL, NULL}, *stage_ms[2] = {NULL, NULL}; /* stage_ms: [stage][frame] */
     double *part_ms[2] = {NULL, NULL};                                /* part_ms: [part][frame] */
+    app_amdahl *amdahl[2] = {NULL, NULL};                             /* pipelining off: [frame] */
     uint32_t ready = 0;
     for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
         memset(&out[m], 0, sizeof out[m]);
@@ -186,16 +386,20 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         frame_ms[m] = malloc(sizeof(double) * frames);
         stage_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
         part_ms[m] = malloc(sizeof(double) * frames * PF_MAX_STAGES);
-        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m] || !part_ms[m]))
+        if (!modes[m]) amdahl[m] = malloc(sizeof(app_amdahl) * frames);
+        if (r == PF_OK && (!frame_ms[m] || !stage_ms[m] || !part_ms[m] || (!modes[m] && !amdahl[m])))
             r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u frames of timings", frames);
     }
     for (uint32_t i = 0; i <= frames && r == PF_OK; i++) { /* i == 0: the first frame, every map rendered */
         light->position = bf__light_at(bs, lit, o->moving_light, i);
         for (uint32_t m = 0; m < nmodes && r == PF_OK; m++) {
             bf_result *res = &out[m];
+            app_amdahl_probe probe;
+            if (i > 0 && amdahl[m]) app_amdahl_begin(&probe, jobs, &amdahl[m][i - 1]);
             double t0 = pf_time_now();
             gi_frame_render_raster(&f[m]);
             double ms = (pf_time_now() - t0) * 1e3;
+            if (i > 0 && amdahl[m]) app_amdahl_end(&probe, BF_TAIL_STAGE);
             uint32_t moved = bf__moved(&f[m]);
             if (i == 0) {
                 res->first = f[m].times;
@@ -225,9 +429,13 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
             out[m].parts.ms[k] = bf__median(part_ms[m] + k * frames, frames);
         out[m].frame_ms = bf__median(frame_ms[m], frames);
         out[m].fps = 1e3 / out[m].frame_ms;
+        if (amdahl[m]) {
+            app_amdahl_median(&out[m].amdahl, amdahl[m], frames);
+            out[m].have_amdahl = 1;
+        }
     }
     for (uint32_t m = 0; m < nmodes; m++) {
-        free(frame_ms[m]), free(stage_ms[m]), free(part_ms[m]);
+        free(frame_ms[m]), free(stage_ms[m]), free(part_ms[m]), free(amdahl[m]);
         if (m < ready) gi_frame_free(&f[m]);
     }
     return r;
@@ -258,6 +466,7 @@ static pf_result bf__scene(const pf_scene *scene, const bf_scene *bs, const uint
         pf_rt *rt = NULL;
         rs_context *rs = NULL;
         if (!jobs) r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", thread_list[t]);
+        else pf_jobs_profile_enable(jobs, 1); /* every frame, both modes alike: the same small cost */
         if (r == PF_OK) r = pf_rt_create(&rt, &lit, isa, thread_list[t], err);
         if (r == PF_OK) r = rs_context_create(&rs, &lit, jobs, rs_simd_for_isa(isa), err);
         for (uint32_t v = 0; v < nvpls && r == PF_OK; v++) {
@@ -381,6 +590,21 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
                "");
     printf("\n");
     bf__print_hedman_table2(res, n);
+    for (uint32_t c = 0; c < n; c++) {
+        if (!res[c].have_amdahl) continue;
+        char title[160];
+        snprintf(title, sizeof title, "\n%s, %u VPLs, pipelining off: Amdahl's law", bs->name, res[c].vpl_budget);
+        app_amdahl_print(&res[c].amdahl, title, res[c].threads, "frame (sum of stages)");
+        /* the model against a measurement: the 1-thread profile's 2-core
+         * prediction beside the 2-thread run's frame */
+        for (uint32_t d = 0; d < n && res[c].threads == 1; d++)
+            if (res[d].have_amdahl && res[d].threads == 2 && res[d].vpl_budget == res[c].vpl_budget)
+                printf("  check: this 1-thread profile predicts %.2f ms on 2 cores; the 2-thread run measured "
+                       "%.2f ms\n",
+                       bf__amdahl_frame(&res[c].amdahl, 2), res[d].frame_ms);
+    }
+    if (n && !res[0].have_amdahl)
+        printf("(no Amdahl table with pipelining on: the VPL update overlaps the other stages; use --pipeline off)\n");
     /* pipelining gains: consecutive off/on pairs of one VPL count and thread count */
     for (uint32_t c = 0; c + 1 < n; c++) {
         const bf_result *off = &res[c], *on = &res[c + 1];
@@ -467,6 +691,12 @@ int app_bench_frame(const pf_options *o)
     uint32_t frames = o->frames ? o->frames : 15;
     uint32_t thread_list[2] = {1, 2}, nthreads = 2;
     if (o->threads) thread_list[0] = o->threads, nthreads = 1;
+    if (o->threads > pf_jobs_core_count()) {
+        fprintf(stderr, "softgi: bench frame: --threads %u: this machine has %u cores (the Amdahl table predicts "
+                        "more)\n",
+                o->threads, pf_jobs_core_count());
+        return 2;
+    }
     uint32_t vpl_list[2] = {256, 2048}, nvpls = 2;
     if (o->vpls) vpl_list[0] = o->vpls, nvpls = 1;
     uint32_t nmodes = o->pipeline >= 0 ? 1 : 2;
@@ -551,6 +781,16 @@ int app_bench_frame(const pf_options *o)
         bf__json_stages(&r->first);
         printf(",\"method_parts_ms\":");
         bf__json_stages(&r->parts);
+        if (r->have_amdahl) { /* the job profile's sums over the stages (app_amdahl_print's "frame" row) */
+            const app_amdahl *am = &r->amdahl;
+            double serial = 0.0, work = 0.0, span = 0.0;
+            for (uint32_t s = 0; s < am->count; s++) serial += am->serial[s], work += am->work[s], span += am->span[s];
+            printf(",\"amdahl\":{\"serial_ms\":%.3f,\"work_ms\":%.3f,\"span_ms\":%.3f,\"predicted_ms\":{", serial,
+                   work, span);
+            for (int k = 0; k < PF_JOBS_PROFILE_CORES; k++)
+                printf("%s\"%u\":%.3f", k ? "," : "", pf_jobs_profile_cores[k], bf__amdahl_frame(am, pf_jobs_profile_cores[k]));
+            printf("}}");
+        }
         printf("}");
     }
     printf("],\"target\":{\"vpls\":%u,\"threads\":%u,\"fps\":%.0f", BF_TARGET_VPLS, BF_TARGET_THREADS, BF_TARGET_FPS);

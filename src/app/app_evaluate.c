@@ -4,6 +4,7 @@
  *   softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]
  *                   [--size WxH] [--spp N] [--vpls N] [--threads N]
  *                   [--full] [--rerun-reference] [--param KEY=VALUE ...] [-q]
+ *                   [--frames A:B]
  *
  * For each sequence file (default: the six in scenes/sequences: the McGuire
  * Cornell box, Sibenik and the conference room, each with a moving camera and
@@ -39,6 +40,24 @@
  * term for every method, so leaving it in would only add the same error to
  * each. --full compares the whole images instead.
  *
+ * --frames A:B (issue 13 item 4): only the references' frames A..B-1 of
+ * every sequence (zero-based, B excluded, clipped to each sequence's
+ * length; a sequence that ends before A is skipped), the one step that
+ * outgrows a machine, so that a batch scheduler can spread them: no
+ * method runs, no table. Each range writes the files a full reference run
+ * writes (the frames under their own names, track.txt, the finished
+ * frames.txt and the stamp), so the OUT folders of all ranges merged by
+ * file name are a finished evaluation's references, and a final
+ * `softgi evaluate` with the same options (without --frames) reuses them
+ * and runs the methods. A range whose frames are all present with the
+ * same stamp is skipped; a folder whose stamp records other settings is
+ * refused (rendering into it would mix two settings) unless
+ * --rerun-reference. A reference folder that says it is finished but lacks
+ * a frame (a range not merged yet) is refused, with the range to render.
+ *
+ * Progress (app_progress.h): one bar over the steps (a reference or a
+ * method run each), on a terminal and without -q.
+ *
  * Everything runs in this process through the same functions as the
  * commands (app_sequence, app_compare), with argument vectors built here, so
  * the options are validated exactly as on the command line. */
@@ -52,6 +71,7 @@
 #include <unistd.h>
 
 #include "app.h"
+#include "app_progress.h"
 #include "gi_vpl.h"
 #include "pf_imageio.h"
 #include "pf_sequence.h"
@@ -71,6 +91,10 @@ typedef struct ev__args {
     const char *params[EV_MAX_ITEMS];
     uint32_t param_count;
     int full, rerun_reference, quiet;
+    app_progress *bar;               /* the steps' bar (ev__run's) */
+    uint32_t steps_done, steps_total;
+    int ranged;                      /* --frames A:B */
+    uint32_t frame_first, frame_end; /* frame_end PF_CLI_FRAMES_END: open */
     char lists[2][4096]; /* storage for split --methods / --sequences */
     char default_sequences[6][4200];
 } ev__args;
@@ -79,7 +103,7 @@ static void ev__usage(FILE *f)
 {
     fputs("usage: softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]\n"
           "                       [--size WxH] [--spp N] [--track-spp N] [--vpls N] [--threads N] [--isa NAME]\n"
-          "                       [--param KEY=VALUE ...] [--full] [--rerun-reference] [-q]\n"
+          "                       [--param KEY=VALUE ...] [--full] [--rerun-reference] [--frames A:B] [-q]\n"
           "\n"
           "Hedman et al. 2017, Table 1 on softgi's sequences: for each sequence, per-frame\n"
           "path-traced references (softgi sequence --reference), every method's frames\n"
@@ -101,7 +125,12 @@ static void ev__usage(FILE *f)
           "  --vpls N            VPL budget of every method (default 256)\n"
           "  --param KEY=VALUE   passed to every method that knows KEY (repeatable)\n"
           "  --full              compare whole images (default: indirect light only)\n"
-          "  --rerun-reference   render the references even when a matching one exists\n",
+          "  --rerun-reference   render the references even when a matching one exists\n"
+          "  --frames A:B        only the references' frames A..B-1 of every sequence (zero-based,\n"
+          "                      B excluded, clipped to each sequence; A: to the end; N: frame N), for a\n"
+          "                      batch scheduler: merge the OUT folders of all ranges, then run evaluate\n"
+          "                      again without --frames for the methods and tables\n"
+          "  -q, --quiet         no progress lines or bar\n",
           f);
 }
 
@@ -157,7 +186,7 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
         else {
             static const char *const with_value[] = {"--methods", "--sequences", "--out",   "--size", "--spp",
                                                      "--vpls",    "--threads",   "--param", "--isa",
-                                                     "--track-spp"};
+                                                     "--track-spp", "--frames"};
             int known = 0;
             for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++) known |= !strcmp(o, with_value[k]);
             if (!known) return ev__fail(2, "unknown option '%s' (see softgi evaluate --help)%s", o, "");
@@ -182,6 +211,12 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
             else if (!strcmp(o, "--vpls")) a->vpls = v;
             else if (!strcmp(o, "--threads")) a->threads = v;
             else if (!strcmp(o, "--isa")) a->isa = v;
+            else if (!strcmp(o, "--frames")) {
+                pf_error err;
+                a->ranged = 1;
+                if (pf_cli_parse_frame_range("--frames", v, &a->frame_first, &a->frame_end, &err) != PF_OK)
+                    rc = ev__fail(2, "%s%s", err.message, "");
+            }
             else {
                 if (a->param_count == EV_MAX_ITEMS) return ev__fail(2, "--param: at most 32%s%s", "", "");
                 a->params[a->param_count++] = v;
@@ -283,47 +318,46 @@ static int ev__read_text(const char *path, char *buf, size_t size)
     return 1;
 }
 
-/* Progress over the steps (a reference or a method run, each a step): on
- * a terminal one line redrawn in place, with a bar, the elapsed time and an
- * estimate of the time left from the mean step so far; elsewhere nothing
- * beyond the step lines. step NULL: finished. */
-typedef struct ev__prog {
-    uint32_t done, total;
-    double t0;
-} ev__prog;
-
-/* Clears the progress line before a line of text (stdout is flushed
- * first: the two streams share the terminal). */
+/* Progress over the steps (a reference or a method run each):
+ * app_progress.h. Clears the bar before a line of text. */
 static void ev__progress_clear(const ev__args *a)
 {
-    if (a->quiet || !isatty(fileno(stderr))) return;
-    fflush(stdout);
-    fputs("\r\033[K", stderr);
+    if (a->bar) app_progress_clear(a->bar);
 }
 
-static void ev__progress(const ev__args *a, const ev__prog *p, const char *seq, const char *step)
+/* The bar at the start of step `step` of sequence `seq`. */
+static void ev__progress(const ev__args *a, const char *seq, const char *step)
 {
-    if (a->quiet || !isatty(fileno(stderr))) return;
-    double el = pf_time_now() - p->t0;
-    char bar[21];
-    uint32_t fill = p->total ? 20u * p->done / p->total : 20u;
-    for (uint32_t i = 0; i < 20; i++) bar[i] = i < fill ? '#' : '.';
-    bar[20] = 0;
-    if (!step) {
-        fprintf(stderr, "\r\033[K[%s] %u/%u steps in %.0f s\n", bar, p->done, p->total, el);
-        return;
+    char what[320];
+    snprintf(what, sizeof what, "step %u/%u: %s: %s", a->steps_done + 1, a->steps_total, seq, step);
+    if (a->bar) app_progress_update(a->bar, a->steps_done, a->steps_total, what);
+}
+
+/* Whether frame f of a reference folder is all there: the four files a
+ * sequence run writes for it (pf_sequence.h). */
+static int ev__frame_present(const char *dir, uint32_t f)
+{
+    static const char *const ext[] = {".pfm", ".png", ".view", ".depth.pfm"};
+    for (size_t k = 0; k < sizeof ext / sizeof ext[0]; k++) {
+        char path[2700];
+        struct stat st;
+        snprintf(path, sizeof path, "%s/frame_%04u%s", dir, f, ext[k]);
+        if (stat(path, &st) != 0) return 0;
     }
-    if (p->done)
-        fprintf(stderr, "\r\033[K[%s] %u/%u  %s: %s  %.0f s, about %.0f s left", bar, p->done, p->total, seq, step, el,
-                el / p->done * (p->total - p->done));
-    else
-        fprintf(stderr, "\r\033[K[%s] %u/%u  %s: %s", bar, p->done, p->total, seq, step);
-    fflush(stderr);
+    return 1;
+}
+
+/* The first frame of [first, end) missing from dir, or end. */
+static uint32_t ev__first_missing(const char *dir, uint32_t first, uint32_t end)
+{
+    while (first < end && ev__frame_present(dir, first)) first++;
+    return first;
 }
 
 /* Step 1: the sequence's per-frame references (reused when the stamp says
- * they were made with the same settings). */
-static int ev__reference(const ev__args *a, const char *file, const char *dir)
+ * they were made with the same settings). With --frames only frames
+ * [first, end) (the top comment). */
+static int ev__reference(const ev__args *a, const char *file, const char *dir, uint32_t first, uint32_t end)
 {
     char stamp_path[2600], want[PATH_MAX + 384], have[PATH_MAX + 384], base[PATH_MAX + 256], real[PATH_MAX];
     snprintf(stamp_path, sizeof stamp_path, "%s/stamp", dir);
@@ -338,8 +372,32 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     int has_manifest = 0;
     pf_error merr;
     int finished = pf_sequence_manifest_read(dir, &man, &has_manifest, &merr) == PF_OK && (!has_manifest || man.complete);
-    if (!a->rerun_reference && finished && ev__read_text(stamp_path, have, sizeof have)) {
+    int have_stamp = ev__read_text(stamp_path, have, sizeof have);
+    char range[48] = "";
+    if (a->ranged) {
+        /* one range of a reference spread over machines: never mix settings */
+        if (have_stamp && strcmp(have, want) && !a->rerun_reference)
+            return ev__fail(1, "%s holds references made with other settings (its stamp); give another --out, or "
+                               "--rerun-reference to replace them%s",
+                            dir, "");
+        if (have_stamp && !strcmp(have, want) && !a->rerun_reference && ev__first_missing(dir, first, end) == end) {
+            ev__progress_clear(a);
+            if (!a->quiet) printf("  reference: frames %u..%u already in %s (same settings)\n", first, end - 1, dir);
+            return 0;
+        }
+        snprintf(range, sizeof range, "%u:%u", first, end);
+    } else if (!a->rerun_reference && finished && have_stamp) {
         if (!strcmp(have, want)) {
+            /* finished, but merged from --frames ranges: all there? */
+            uint32_t miss = has_manifest ? ev__first_missing(dir, 0, man.frames) : 0;
+            if (has_manifest && miss < man.frames) {
+                uint32_t to = miss;
+                while (to < man.frames && !ev__frame_present(dir, to)) to++;
+                char m[160];
+                snprintf(m, sizeof m, "frame_%04u is missing (a --frames range not merged yet?); render it with "
+                         "softgi evaluate --frames %u:%u (same options) or give --rerun-reference", miss, miss, to);
+                return ev__fail(1, "%s: %s", dir, m);
+            }
             ev__progress_clear(a);
             if (!a->quiet) printf("  reference: reusing %s (%s)\n", dir, "same settings");
             return 0;
@@ -355,6 +413,10 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     ev__push(&v, "--track-spp");
     ev__push(&v, a->track_spp);
     if (reuse) ev__push(&v, "--reuse-frames");
+    if (range[0]) {
+        ev__push(&v, "--frames");
+        ev__push(&v, range);
+    }
     double t0 = pf_time_now();
     int rc = ev__run_sequence(&v);
     if (rc) return rc;
@@ -362,8 +424,8 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir)
     if (pf_imageio_write_file(stamp_path, want, strlen(want), &err) != PF_OK) return app_fail(&err);
     ev__progress_clear(a);
     if (!a->quiet)
-        printf("  reference: %s spp (tracked pixels %s)%s in %.1f s\n", a->spp, a->track_spp,
-               reuse ? ", images reused" : "", pf_time_now() - t0);
+        printf("  reference: %s spp (tracked pixels %s)%s%s%s in %.1f s\n", a->spp, a->track_spp,
+               reuse ? ", images reused" : "", range[0] ? ", frames " : "", range, pf_time_now() - t0);
     return 0;
 }
 
@@ -477,7 +539,58 @@ static void ev__unlit_rows(FILE *summary, const char *const *unlit, uint32_t cou
                      "triangles), so its numbers would measure nothing.\n");
 }
 
-static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
+/* --frames A:B: the references' frames A..B-1 of every sequence, nothing
+ * else (the top comment). Every sequence is read and the range checked
+ * against it before anything renders. */
+static int ev__run_ranged(ev__args *ap)
+{
+    uint32_t end[EV_MAX_ITEMS], longest = 0, todo = 0;
+    for (uint32_t s = 0; s < ap->sequence_count; s++) {
+        pf_sequence seq;
+        pf_error err;
+        if (pf_sequence_load(&seq, ap->sequences[s], &err) != PF_OK) return app_fail(&err);
+        uint32_t n = seq.frames;
+        pf_sequence_free(&seq);
+        if (n > longest) longest = n;
+        end[s] = ap->frame_first >= n ? 0 : ap->frame_end < n ? ap->frame_end : n;
+        todo += end[s] != 0;
+    }
+    if (!todo) {
+        char given[32];
+        if (ap->frame_end == PF_CLI_FRAMES_END) snprintf(given, sizeof given, "%u:", ap->frame_first);
+        else snprintf(given, sizeof given, "%u:%u", ap->frame_first, ap->frame_end);
+        char m[96];
+        snprintf(m, sizeof m, "the longest sequence has %u frames (0..%u)", longest, longest - 1);
+        return ev__fail(2, "--frames '%s': no sequence has these frames: %s", given, m);
+    }
+    ap->steps_total = todo;
+    const ev__args *a = ap;
+    int worst = 0;
+    for (uint32_t s = 0; s < a->sequence_count; s++) {
+        char name[256], ref_dir[2500];
+        ev__sequence_name(a->sequences[s], name, sizeof name);
+        snprintf(ref_dir, sizeof ref_dir, "%s/%s/reference", a->out, name);
+        ev__progress_clear(a);
+        if (!end[s]) {
+            if (!a->quiet) printf("evaluate: %s ends before frame %u: nothing to render\n", name, a->frame_first);
+            continue;
+        }
+        if (!a->quiet) printf("evaluate: %s (%s), reference frames %u..%u\n", name, a->sequences[s], a->frame_first,
+                              end[s] - 1);
+        ev__progress(a, name, "reference");
+        int rc = ev__reference(a, a->sequences[s], ref_dir, a->frame_first, end[s]);
+        ap->steps_done++;
+        if (rc) worst = rc;
+    }
+    ev__progress_clear(a);
+    if (!a->quiet)
+        printf("evaluate --frames: references written to %s; when every range is there, run softgi evaluate with the "
+               "same options and no --frames for the methods and tables\n",
+               a->out);
+    return worst;
+}
+
+static int ev__run(ev__args *ap, char (*names)[2600], app_progress *bar, int argc, char **argv)
 {
     int help = 0;
     int rc = ev__parse(ap, argc, argv, &help);
@@ -486,6 +599,10 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
         ev__usage(stdout);
         return 0;
     }
+    app_progress_begin(bar, "evaluate", ap->quiet);
+    ap->bar = bar;
+    if (ap->ranged) return ev__run_ranged(ap);
+    ap->steps_total = ap->sequence_count * (ap->method_count + 1);
     const ev__args *a = ap;
     char all_table[4300];
     snprintf(all_table, sizeof all_table, "%s/table.md", a->out);
@@ -501,7 +618,6 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
     fprintf(summary, "# softgi evaluate\n\nSettings: size %s, reference %s spp, %s VPLs, %s.\n", a->size, a->spp, a->vpls,
             a->full ? "whole images" : "indirect light only");
     int worst = 0;
-    ev__prog pr = {0, a->sequence_count * (a->method_count + 1), pf_time_now()};
     for (uint32_t s = 0; s < a->sequence_count; s++) {
         char name[256], seq_dir[2400], ref_dir[2500];
         ev__sequence_name(a->sequences[s], name, sizeof name);
@@ -510,9 +626,9 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
         ev__progress_clear(a);
         if (!a->quiet) printf("evaluate: %s (%s)\n", name, a->sequences[s]);
         fprintf(summary, "\n## %s\n\n", name);
-        ev__progress(a, &pr, name, "reference");
-        rc = ev__reference(a, a->sequences[s], ref_dir);
-        pr.done++;
+        ev__progress(a, name, "reference");
+        rc = ev__reference(a, a->sequences[s], ref_dir, 0, 0);
+        ap->steps_done++;
         if (rc) {
             fprintf(summary, "The reference failed (exit %d); sequence skipped.\n", rc);
             worst = rc;
@@ -523,9 +639,9 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
         for (uint32_t m = 0; m < a->method_count; m++) {
             char dir[2500];
             snprintf(dir, sizeof dir, "%s/%s", seq_dir, a->methods[m]);
-            ev__progress(a, &pr, name, a->methods[m]);
+            ev__progress(a, name, a->methods[m]);
             rc = ev__method(a, a->sequences[s], a->methods[m], dir);
-            pr.done++;
+            ap->steps_done++;
             if (rc) {
                 fprintf(summary, "- `%s` failed (exit %d): see the message above; not in the table.\n",
                         a->methods[m], rc);
@@ -561,7 +677,7 @@ static int ev__run(ev__args *ap, char (*names)[2600], int argc, char **argv)
                       : pf_imageio_write_file(all_table, summary_text, summary_len, &err);
     free(summary_text);
     if (r != PF_OK) return app_fail(&err);
-    ev__progress(a, &pr, NULL, NULL);
+    ev__progress_clear(a);
     if (!a->quiet) printf("evaluate: wrote %s\n", all_table);
     return worst;
 }
@@ -574,7 +690,9 @@ int app_evaluate(int argc, char **argv)
         free(ap), free(names);
         return ev__fail(1, "out of memory%s%s", "", "");
     }
-    int rc = ev__run(ap, names, argc, argv);
+    app_progress bar = {0};
+    int rc = ev__run(ap, names, &bar, argc, argv);
+    app_progress_end(&bar);
     free(ap), free(names);
     return rc;
 }

@@ -10,14 +10,14 @@
  * .png, .exr or .pfm by extension): checked before the path tracing starts,
  * both files complete or neither replaced.
  *
- * The progress bar goes to stderr, only when stderr is a terminal and not
- * --quiet; gi_reference calls it on this thread only (after every row this
- * thread finishes), so it needs no locking. */
+ * The progress bar (app_progress.h) goes to stderr, only when stderr is a
+ * terminal and not --quiet; gi_reference calls it on this thread only
+ * (after every row this thread finishes), so it needs no locking. */
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "app.h"
+#include "app_progress.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
@@ -25,38 +25,10 @@
 #include "pf_rt.h"
 #include "pf_timer.h"
 
-/* ---------------------------------------------------------------- progress bar */
-
-typedef struct app__progress {
-    double start, last_draw;
-    int drawn;
-} app__progress;
-
-/* "reference [==========>         ]  52%  10.4 s, ETA 9.6 s", redrawn in place
- * at most 10 times a second. The ETA assumes the remaining rows cost what the
- * finished ones did on average. */
-static void app__progress_draw(void *user, uint32_t done, uint32_t total)
+/* gi_reference's progress callback: rows done of all rows. */
+static void app__progress_rows(void *user, uint32_t done, uint32_t total)
 {
-    app__progress *p = user;
-    double now = pf_time_now();
-    if (done < total && p->drawn && now - p->last_draw < 0.1) return;
-    p->last_draw = now;
-    p->drawn = 1;
-    enum { BAR = 30 };
-    char bar[BAR + 1];
-    uint32_t fill = (uint32_t)((uint64_t)done * BAR / (total ? total : 1));
-    for (uint32_t i = 0; i < BAR; i++) bar[i] = i < fill ? '=' : (i == fill ? '>' : ' ');
-    bar[BAR] = 0;
-    double elapsed = now - p->start;
-    double frac = total ? (double)done / total : 1.0;
-    if (done > 0 && done < total)
-        fprintf(stderr, "\rreference [%s] %3.0f%%  %.1f s, ETA %.1f s   ", bar, 100.0 * frac, elapsed,
-                elapsed * (1.0 - frac) / frac);
-    else if (done == 0)
-        fprintf(stderr, "\rreference [%s] %3.0f%%  %.1f s, ETA ?        ", bar, 100.0 * frac, elapsed);
-    else
-        fprintf(stderr, "\rreference [%s] 100%%  %.1f s                 \n", bar, elapsed);
-    fflush(stderr);
+    app_progress_update(user, done, total, NULL);
 }
 
 /* ---------------------------------------------------------------- command */
@@ -90,17 +62,18 @@ int app_reference(const pf_options *o)
     /* Path trace */
     gi_reference_options ro;
     app_reference_options(o, &ro);
-    app__progress prog = {pf_time_now(), 0.0, 0};
-    if (!o->quiet && isatty(STDERR_FILENO)) {
-        ro.progress = app__progress_draw;
+    app_progress prog;
+    app_progress_begin(&prog, "reference", o->quiet);
+    if (prog.on) {
+        ro.progress = app__progress_rows;
         ro.progress_user = &prog;
     }
     if (r == PF_OK) {
         double t0 = pf_time_now();
-        prog.start = t0;
         r = gi_reference_render(image, &su.scene, su.rt, su.jobs, &su.camera, width, height, &ro, &err);
         pf_stage_add(&t, "path trace", (pf_time_now() - t0) * 1e3);
     }
+    app_progress_end(&prog);
 
     /* Output */
     float exposure = o->exposure;

@@ -16,6 +16,11 @@
  * --exposure auto picks the PNG's (and the pictures') exposure from the
  * image (app_exposure); a nearly black image gets a one-line hint.
  *
+ * A frame that takes long (large --vpls: every VPL's paraboloid map is
+ * rendered in the first frame) shows, on a terminal and without -q, the
+ * time so far and the last stage finished (app_progress.h; through
+ * pf_stage_hook, so the frame knows nothing of it).
+ *
  * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
  * way, since frame 0 runs the VPL update in place; gi_indirect.h). */
@@ -23,6 +28,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "app_progress.h"
 #include "gi_dump.h"
 #include "gi_frame.h"
 #include "gi_view.h"
@@ -73,6 +79,22 @@ static pf_result app__check_outputs(const pf_options *o, const char *default_png
     return r;
 }
 
+/* pf_stage_hook: a stage of the frame has finished. */
+typedef struct app__render_progress {
+    app_progress bar;
+    uint32_t stages;
+    char what[96];
+} app__render_progress;
+
+static void app__render_stage(void *user, const char *name, double ms)
+{
+    (void)ms;
+    app__render_progress *p = user;
+    p->stages++;
+    snprintf(p->what, sizeof p->what, "frame: %u stages done, the last %s", p->stages, name);
+    app_progress_update(&p->bar, 0.0, 0.0, p->what);
+}
+
 int app_render(const pf_options *o)
 {
     pf_error err;
@@ -110,8 +132,13 @@ int app_render(const pf_options *o)
     }
 
     /* Frame */
+    app__render_progress prog = {.stages = 0};
+    app_progress_begin(&prog.bar, "render", o->quiet);
+    pf_stage_hook hook = pf_stage_hook_set((pf_stage_hook){prog.bar.on ? app__render_stage : NULL, &prog});
     if (o->raytrace) gi_frame_render_raytraced(&frame);
     else gi_frame_render_raster(&frame);
+    pf_stage_hook_set(hook);
+    app_progress_end(&prog.bar);
     for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
 
     /* Output */

@@ -243,8 +243,11 @@ pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t 
     pf_budget_init(&b, o->max_memory);
     pf_result r = pf_budget_take(&b, scene->memory_bytes, "the scene", err);
     if (r != PF_OK) return r;
-    if (!frame) /* the path tracer: its image and per-pixel sums */
-        return pf_budget_take(&b, pf_budget_mul((uint64_t)width * height, 64), "the image", err);
+    if (!frame) { /* the path tracer: its image and per-pixel sums */
+        r = pf_budget_take(&b, pf_budget_mul((uint64_t)width * height, 64), "the image", err);
+        if (r == PF_OK) pf_budget_warn(&b, "a smaller scene or --size");
+        return r;
+    }
     uint32_t vpls = indirect && !o->direct_only ? (o->vpls ? o->vpls : 256) : 0;
     uint32_t res = o->visibility_raytrace ? 1 : o->visibility_ism ? (o->ism_res ? o->ism_res : GI_ISM_DEFAULT_RES) : 0;
     uint32_t area = app__has_emitters(scene) ? (o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS) : 0;
@@ -253,15 +256,17 @@ pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t 
              scene->light_count, o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE, vpls);
     uint64_t all = gi_frame_memory_estimate(scene, width, height, o->shadow_size, vpls, res, area);
     r = pf_budget_take(&b, all, what, err);
-    if (r != PF_OK) { /* say which knob helps */
-        uint64_t no_vpls = gi_frame_memory_estimate(scene, width, height, o->shadow_size, 0, res, area);
-        uint64_t no_shadows = all - gi_frame_memory_estimate(scene, 0, 0, o->shadow_size, 0, res, 0);
-        const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs or --visibility raytrace"
-                           : all - no_shadows > all / 2 ? "use fewer lights or a smaller --shadow-size"
-                                                        : "use a smaller --size";
+    /* which knob helps, for the refusal or the warning */
+    uint64_t no_vpls = gi_frame_memory_estimate(scene, width, height, o->shadow_size, 0, res, area);
+    uint64_t no_shadows = all - gi_frame_memory_estimate(scene, 0, 0, o->shadow_size, 0, res, 0);
+    const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs or --visibility raytrace (--vpls N)"
+                       : all - no_shadows > all / 2 ? "use fewer lights or a smaller --shadow-size"
+                                                    : "use a smaller --size";
+    if (r != PF_OK) {
         size_t n = strlen(err->message);
         snprintf(err->message + n, sizeof err->message - n, "; %s", hint);
-    }
+    } else
+        pf_budget_warn(&b, hint);
     return r;
 }
 

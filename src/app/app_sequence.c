@@ -45,7 +45,34 @@
  * alongside the frame and its set is used one frame later (frame 0 is
  * unchanged; frame N >= 1 shades with frame N-1's set; gi_indirect.h,
  * "Pipelining"). The moved count printed is that of the set the frame
- * shaded with. */
+ * shaded with.
+ *
+ * --frames A:B (issue 13 item 4: offline work spread over machines by a
+ * batch scheduler): only frames A..B-1 are written (zero-based as the
+ * file names, B excluded; "A:" to the end), under the names and with the
+ * bytes a full run gives them, so the folders of runs 0:10, 10:20, ...
+ * merged by file name equal a full run's folder. Every run writes the same
+ * track.txt and the same finished manifest (frames N, complete; "running"
+ * while it works), and `softgi compare` checks that every listed frame is
+ * there, so a merge that lacks a range is refused, not read short. What a
+ * frame's bytes depend on decides what a range costs:
+ * - the frame keeps state from frame to frame: the VPL method's (and with
+ *   --pipeline the previous frame's set), and even without indirect light
+ *   the area lights' emitter points (test_frames found it), so frames
+ *   0..A-1 are rendered, not written, to bring that state to frame A; only
+ *   the writing of those frames is saved;
+ * - --reference frames depend only on their camera and lights (the path
+ *   tracer's random numbers are seeded by pixel and sample, not by frame
+ *   order): frames before A are skipped;
+ * - --exposure auto is picked on frame 0 and held, so a range without
+ *   frame 0 renders frame 0 first for it (not written).
+ * --hash then hashes the range's frames.
+ *
+ * Progress (app_progress.h): on a terminal and without -q, one bar over
+ * the frames to render, advanced within a frame by its stages (through
+ * pf_stage_hook; the previous frame's stage count is the expected one) or,
+ * for --reference, by the path tracer's rows; the per-frame lines print
+ * above it. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -53,6 +80,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "app_progress.h"
 #include "gi_frame.h"
 #include "gi_metrics.h"
 #include "gi_reference.h"
@@ -114,6 +142,38 @@ static uint64_t app__fnv1a(uint64_t h, const void *data, size_t n)
     return h;
 }
 
+/* The bar over the frames to render (the top comment). */
+typedef struct app__seq_progress {
+    app_progress bar;
+    uint32_t done, total;      /* frames rendered, to render */
+    uint32_t frame;            /* the frame being rendered */
+    uint32_t stages, expected; /* its stages done so far; the last frame's count */
+    char what[96];
+} app__seq_progress;
+
+static void app__seq_progress_show(app__seq_progress *p, double frac, const char *step)
+{
+    if (frac > 0.99) frac = 0.99;
+    snprintf(p->what, sizeof p->what, "frame %u (%u of %u)%s%s", p->frame, p->done + 1, p->total, step ? ": " : "",
+             step ? step : "");
+    app_progress_update(&p->bar, p->done + frac, p->total, p->what);
+}
+
+/* pf_stage_hook: a stage of the frame being rendered has finished. */
+static void app__seq_progress_stage(void *user, const char *name, double ms)
+{
+    (void)ms;
+    app__seq_progress *p = user;
+    p->stages++;
+    app__seq_progress_show(p, p->expected ? (double)p->stages / p->expected : 0.0, name);
+}
+
+/* gi_reference's progress: rows of the frame's reference. */
+static void app__seq_progress_rows(void *user, uint32_t done, uint32_t total)
+{
+    app__seq_progress_show(user, total ? (double)done / total : 0.0, "path tracing");
+}
+
 /* Everything the run owns, freed by app__cleanup. */
 typedef struct app__seq_run {
     pf_sequence seq;
@@ -128,6 +188,7 @@ typedef struct app__seq_run {
     /* --reference --track-spp: the pixels `softgi compare` will track */
     uint32_t track_xy[2 * PF_SEQUENCE_MAX_TRACK];
     uint32_t track_count;
+    app__seq_progress progress;
 } app__seq_run;
 
 static void app__cleanup(app__seq_run *s)
@@ -172,7 +233,12 @@ static pf_result app__render_reference(app__seq_run *s, const pf_options *o, con
         if (r == PF_OK) memcpy(fr->final, rgb, sizeof(float) * 3 * w * h);
         free(rgb);
     } else {
+        if (s->progress.bar.on) {
+            ro.progress = app__seq_progress_rows;
+            ro.progress_user = &s->progress;
+        }
         r = gi_reference_render(fr->final, &s->scene, s->rt, s->jobs, &fr->camera, fr->width, fr->height, &ro, err);
+        ro.progress = NULL;
     }
     pf_stage_add(&fr->times, o->reuse_frames ? "reference (reused)" : "reference", (pf_time_now() - t0) * 1e3);
     if (r != PF_OK || o->track_spp <= ro.spp) return r;
@@ -189,6 +255,7 @@ static pf_result app__render_reference(app__seq_run *s, const pf_options *o, con
 
 static int app__fail_run(app__seq_run *s, const pf_error *err)
 {
+    app_progress_end(&s->progress.bar);
     int st = app_fail(err);
     app__cleanup(s);
     return st;
@@ -213,6 +280,13 @@ int app_sequence(const pf_options *o)
         r = pf_error_set(&err, PF_ERR_ARGUMENT, "--camera: %s has camera keys; edit the file instead", seq->file);
     if (seq->lights_replace && o->light_count)
         r = pf_error_set(&err, PF_ERR_ARGUMENT, "--light: %s gives its own lights; edit the file instead", seq->file);
+    /* --frames A:B: the frames this run writes, [first, end) */
+    uint32_t first = 0, end = seq->frames;
+    if (r == PF_OK && o->frame_range) {
+        first = o->frame_first;
+        end = o->frame_end;
+        r = pf_cli_check_frame_range("--frames", seq->frames, first, &end, &err);
+    }
     /* Tracked pixels are in the file's image size: --size scales them. */
     uint32_t track[PF_SEQUENCE_MAX_TRACK][2];
     for (uint32_t i = 0; i < seq->track_count && r == PF_OK; i++) {
@@ -346,7 +420,9 @@ int app_sequence(const pf_options *o)
                t_build * 1e3, dir);
     }
 
-    /* Frames: the manifest says "running" until the last file is written */
+    /* Frames: the manifest says "running" until the last file is written.
+     * [first, end): the frames written; frames before `first` are rendered
+     * only to carry the frame's state (or frame 0 for --exposure auto). */
     if ((r = pf_sequence_manifest_write(dir, &man, &err)) != PF_OK) return app__fail_run(&s, &err);
     pf_stage_times total;
     memset(&total, 0, sizeof total);
@@ -354,7 +430,17 @@ int app_sequence(const pf_options *o)
     double render_sum = 0.0, write_sum = 0.0;
     uint64_t moved_sum = 0;
     float exposure = o->exposure; /* --exposure auto: picked on frame 0 and held, so the PNGs do not flicker */
-    for (uint32_t f = 0; f < seq->frames && r == PF_OK; f++) {
+    /* the frame's state runs through every frame; references stand alone */
+    const int carry = !o->reference;
+    app__seq_progress *prog = &s.progress;
+    app_progress_begin(&prog->bar, "sequence", o->quiet);
+    prog->total = carry ? end : end - first + (o->exposure_auto && first > 0);
+    for (uint32_t f = 0; f < end && r == PF_OK; f++) {
+        const int write = f >= first;
+        if (!write && !carry && !(f == 0 && o->exposure_auto)) continue;
+        prog->frame = f;
+        prog->stages = 0;
+        app__seq_progress_show(prog, 0.0, NULL);
         /* camera and lights of frame f (checked above) */
         pf_vec3 eye, target;
         float fovy;
@@ -370,17 +456,32 @@ int app_sequence(const pf_options *o)
 
         /* render */
         double t0 = pf_time_now();
+        pf_stage_hook hook = pf_stage_hook_set((pf_stage_hook){prog->bar.on ? app__seq_progress_stage : NULL, prog});
         if (o->reference) r = app__render_reference(&s, o, dir, f, &err);
         else if (o->raytrace) gi_frame_render_raytraced(fr);
         else gi_frame_render_raster(fr);
+        pf_stage_hook_set(hook);
         double t_render = (pf_time_now() - t0) * 1e3;
-        for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
+        prog->expected = prog->stages;
+        prog->done++;
+        app_progress_clear(&prog->bar); /* lines and notes follow; the next frame draws it again */
         uint32_t moved = 0;
         if (fr->indirect)
             for (uint32_t i = 0; i < fr->ind.vpls.count; i++) moved += fr->ind.vpls.v[i].moved != 0;
-        moved_sum += moved;
 
         if (r != PF_OK) break;
+        if (!write) { /* a frame before the range: its state (or frame 0's exposure) only */
+            if (f == 0) {
+                exposure = app_exposure(o, fr->final, width, height);
+                app_hint_dark(o, fr->final, width, height, exposure);
+            }
+            if (!o->quiet)
+                printf("frame %04u  render %8.1f ms  (before --frames %u:%u: not written; %s)\n", f, t_render, first,
+                       end, carry ? "carries the frame's state" : "picks --exposure auto");
+            continue;
+        }
+        moved_sum += moved;
+        for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
         /* write */
         t0 = pf_time_now();
         gi_metrics_view view;
@@ -410,6 +511,7 @@ int app_sequence(const pf_options *o)
             printf("\n");
         }
     }
+    app_progress_end(&prog->bar);
     if (r != PF_OK) return app__fail_run(&s, &err);
 
     /* track.txt (empty without "track": compare's default grid), then the
@@ -425,14 +527,17 @@ int app_sequence(const pf_options *o)
     if (r != PF_OK) return app__fail_run(&s, &err);
 
     if (!o->quiet) {
-        double n = (double)seq->frames;
-        printf("%u frames: render %.1f ms/frame (total %.2f s), write %.1f ms/frame", seq->frames, render_sum / n,
+        double n = (double)(end - first);
+        printf("%u frames: render %.1f ms/frame (total %.2f s), write %.1f ms/frame", end - first, render_sum / n,
                render_sum * 1e-3, write_sum / n);
         if (fr->indirect) printf(", %.1f VPLs moved/frame", (double)moved_sum / n);
         printf("\nmean per frame:\n");
         for (uint32_t i = 0; i < total.count; i++) total.ms[i] /= n;
         pf_stage_print(&total, stdout);
-        printf("wrote %u frames to %s\n", seq->frames, dir);
+        if (end - first == seq->frames) printf("wrote %u frames to %s\n", seq->frames, dir);
+        else
+            printf("wrote frames %u..%u (%u of %u; --frames %u:%u) to %s\n", first, end - 1, end - first, seq->frames,
+                   first, end, dir);
     }
     if (o->print_hash) printf("hash %016llx (isa %s)\n", (unsigned long long)hash, pf_isa_name(isa));
     app__cleanup(&s);

@@ -66,7 +66,9 @@ static const pf__opt k_options[] = {
     {PF__OPT_SIZE, "--size", NULL, "WxH", R | V | F, "image size (default 640x480)", NULL},
     {PF__OPT_SIZE, "--size", NULL, "WxH", S, "image size (default: the file's \"size\", else 640x480)", NULL},
     {PF__OPT_THREADS, "--threads", NULL, "N", SCENE, "worker threads incl. the main one (default: cores)", NULL},
-    {PF__OPT_THREADS, "--threads", NULL, "N", BR | BF, "measure only N threads (default: 1 and 2)", NULL},
+    {PF__OPT_THREADS, "--threads", NULL, "N", BR | BF,
+     "measure only N threads, at most the cores (default: 1 and 2);\nthe Amdahl table predicts 8, 16 and 64 cores",
+     NULL},
     {PF__OPT_ISA, "--isa", NULL, "auto|sse2|sse4.2|avx2|avx512", ALL, "pin Embree's and softgi's SIMD ISA (default auto)",
      NULL},
     {PF__OPT_EXPOSURE, "--exposure", NULL, "STOPS|auto", SCENE,
@@ -141,6 +143,12 @@ static const pf__opt k_options[] = {
     {PF__OPT_QUIET, "--quiet", "-q", NULL, SCENE, "no timing table", NULL},
     {PF__OPT_FRAMES, "--frames", NULL, "N", V, "render N frames, then exit (after --screenshot)", NULL},
     {PF__OPT_FRAMES, "--frames", NULL, "N", BR | BF, "repetitions per measurement (default 15)", NULL},
+    {PF__OPT_FRAMES, "--frames", NULL, "A:B", S,
+     "render only frames A..B-1 (zero-based as frame_NNNN, B excluded;\nA: to the end, N: frame N alone), named as "
+     "a full run names\nthem, so runs of 0:10, 10:20, ... merged into one folder equal\na full run's (README: a batch "
+     "scheduler); "
+     "the frames before A are\nrendered, not written, to carry the frame's state (references:\nskipped)",
+     NULL},
     {PF__OPT_SCREENSHOT, "--screenshot", NULL, "FILE.png", V,
      "save the window (without the HUD) after --frames N (default 1)", NULL},
     {PF__OPT_SCENES, "--scenes", NULL, "DIR", BR | BF, "folder with sibenik/ and conference/ (default ../shared/scenes)",
@@ -615,7 +623,7 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
     case PF__OPT_RAYTRACE: o->raytrace = 1; break;
     case PF__OPT_HASH: o->print_hash = 1; break;
     case PF__OPT_QUIET: o->quiet = 1; break;
-    case PF__OPT_FRAMES: r = pf__uint(a, val, 1, 1000, &o->frames, err); break;
+    case PF__OPT_FRAMES: o->frames_arg = val; break; /* N or A:B: parsed once the command is known */
     case PF__OPT_SCREENSHOT: {
         size_t n = strlen(val);
         o->screenshot_path = val;
@@ -664,6 +672,23 @@ static pf_result pf__check_command(const pf_options *o, const char *const given[
                             given[id], name, given[id], by, (takes & (takes - 1)) ? "" : "s", e->note ? "; " : "",
                             e->note ? e->note : "", cmd);
     }
+    return PF_OK;
+}
+
+/* --frames by command: A:B for sequence, a count elsewhere. */
+static pf_result pf__frames(pf_options *o, const char *spelt, pf_error *err)
+{
+    if (!o->frames_arg || !o->command) return PF_OK;
+    if (!strcmp(o->command, "sequence")) {
+        o->frame_range = 1;
+        return pf_cli_parse_frame_range(spelt, o->frames_arg, &o->frame_first, &o->frame_end, err);
+    }
+    return pf__uint(spelt, o->frames_arg, 1, 1000, &o->frames, err);
+}
+
+/* The options that depend on others (after pf__check_command). */
+static pf_result pf__check_combinations(const pf_options *o, pf_error *err)
+{
     if (o->reuse_frames && !o->track_spp)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--reuse-frames: only with sequence --reference --track-spp");
     if (o->track_spp && !o->reference)
@@ -704,5 +729,63 @@ pf_result pf_cli_parse(pf_options *o, int argc, char **argv, pf_error *err)
         else
             r = pf_error_set(err, PF_ERR_ARGUMENT, "unexpected argument '%s'", a);
     }
-    return r == PF_OK ? pf__check_command(o, given, err) : r;
+    if (r == PF_OK) r = pf__check_command(o, given, err);
+    if (r == PF_OK && !o->version && !o->help) r = pf__frames(o, given[PF__OPT_FRAMES], err);
+    if (r == PF_OK && !o->version && !o->help) r = pf__check_combinations(o, err);
+    return r;
+}
+
+/* Digits only, at most 6 of them (below 1000000): no sign, space or
+ * exponent slips through strtoul. */
+static int pf__frame_number(const char *s, size_t n, uint32_t *out)
+{
+    if (n == 0 || n > 6) return 0;
+    uint32_t v = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9') return 0;
+        v = v * 10 + (uint32_t)(s[i] - '0');
+    }
+    *out = v;
+    return 1;
+}
+
+pf_result pf_cli_parse_frame_range(const char *opt, const char *val, uint32_t *first, uint32_t *end, pf_error *err)
+{
+    const char *colon = strchr(val, ':');
+    if (!colon && pf__frame_number(val, strlen(val), first)) { /* N: frame N alone, N:N+1 */
+        *end = *first + 1;
+        return PF_OK;
+    }
+    if (!colon || strchr(colon + 1, ':') || (colon == val && !colon[1]))
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "%s '%.40s': expected A:B (frames A..B-1, zero-based), A: (A to the end), :B or N (frame "
+                            "N alone)",
+                            opt, val);
+    size_t la = (size_t)(colon - val), lb = strlen(colon + 1);
+    uint32_t a = 0, b = PF_CLI_FRAMES_END;
+    if ((la && !pf__frame_number(val, la, &a)) || (lb && !pf__frame_number(colon + 1, lb, &b)))
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "%s '%.40s': A and B are frame numbers 0..999999 (digits only; frames A..B-1)", opt, val);
+    if (b != PF_CLI_FRAMES_END && b <= a)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "%s '%.40s': B must be greater than A (the range is frames A..B-1; B is not rendered)",
+                            opt, val);
+    *first = a;
+    *end = b;
+    return PF_OK;
+}
+
+pf_result pf_cli_check_frame_range(const char *opt, uint32_t frames, uint32_t first, uint32_t *end, pf_error *err)
+{
+    if (first >= frames || (*end != PF_CLI_FRAMES_END && *end > frames)) {
+        char given[32];
+        if (*end == PF_CLI_FRAMES_END) snprintf(given, sizeof given, "%u:", first);
+        else snprintf(given, sizeof given, "%u:%u", first, *end);
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "%s '%s': the sequence has %u frame%s (0..%u), so A must be below %u and B at most %u "
+                            "(A: renders to the end)",
+                            opt, given, frames, frames > 1 ? "s" : "", frames - 1, frames, frames);
+    }
+    if (*end == PF_CLI_FRAMES_END) *end = frames;
+    return PF_OK;
 }

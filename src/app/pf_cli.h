@@ -52,7 +52,12 @@ typedef struct pf_options {
     const char *scene_path; /* render: NULL = the embedded default scene (Cornell box); bench: what to bench;
                                sequence: the sequence file */
     const char *scenes_dir; /* bench: folder of the shared scenes (default ../shared/scenes) */
-    uint32_t frames;        /* bench: repetitions per measurement (0: default 15) */
+    uint32_t frames;        /* bench: repetitions per measurement (0: default 15); view: frames to show */
+    const char *frames_arg; /* --frames as given: N (view, bench) or A:B (sequence), parsed by command */
+    /* sequence --frames A:B: render frames A..B-1 only (zero-based, B
+     * excluded, as Python's A:B; see pf_cli_parse_frame_range) */
+    int frame_range;              /* --frames given to sequence */
+    uint32_t frame_first, frame_end; /* frame_end PF_CLI_FRAMES_END: to the last frame */
     uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */
     uint32_t area_strata;   /* ray-traced area-light samples: N x N per pixel (0: default 4) */
     uint32_t area_points;   /* rasterized area light: K emitter points with paraboloid maps (0: default 32) */
@@ -119,6 +124,18 @@ uint32_t pf_cli_command_bit(const char *command, const char *subject);
 uint32_t pf_cli_option_commands(const char *option);
 /* The i-th option's long name, i = 0, 1, ...; NULL past the last. */
 const char *pf_cli_option_name(uint32_t i);
+
+/* "A:B" (frames A..B-1: zero-based like frame_NNNN, B excluded, so the
+ * ranges 0:10, 10:20, ... tile a sequence), "A:" (A to the end), ":B"
+ * (0..B-1) or "N" (frame N alone, N:N+1: one frame per array task):
+ * digits only, A < B, both below 1000000. `opt` names the option
+ * in the message. *end is PF_CLI_FRAMES_END for an open end. */
+#define PF_CLI_FRAMES_END UINT32_MAX
+pf_result pf_cli_parse_frame_range(const char *opt, const char *val, uint32_t *first, uint32_t *end, pf_error *err);
+/* The frame range against a sequence of `frames` frames: PF_ERR_ARGUMENT
+ * when A is not one of its frames or B is past its end; an open end
+ * becomes `frames`. */
+pf_result pf_cli_check_frame_range(const char *opt, uint32_t frames, uint32_t first, uint32_t *end, pf_error *err);
 
 /* Parsers used by the CLI, exposed for tests. */
 pf_result pf_cli_parse_light(const char *spec, pf_light *out, pf_error *err);

@@ -89,3 +89,14 @@ pf_result pf_budget_take(pf_budget *b, uint64_t bytes, const char *what, pf_erro
     b->used = total;
     return PF_OK;
 }
+
+int pf_budget_warn(const pf_budget *b, const char *hint)
+{
+    uint64_t machine = pf_memory_machine();
+    double share = (double)b->used / (double)machine;
+    if (share < PF_BUDGET_WARN_SHARE) return 0;
+    fprintf(stderr, "softgi: warning: this run will take about %.1f GiB, %.0f%% of this machine's %.1f GiB%s; %s\n",
+            pf__mib(b->used) / 1024.0, 100.0 * share, pf__mib(machine) / 1024.0,
+            share > 1.0 ? " (more than it has: it will swap or be killed)" : "", hint);
+    return 1;
+}

@@ -49,6 +49,14 @@ void pf_budget_init(pf_budget *b, uint64_t limit);
 /* Takes `bytes` for `what` (e.g. "texture 3 (8192x8192)"), or fails with
  * PF_ERR_OUT_OF_MEMORY and a message naming both sizes and the budget. */
 pf_result pf_budget_take(pf_budget *b, uint64_t bytes, const char *what, pf_error *err);
+/* Before a large allocation that fits the budget but takes a big share of
+ * the machine (at least PF_BUDGET_WARN_SHARE of pf_memory_machine(), e.g.
+ * --vpls 100000: 3.3 GB of paraboloid maps), one line on stderr:
+ *   softgi: warning: this run will take about 3.4 GiB, 42% of this
+ *   machine's 7.8 GiB; use fewer VPLs or --visibility raytrace (--vpls N)
+ * `hint` names the option that reduces it. Returns 1 if it warned. */
+#define PF_BUDGET_WARN_SHARE 0.25
+int pf_budget_warn(const pf_budget *b, const char *hint);
 /* a * b, saturating at UINT64_MAX. */
 uint64_t pf_budget_mul(uint64_t a, uint64_t b);
 

@@ -32,6 +32,15 @@
  * thread may call the wait functions at a time, or two threads would share
  * index thread_count-1 and with it per-worker scratch.
  *
+ * Profile (pf_jobs.h, off unless a benchmark turns it on): each thread
+ * times the items of a chunk, adds their sum and maximum to the job's two
+ * profile counters (relaxed atomics, published by the acq_rel on `done`),
+ * and the thread that finishes the job folds them into the pool's totals
+ * under the mutex. A wait inside an item adds its duration to a
+ * thread-local "excluded" count that the item subtracts from its own time,
+ * so nested jobs are counted once; items run inside that wait restore the
+ * count when they end, so nothing is subtracted twice.
+ *
  * Waiting inside a job helps with any ready job, so it cannot deadlock while
  * the awaited job does not depend (directly or not) on a job that is already
  * running: a helper may be parked, under its own stack frames, inside such a
@@ -48,9 +57,11 @@
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <time.h>
 #include <unistd.h>
 
-/* 256 jobs of one cache line each: 16 KiB pages. */
+/* 256 jobs of two cache lines each (the second holds only the profile
+ * counters, untouched unless profiling): 32 KiB pages. */
 #define PF__PAGE_SHIFT 8u
 #define PF__PAGE_JOBS (1u << PF__PAGE_SHIFT)
 #define PF__NO_EDGE 0xffffffffu
@@ -75,6 +86,9 @@ typedef struct pf__job {
     uint32_t first_edge; /* head of the dependents list, PF__NO_EDGE if none */
     struct pf__job *link; /* pf__finish's work stack */
     uint8_t finished;
+    uint8_t auto_grain; /* grain was 0: the profile's predictions rescale it */
+    /* Profile only: item nanoseconds summed, and the longest item. */
+    atomic_uint_fast64_t prof_work_ns, prof_longest_ns;
 } pf__job;
 
 typedef struct pf__job_page {
@@ -121,13 +135,31 @@ struct pf_jobs {
     uint32_t idle_workers;     /* asleep on work_cv */
     uint32_t sleeping_waiters; /* asleep on wait_cv */
     uint32_t active;           /* threads holding a job pointer outside the mutex */
+
+    /* Profile (pf_jobs.h): `profile` is written only between frames by the
+     * external thread (atomic, so threads read it without the mutex); the
+     * totals are under the mutex. */
+    atomic_int profile;
+    uint64_t prof_wait_ns, prof_wait_cpu_ns, prof_work_ns, prof_span_ns, prof_jobs, prof_items;
+    double prof_predicted_ns[PF_JOBS_PROFILE_CORES];
 };
+
+const uint32_t pf_jobs_profile_cores[PF_JOBS_PROFILE_CORES] = {1, 2, 4, 8, 16, 32, 64, 128};
 
 /* Which pool, if any, this thread is a worker of, and how many job bodies
  * are on its stack (wait_all inside a job would wait for itself). */
 static _Thread_local const pf_jobs *pf__tls_pool;
 static _Thread_local uint32_t pf__tls_worker;
 static _Thread_local uint32_t pf__tls_depth;
+/* Profile: nanoseconds of waits inside the item this thread is running. */
+static _Thread_local uint64_t pf__tls_excluded_ns;
+
+static uint64_t pf__ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
 
 static void pf__fatal(const char *what)
 {
@@ -187,6 +219,29 @@ static uint64_t pf__chunk_count(const pf__job *job)
     return ((uint64_t)job->count + job->grain - 1) / job->grain;
 }
 
+/* Adds a finished job's profile counters to the pool's totals (see
+ * pf_jobs.h for the prediction). Under the mutex. */
+static void pf__profile_fold(pf_jobs *jobs, pf__job *job)
+{
+    uint64_t work = atomic_load_explicit(&job->prof_work_ns, memory_order_relaxed);
+    uint64_t longest = atomic_load_explicit(&job->prof_longest_ns, memory_order_relaxed);
+    jobs->prof_work_ns += work;
+    jobs->prof_span_ns += longest;
+    jobs->prof_jobs++;
+    jobs->prof_items += job->count;
+    for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) {
+        uint64_t n = pf_jobs_profile_cores[k];
+        uint64_t grain = job->grain;
+        if (job->auto_grain) {
+            grain = job->count / (n * PF__CHUNKS_PER_THREAD);
+            if (grain == 0) grain = 1;
+        }
+        uint64_t chunks = (job->count + grain - 1) / grain;
+        double t = (double)((chunks + n - 1) / n) * ((double)work / (double)chunks);
+        jobs->prof_predicted_ns[k] += t > (double)longest ? t : (double)longest;
+    }
+}
+
 /* Marks `job` finished and releases its dependents; count-0 dependents
  * finish at once, which can cascade, so this walks an explicit stack rather
  * than recursing. Under the mutex. */
@@ -200,6 +255,7 @@ static void pf__finish(pf_jobs *jobs, pf__job *job)
         stack = j->link;
         j->finished = 1;
         jobs->finished_count++;
+        if (j->count && atomic_load_explicit(&jobs->profile, memory_order_relaxed)) pf__profile_fold(jobs, j);
         for (uint32_t e = j->first_edge; e != PF__NO_EDGE; e = jobs->edges[e].next) {
             uint32_t id = jobs->edges[e].job;
             pf__job *d = pf__job_at(jobs, id);
@@ -234,16 +290,85 @@ static pf__job *pf__pick(pf_jobs *jobs, pf__job *prefer)
     return NULL;
 }
 
+/* The calling thread's CPU time (about 1 us a read here, 25 times a
+ * monotonic clock read: read only where an item looks preempted). */
+static uint64_t pf__cpu_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* An item at least this long may hold a preemption (a loaded machine takes
+ * the core away for a scheduler slice, milliseconds): its thread's CPU time
+ * is checked. */
+#define PF__SUSPECT_NS 300000u
+
+/* One thread's run through a job (pf__run_chunks): its CPU time when last
+ * checked and the item wall time since. */
+typedef struct pf__prof_run {
+    uint64_t cpu, wall;
+} pf__prof_run;
+
+/* Runs items [begin, end) of `job` timing each one (the profile), and adds
+ * their sum and maximum to the job's counters.
+ *
+ * Items are timed by the wall clock (cheap), which on a loaded machine
+ * also counts the time another process held the core: one preempted row
+ * would pass for the frame's longest item. So when a chunk's longest item
+ * is long, the thread's CPU time is read, and the wall time since the last
+ * check beyond it (time not running) is taken off that item and the
+ * chunk's sum. Items that waited (nested jobs) skip the check: their
+ * thread's CPU time includes the items it ran meanwhile. */
+static void pf__run_profiled(pf__job *job, uint32_t begin, uint32_t end, uint32_t worker, pf__prof_run *run)
+{
+    uint64_t sum = 0, longest = 0;
+    int nested = 0;
+    for (uint32_t item = begin; item < end; item++) {
+        uint64_t excluded = pf__tls_excluded_ns, t0 = pf__ns();
+        job->fn(job->ctx, item, worker);
+        uint64_t t = pf__ns() - t0, waited = pf__tls_excluded_ns - excluded;
+        pf__tls_excluded_ns = excluded; /* this item's waits are not its caller's */
+        nested |= waited != 0;
+        t = t > waited ? t - waited : 0;
+        sum += t;
+        if (t > longest) longest = t;
+    }
+    run->wall += sum;
+    if (nested) {
+        run->cpu = pf__cpu_ns();
+        run->wall = 0;
+    } else if (longest >= PF__SUSPECT_NS) {
+        uint64_t cpu = pf__cpu_ns(), ran = cpu - run->cpu;
+        uint64_t idle = run->wall > ran ? run->wall - ran : 0;
+        if (idle > longest) idle = longest;
+        longest -= idle;
+        sum -= idle < sum ? idle : sum;
+        run->cpu = cpu;
+        run->wall = 0;
+    }
+    atomic_fetch_add_explicit(&job->prof_work_ns, sum, memory_order_relaxed);
+    uint_fast64_t old = atomic_load_explicit(&job->prof_longest_ns, memory_order_relaxed);
+    while (old < longest &&
+           !atomic_compare_exchange_weak_explicit(&job->prof_longest_ns, &old, longest, memory_order_relaxed,
+                                                  memory_order_relaxed)) {
+    }
+}
+
 /* Claims and runs chunks of `job` until none are left. Outside the mutex.
  * Returns 1 when this thread ran the job's last item and so must finish it. */
-static int pf__run_chunks(pf__job *job, uint32_t worker)
+static int pf__run_chunks(pf__job *job, uint32_t worker, int profile)
 {
     const uint32_t count = job->count, grain = job->grain;
+    pf__prof_run run = {0, 0};
     for (;;) {
         uint64_t begin = atomic_fetch_add_explicit(&job->next, grain, memory_order_relaxed);
         if (begin >= count) return 0;
         uint32_t end = begin + grain < count ? (uint32_t)(begin + grain) : count;
-        for (uint32_t item = (uint32_t)begin; item < end; item++) job->fn(job->ctx, item, worker);
+        if (profile && run.cpu == 0) run.cpu = pf__cpu_ns();
+        if (profile) pf__run_profiled(job, (uint32_t)begin, end, worker, &run);
+        else
+            for (uint32_t item = (uint32_t)begin; item < end; item++) job->fn(job->ctx, item, worker);
         /* acq_rel: the thread that completes the job has then seen every
          * other thread's item writes, and publishes them to dependents
          * through the mutex in pf__finish. */
@@ -261,7 +386,7 @@ static int pf__help(pf_jobs *jobs, uint32_t worker, pf__job *prefer)
     jobs->active++;
     pthread_mutex_unlock(&jobs->mutex);
     pf__tls_depth++;
-    int completed = pf__run_chunks(job, worker);
+    int completed = pf__run_chunks(job, worker, atomic_load_explicit(&jobs->profile, memory_order_relaxed));
     pf__tls_depth--;
     pthread_mutex_lock(&jobs->mutex);
     jobs->active--;
@@ -317,6 +442,7 @@ pf_jobs *pf_jobs_create(uint32_t thread_count)
 
     pf_jobs *jobs = calloc(1, sizeof *jobs);
     if (!jobs) return NULL;
+    atomic_init(&jobs->profile, 0);
     if (pthread_mutex_init(&jobs->mutex, NULL)) {
         free(jobs);
         return NULL;
@@ -373,6 +499,7 @@ pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, ui
 {
     assert(fn || count == 0);
     assert(deps || dep_count == 0);
+    const uint8_t auto_grain = grain == 0;
     if (grain == 0) {
         grain = count / (jobs->thread_count * PF__CHUNKS_PER_THREAD);
         if (grain == 0) grain = 1;
@@ -395,6 +522,11 @@ pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, ui
     job->first_edge = PF__NO_EDGE;
     job->link = NULL;
     job->finished = 0;
+    job->auto_grain = auto_grain;
+    if (atomic_load_explicit(&jobs->profile, memory_order_relaxed)) {
+        atomic_store_explicit(&job->prof_work_ns, 0, memory_order_relaxed);
+        atomic_store_explicit(&job->prof_longest_ns, 0, memory_order_relaxed);
+    }
 
     for (uint32_t i = 0; i < dep_count; i++) {
         pf_job_id dep = deps[i];
@@ -431,10 +563,24 @@ pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, ui
     return id;
 }
 
+/* A wait of `ns` ended: inside an item, the item excludes it; outside any,
+ * it is the external thread's parallel region, and `cpu0` its CPU time
+ * when the wait began. Under the mutex. */
+static void pf__profile_wait(pf_jobs *jobs, uint64_t ns, uint64_t cpu0)
+{
+    if (pf__tls_depth) pf__tls_excluded_ns += ns;
+    else {
+        jobs->prof_wait_ns += ns;
+        jobs->prof_wait_cpu_ns += pf__cpu_ns() - cpu0;
+    }
+}
+
 void pf_jobs_wait(pf_jobs *jobs, pf_job_id id)
 {
     if (id == PF_JOB_NONE) return;
     uint32_t worker = pf__self(jobs);
+    const int profile = atomic_load_explicit(&jobs->profile, memory_order_relaxed);
+    uint64_t t0 = profile ? pf__ns() : 0, cpu0 = profile && !pf__tls_depth ? pf__cpu_ns() : 0;
     pthread_mutex_lock(&jobs->mutex);
     /* An id from before the last wait_all is stale; in release builds treat
      * ids past the end as finished rather than reading a missing page. */
@@ -448,6 +594,7 @@ void pf_jobs_wait(pf_jobs *jobs, pf_job_id id)
             jobs->sleeping_waiters--;
         }
     }
+    if (profile) pf__profile_wait(jobs, pf__ns() - t0, cpu0);
     pthread_mutex_unlock(&jobs->mutex);
 }
 
@@ -455,6 +602,8 @@ void pf_jobs_wait_all(pf_jobs *jobs)
 {
     assert(pf__tls_depth == 0 && pf__tls_pool != jobs);
     uint32_t worker = jobs->thread_count - 1;
+    const int profile = atomic_load_explicit(&jobs->profile, memory_order_relaxed);
+    uint64_t t0 = profile ? pf__ns() : 0, cpu0 = profile && !pf__tls_depth ? pf__cpu_ns() : 0;
     pthread_mutex_lock(&jobs->mutex);
     /* Finished is not enough before ids recycle: a thread that just found a
      * job exhausted still holds its pointer (`active`) and will touch its
@@ -469,6 +618,7 @@ void pf_jobs_wait_all(pf_jobs *jobs)
     jobs->finished_count = 0;
     jobs->ready_head = jobs->ready_tail = 0;
     jobs->edge_count = 0;
+    if (profile) pf__profile_wait(jobs, pf__ns() - t0, cpu0);
     pthread_mutex_unlock(&jobs->mutex);
 }
 
@@ -483,4 +633,42 @@ uint32_t pf_jobs_core_count(void)
     if (n < 1) return 1;
     if (n > PF_JOBS_MAX_THREADS) return PF_JOBS_MAX_THREADS;
     return (uint32_t)n;
+}
+
+/* ---------------------------------------------------------------- profile */
+
+void pf_jobs_profile_enable(pf_jobs *jobs, int on)
+{
+    pthread_mutex_lock(&jobs->mutex);
+    atomic_store_explicit(&jobs->profile, on != 0, memory_order_relaxed);
+    jobs->prof_wait_ns = jobs->prof_wait_cpu_ns = jobs->prof_work_ns = jobs->prof_span_ns = 0;
+    jobs->prof_jobs = jobs->prof_items = 0;
+    for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) jobs->prof_predicted_ns[k] = 0.0;
+    pthread_mutex_unlock(&jobs->mutex);
+}
+
+void pf_jobs_profile_read(pf_jobs *jobs, pf_jobs_profile *out)
+{
+    pthread_mutex_lock(&jobs->mutex);
+    out->wait_ms = (double)jobs->prof_wait_ns * 1e-6;
+    out->wait_cpu_ms = (double)jobs->prof_wait_cpu_ns * 1e-6;
+    out->work_ms = (double)jobs->prof_work_ns * 1e-6;
+    out->span_ms = (double)jobs->prof_span_ns * 1e-6;
+    for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) out->predicted_ms[k] = jobs->prof_predicted_ns[k] * 1e-6;
+    out->jobs = jobs->prof_jobs;
+    out->items = jobs->prof_items;
+    pthread_mutex_unlock(&jobs->mutex);
+}
+
+pf_jobs_profile pf_jobs_profile_delta(const pf_jobs_profile *a, const pf_jobs_profile *b)
+{
+    pf_jobs_profile d;
+    d.wait_ms = b->wait_ms - a->wait_ms;
+    d.wait_cpu_ms = b->wait_cpu_ms - a->wait_cpu_ms;
+    d.work_ms = b->work_ms - a->work_ms;
+    d.span_ms = b->span_ms - a->span_ms;
+    for (uint32_t k = 0; k < PF_JOBS_PROFILE_CORES; k++) d.predicted_ms[k] = b->predicted_ms[k] - a->predicted_ms[k];
+    d.jobs = b->jobs - a->jobs;
+    d.items = b->items - a->items;
+    return d;
 }

@@ -65,4 +65,57 @@ void pf_jobs_parallel_for(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count
 /* Number of cores the OS reports (the default for --threads). */
 uint32_t pf_jobs_core_count(void);
 
+/* ---------------------------------------------------------------- profile
+ *
+ * Where a frame's time goes between one thread and many (Amdahl's law), for
+ * `softgi bench`. Off by default: then the only cost is one predictable
+ * branch per chunk and per wait. On, every item is timed (two clock reads)
+ * and each job, when it finishes, is folded into cumulative totals:
+ *
+ * - wait: the external thread's time inside top-level waits
+ *   (pf_jobs_wait, pf_jobs_parallel_for, pf_jobs_wait_all called outside
+ *   any job): the frame's parallel regions, in wall and in CPU time. The
+ *   external thread's CPU time outside them is a stage's serial part
+ *   (set-up, reductions, single-threaded code): CPU time, because on a
+ *   loaded machine the wall clock also counts the time another process
+ *   held the core;
+ * - work: every item's time, summed over items and threads. An item that
+ *   waits inside (nested jobs) counts without its waits, so nothing is
+ *   counted twice. Items are timed by the wall clock, with the time their
+ *   thread was not running taken off (pf_jobs.c, pf__run_profiled): CPU
+ *   time, near enough;
+ * - span: each job's longest item, summed over jobs: the parallel part's
+ *   time on unlimited cores (load imbalance bounds it);
+ * - predicted[k]: each job's time on pf_jobs_profile_cores[k] cores,
+ *   summed over jobs: max(its longest item, ceil(C / N) chunks of its mean
+ *   chunk time), where C is the chunk count that job would have with N
+ *   threads (an explicit grain keeps its chunks; grain 0 makes about 4 per
+ *   thread). Jobs are summed as if they ran one after the other, so jobs
+ *   that overlap (the rasterizer's vertex and cull jobs) are predicted
+ *   slightly long. Memory bandwidth shared by the cores is not modelled.
+ *
+ * A stage's time on N cores is then its serial part + predicted[N]; on 1
+ * core serial + work. Timings never feed back into results: the output is
+ * the same with the profile on or off. */
+#define PF_JOBS_PROFILE_CORES 8
+extern const uint32_t pf_jobs_profile_cores[PF_JOBS_PROFILE_CORES]; /* 1, 2, 4, 8, 16, 32, 64, 128 */
+
+typedef struct pf_jobs_profile {
+    double wait_ms;     /* top-level waits of the external thread */
+    double wait_cpu_ms; /* its CPU time in them (items it ran) */
+    double work_ms;  /* every item, summed */
+    double span_ms;  /* longest item of each job, summed */
+    double predicted_ms[PF_JOBS_PROFILE_CORES];
+    uint64_t jobs, items; /* finished jobs (count > 0) and their items */
+} pf_jobs_profile;
+
+/* Turns the profile on or off (from the external thread, between frames:
+ * no job running). Turning it on clears the totals. */
+void pf_jobs_profile_enable(pf_jobs *jobs, int on);
+/* The totals since pf_jobs_profile_enable (zeros when off). Jobs still
+ * running are not in them yet. From the external thread. */
+void pf_jobs_profile_read(pf_jobs *jobs, pf_jobs_profile *out);
+/* b - a, field by field (what happened between two reads). */
+pf_jobs_profile pf_jobs_profile_delta(const pf_jobs_profile *a, const pf_jobs_profile *b);
+
 #endif

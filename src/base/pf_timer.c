@@ -13,17 +13,26 @@ double pf_time_now(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
+static _Thread_local pf_stage_hook pf__hook;
+
+pf_stage_hook pf_stage_hook_set(pf_stage_hook hook)
+{
+    pf_stage_hook old = pf__hook;
+    pf__hook = hook;
+    return old;
+}
+
 void pf_stage_add(pf_stage_times *t, const char *name, double ms)
 {
-    for (uint32_t i = 0; i < t->count; i++)
-        if (strcmp(t->name[i], name) == 0) {
-            t->ms[i] += ms;
-            return;
-        }
-    if (t->count == PF_MAX_STAGES) return;
-    t->name[t->count] = name;
-    t->ms[t->count] = ms;
-    t->count++;
+    uint32_t i = 0;
+    while (i < t->count && strcmp(t->name[i], name) != 0) i++;
+    if (i < t->count) t->ms[i] += ms;
+    else if (t->count < PF_MAX_STAGES) {
+        t->name[t->count] = name;
+        t->ms[t->count] = ms;
+        t->count++;
+    }
+    if (pf__hook.fn) pf__hook.fn(pf__hook.user, name, ms);
 }
 
 void pf_stage_print(const pf_stage_times *t, FILE *out)

@@ -20,6 +20,19 @@ typedef struct pf_stage_times {
 double pf_time_now(void);
 /* Adds `ms` to the stage called `name` (appending it on first use). */
 void pf_stage_add(pf_stage_times *t, const char *name, double ms);
+/* A function told of every pf_stage_add this thread makes (name and ms),
+ * after the table is updated: how `softgi bench` reads the job profile at
+ * each stage boundary (pf_jobs.h) and how long commands draw progress,
+ * without the frame knowing. Per thread, so a pipelined job adding a stage
+ * on a worker does not call it; NULL (the default) turns it off. The
+ * previous hook is returned so a caller can put it back. */
+typedef void (*pf_stage_hook_fn)(void *user, const char *name, double ms);
+typedef struct pf_stage_hook {
+    pf_stage_hook_fn fn;
+    void *user;
+} pf_stage_hook;
+pf_stage_hook pf_stage_hook_set(pf_stage_hook hook);
+
 /* Prints "stage  ms" lines and a total. */
 void pf_stage_print(const pf_stage_times *t, FILE *out);
 

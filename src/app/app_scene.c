@@ -229,6 +229,9 @@ pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_
     }
     io->clamp = o->clamp_set ? o->clamp : -1.0f;
     io->pipeline = o->pipeline == 1; /* default off for every command */
+    io->scale = o->indirect_scale;
+    io->temporal = o->temporal;
+    io->compensate = o->compensate;
     io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
                  : !strcmp(o->filter, "gaussian")        ? GI_FILTER_GAUSSIAN

@@ -9,6 +9,7 @@
 #include "pf_cli.h"
 #include "pf_budget.h"
 #include "pf_imageio.h"
+#include "gi_indirect.h"
 
 #include <errno.h>
 #include <math.h>
@@ -26,7 +27,7 @@ typedef enum pf__opt_id {
     PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_HELP, PF__OPT_VERSION,
-    PF__OPT_COUNT
+    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_COUNT
 } pf__opt_id;
 
 typedef struct pf__opt {
@@ -125,6 +126,15 @@ static const pf__opt k_options[] = {
      "write every stage of the frame as an image, with captions.txt", NULL},
     {PF__OPT_DUMP_FORMAT, "--dump-format", NULL, "png|exr|both", R,
      "--dump-stages: the pictures (png, the default), the stages'\nfloat data as OpenEXR (exr), or both", NULL},
+    {PF__OPT_INDIRECT_SCALE, "--indirect-scale", NULL, "N", FRAME | BF,
+     "indirect light at 1/N of the resolution (1..4), upsampled\ngeometry-aware (default 1; docs/frame.md)", NULL},
+    {PF__OPT_COMPENSATE, "--compensate", NULL, "on|off", FRAME | BF,
+     "add back the light the clamp removes, gathered in screen\nspace (survey Sec. 5.2; default off; docs/frame.md)",
+     NULL},
+    {PF__OPT_TEMPORAL, "--temporal", NULL, "N", FRAME | BF,
+     "average the indirect light over up to N frames (2..256) with\nreprojection, the tiles' VPL groups rotating "
+     "each frame\n(default 0: off; docs/frame.md)",
+     NULL},
     {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", FRAME,
      "overlap the next frame's VPL update with this frame\n(one frame of VPL delay; default off)", NULL},
     {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", BF, "measure only with or only without pipelining (default: both)",
@@ -610,6 +620,18 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         k = pf__choice(val, "png|exr|both");
         if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format '%s': expected png, exr or both", val);
         o->dump_format = k == 0 ? PF_CLI_DUMP_PNG : k == 1 ? PF_CLI_DUMP_EXR : PF_CLI_DUMP_PNG | PF_CLI_DUMP_EXR;
+        break;
+    case PF__OPT_INDIRECT_SCALE: r = pf__uint(a, val, 1, GI_INDIRECT_MAX_SCALE, &o->indirect_scale, err); break;
+    case PF__OPT_TEMPORAL:
+        r = pf__uint(a, val, 0, GI_INDIRECT_MAX_TEMPORAL, &o->temporal, err);
+        if (r == PF_OK && o->temporal == 1)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--temporal '%s': expected 0 (off) or 2..%u frames", val,
+                             GI_INDIRECT_MAX_TEMPORAL);
+        break;
+    case PF__OPT_COMPENSATE:
+        k = pf__choice(val, "off|on");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--compensate '%s': expected on or off", val);
+        o->compensate = k == 1;
         break;
     case PF__OPT_PIPELINE:
         k = pf__choice(val, "off|on");

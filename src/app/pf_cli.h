@@ -82,6 +82,9 @@ typedef struct pf_options {
     uint32_t dump_format;    /* --dump-format: PF_CLI_DUMP_* bits; 0: not given (png) */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
+    uint32_t indirect_scale; /* --indirect-scale N: indirect light at 1/N resolution (0: 1) */
+    uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
+    int compensate;          /* --compensate on: screen-space clamp compensation */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
     uint32_t track_spp;      /* sequence --reference --track-spp N: tracked pixels with N samples (0: --spp) */

@@ -349,7 +349,7 @@ static void test_same_as_cli_camera_lights(void **state)
 }
 
 /* A scene with neither camera nor light: the automatic camera and light
- * (app_defaults.h), rounded as the program prints them; and with a camera
+ * (pf_defaults.h), rounded as the program prints them; and with a camera
  * given, the automatic light placed at that camera, as --camera does. */
 static void test_same_as_cli_automatic(void **state)
 {

@@ -1,4 +1,4 @@
-/* test_defaults: scenes that just work (issue 16, item 2; app_defaults.h).
+/* test_defaults: scenes that just work (issue 16, item 2; pf_defaults.h).
  * - every shared scene (../shared/scenes; skipped when absent) rendered with
  *   no --camera and no --light gives a lit image (mean luminance above a
  *   floor, no nearly-black hint) and says what it chose in one note line
@@ -19,7 +19,7 @@
 
 #include <cmocka.h>
 
-#include "app_defaults.h"
+#include "pf_defaults.h"
 #include "pf_imageio.h"
 #include "test_util.h"
 #include "tu_golden.h"
@@ -233,8 +233,8 @@ static void test_camera_choice(void **state)
     pf_error err;
     tu_make_scene(&s, room, 6);
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    app_default_camera c;
-    app_defaults_camera(&c, &s);
+    pf_default_camera c;
+    pf_defaults_camera(&c, &s);
     assert_true(c.interior);
     assert_int_equal(c.hits, 26);
     assert_int_equal(c.axis, 'x');
@@ -245,7 +245,7 @@ static void test_camera_choice(void **state)
     assert_int_equal(pf_camera_look_at(&cam, c.eye, c.target, pf_radians(c.fovy_deg), &err), PF_OK);
     pf_light l;
     float d;
-    app_defaults_light(&l, &d, &s, &cam, 64, 48);
+    pf_defaults_light(&l, &d, &s, &cam, 64, 48);
     assert_true(d > 1.0f && d < 8.0f);
     assert_true(l.position.y > c.eye.y && l.position.y < 3.0f);
     assert_float_equal(l.intensity, APP_DEFAULT_IRRADIANCE * d * d, 1e-3f * d * d);
@@ -255,7 +255,7 @@ static void test_camera_choice(void **state)
     const tu_quad quad = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1, 1}, 0, 0};
     tu_make_scene(&s, &quad, 1);
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    app_defaults_camera(&c, &s);
+    pf_defaults_camera(&c, &s);
     assert_false(c.interior);
     assert_true(c.eye.z > 1.0f);
     assert_float_equal(c.target.x, 0.0f, 1e-6f);
@@ -265,10 +265,10 @@ static void test_camera_choice(void **state)
     const tu_quad far = {{9.9e6f, 9.9e6f, 0}, {1e5f, 0, 0}, {0, 1e5f, 0}, {1, 1, 1, 1}, 0, 0};
     tu_make_scene(&s, &far, 1);
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    app_defaults_camera(&c, &s);
+    pf_defaults_camera(&c, &s);
     assert_true(pf_scene_coord_ok(c.eye) && pf_scene_coord_ok(c.target));
     assert_int_equal(pf_camera_look_at(&cam, c.eye, c.target, pf_radians(c.fovy_deg), &err), PF_OK);
-    app_defaults_light(&l, &d, &s, &cam, 64, 48);
+    pf_defaults_light(&l, &d, &s, &cam, 64, 48);
     assert_true(pf_scene_coord_ok(l.position));
     assert_true(l.intensity > 0.0f && l.intensity <= PF_MAX_RADIANCE);
     pf_scene_free(&s);
@@ -280,15 +280,15 @@ static void test_exposure_maths(void **state)
     float img[3 * 4 * 4];
     for (int i = 0; i < 16; i++) img[3 * i] = img[3 * i + 1] = img[3 * i + 2] = i < 8 ? 2.0f : 0.0f;
     double avg;
-    float ev = app_defaults_exposure(img, 4, 4, &avg); /* black pixels ignored */
+    float ev = pf_defaults_exposure(img, 4, 4, &avg); /* black pixels ignored */
     assert_float_equal((float)avg, 2.0f, 1e-5f);
     float x = 2.0f * exp2f(ev);
     assert_float_equal(x / (1.0f + x), APP_DEFAULT_GREY, 1e-5f);
-    assert_false(app_defaults_nearly_black(img, 4, 4, 0.0f));
-    assert_true(app_defaults_nearly_black(img, 4, 4, -10.0f)); /* 2 / 1024 < 0.01 */
+    assert_false(pf_defaults_nearly_black(img, 4, 4, 0.0f));
+    assert_true(pf_defaults_nearly_black(img, 4, 4, -10.0f)); /* 2 / 1024 < 0.01 */
     memset(img, 0, sizeof img);
-    assert_float_equal(app_defaults_exposure(img, 4, 4, NULL), 0.0f, 0.0f);
-    assert_true(app_defaults_nearly_black(img, 4, 4, 0.0f));
+    assert_float_equal(pf_defaults_exposure(img, 4, 4, NULL), 0.0f, 0.0f);
+    assert_true(pf_defaults_nearly_black(img, 4, 4, 0.0f));
 }
 
 static int setup(void **state)

@@ -7,7 +7,7 @@
  *
  *   softgi_create       options checked, ISA resolved (pf_isa), jobs started (pf_jobs)
  *   softgi_load_scene   pf_gltf_load with the memory budget -> the file's camera, or
- *                       app_defaults_camera -> pf_scene_validate -> app_defaults_light
+ *                       pf_defaults_camera -> pf_scene_validate -> pf_defaults_light
  *                       when nothing lights the scene -> the frame's budget
  *                       (app_budget_check) -> pf_rt_create -> rs_context_create
  *   softgi_set_camera   pf_camera_look_at, as --camera
@@ -22,7 +22,7 @@
  * copied line gives the same image; the library must round the same way to
  * give the same image), app__has_emitters, the frame's budget check, and the
  * many-light options with their defaults. The automatic camera and light
- * themselves are app_defaults.c, compiled into this library unchanged.
+ * themselves are pf_defaults.c, compiled into this library unchanged.
  *
  * Deviation from the program: the camera and lights are set after the
  * scene is loaded (the program applies --camera / --light while loading).
@@ -41,7 +41,7 @@
 #include <xmmintrin.h>
 #endif
 
-#include "app_defaults.h"
+#include "pf_defaults.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
 #include "pf_budget.h"
@@ -341,13 +341,13 @@ static float api__text_round(const char *fmt, int digits, float v)
     return strtof(buf, NULL);
 }
 
-/* As app_scene.c (app__default_camera): app_defaults_camera's camera as the
+/* As app_scene.c (app__default_camera): pf_defaults_camera's camera as the
  * program prints it (5 significant digits, or 9 when 5 merge eye and
  * target) and parses it back, with pf_cli_parse_camera's checks. */
 static pf_result api__default_camera(const pf_scene *scene, pf_camera *camera, pf_error *err)
 {
-    app_default_camera dc;
-    app_defaults_camera(&dc, scene);
+    pf_default_camera dc;
+    pf_defaults_camera(&dc, scene);
     pf_result r = PF_OK;
     for (int digits = 5; digits <= 9; digits += 4) {
         pf_vec3 eye = pf_v3(api__text_round("%.*g", digits, dc.eye.x), api__text_round("%.*g", digits, dc.eye.y),
@@ -367,7 +367,7 @@ static pf_result api__default_camera(const pf_scene *scene, pf_camera *camera, p
     return PF_OK;
 }
 
-/* As app_scene.c (app__default_light): app_defaults_light's light as the
+/* As app_scene.c (app__default_light): pf_defaults_light's light as the
  * program prints it ("point:x,y,z:1,1,1:I", 5 digits unless they move the
  * light by more than 1% of the median distance, then 9; I with 3) and
  * parses it back (pf_cli_parse_light's checks). */
@@ -376,7 +376,7 @@ static pf_result api__default_light(const softgi_context *c, const pf_camera *ca
 {
     pf_light l;
     float median;
-    app_defaults_light(&l, &median, &c->scene, camera, c->width, c->height);
+    pf_defaults_light(&l, &median, &c->scene, camera, c->width, c->height);
     pf_light parsed;
     pf_result r = PF_OK;
     for (int digits = 5; digits <= 9; digits += 4) {
@@ -674,7 +674,7 @@ softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_er
                 memcpy(t->rgb + y * stride, src + (size_t)y * w * 3, (size_t)w * 3 * sizeof(float));
         }
         if (t->rgba8) {
-            c->exposure = t->auto_exposure ? app_defaults_exposure(src, w, h, NULL) : t->exposure;
+            c->exposure = t->auto_exposure ? pf_defaults_exposure(src, w, h, NULL) : t->exposure;
             const float scale = exp2f(c->exposure); /* as pf_imageio_stage_png */
             size_t stride = t->rgba8_stride ? t->rgba8_stride : (size_t)4 * w;
             for (uint32_t y = 0; y < h; y++) {

@@ -12,20 +12,20 @@ int app_fail(const pf_error *err);
  * box), applies --camera and --light, validates it, and prints its load
  * warnings; `stem` gets the output base name ("cornell-box"). Without a
  * camera (file, --camera) it frames the scene, and without a light or an
- * emitter it adds a point light at the camera (app_defaults.h), each said
+ * emitter it adds a point light at the camera (pf_defaults.h), each said
  * in one "softgi: note:" line as a --camera / --light value to copy. On
  * failure the scene is freed. */
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
 
 /* The PNG's exposure in stops: --exposure STOPS, or for --exposure auto
- * the stops app_defaults_exposure picks from the linear image (said in one
+ * the stops pf_defaults_exposure picks from the linear image (said in one
  * note unless -q). Only the PNG and the pictures change, never the linear
  * image. */
 float app_exposure(const pf_options *o, const float *rgb, uint32_t width, uint32_t height);
 
 /* One "softgi: note:" line (unless -q) when the image, at `exposure`, is
- * nearly black (app_defaults_nearly_black), suggesting --exposure auto or
+ * nearly black (pf_defaults_nearly_black), suggesting --exposure auto or
  * a brighter --light. */
 void app_hint_dark(const pf_options *o, const float *rgb, uint32_t width, uint32_t height, float exposure);
 

@@ -1,6 +1,6 @@
 /* app_scene: what the commands share before they render: the scene loading
  * (the file or the embedded default scene, the --camera / --light
- * overrides, validation, the automatic camera and light of app_defaults.h
+ * overrides, validation, the automatic camera and light of pf_defaults.h
  * and the user-facing warnings and notes), the PNG exposure (--exposure
  * auto) and the nearly-black hint, the scene + Embree +
  * jobs setup of `render` and `reference`, and the frame and path-tracer
@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "app.h"
-#include "app_defaults.h"
+#include "pf_defaults.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
 #include "gi_ism.h"
@@ -59,14 +59,14 @@ static void app__image_size(const pf_options *o, uint32_t *w, uint32_t *h)
     *h = o->height ? o->height : 480;
 }
 
-/* No camera anywhere: app_defaults_camera, printed as a --camera value and
+/* No camera anywhere: pf_defaults_camera, printed as a --camera value and
  * parsed back from that text, so that copying the line gives the same
  * image bit for bit. */
 static pf_result app__default_camera(const pf_options *o, const pf_scene *scene, pf_camera *camera, const char *name,
                                      pf_error *err)
 {
-    app_default_camera dc;
-    app_defaults_camera(&dc, scene);
+    pf_default_camera dc;
+    pf_defaults_camera(&dc, scene);
     char spec[256];
     pf_vec3 eye, target;
     float fovy;
@@ -98,7 +98,7 @@ static pf_result app__default_camera(const pf_options *o, const pf_scene *scene,
     return PF_OK;
 }
 
-/* No light and no emitter: app_defaults_light, printed as a --light value
+/* No light and no emitter: pf_defaults_light, printed as a --light value
  * and parsed back (as app__default_camera). */
 static pf_result app__default_light(const pf_options *o, pf_scene *scene, const pf_camera *camera, const char *name,
                                     pf_error *err)
@@ -107,7 +107,7 @@ static pf_result app__default_light(const pf_options *o, pf_scene *scene, const 
     app__image_size(o, &w, &h);
     pf_light l;
     float median;
-    app_defaults_light(&l, &median, scene, camera, w, h);
+    pf_defaults_light(&l, &median, scene, camera, w, h);
     char spec[256];
     pf_light parsed;
     pf_result r = PF_OK;
@@ -173,7 +173,7 @@ float app_exposure(const pf_options *o, const float *rgb, uint32_t width, uint32
 {
     if (!o->exposure_auto) return o->exposure;
     double avg;
-    float ev = app_defaults_exposure(rgb, width, height, &avg);
+    float ev = pf_defaults_exposure(rgb, width, height, &avg);
     if (!o->quiet)
         fprintf(stderr,
                 "softgi: note: --exposure auto: %+.2f stops (the lit pixels' log-average luminance %.4g to %g%% grey)"
@@ -184,7 +184,7 @@ float app_exposure(const pf_options *o, const float *rgb, uint32_t width, uint32
 
 void app_hint_dark(const pf_options *o, const float *rgb, uint32_t width, uint32_t height, float exposure)
 {
-    if (o->quiet || !app_defaults_nearly_black(rgb, width, height, exposure)) return;
+    if (o->quiet || !pf_defaults_nearly_black(rgb, width, height, exposure)) return;
     fprintf(stderr,
             "softgi: note: the image is nearly black (99%% of its pixels below luminance %g at exposure %+.2f); "
             "try %s\n",

@@ -37,7 +37,7 @@
  * --camera/--light act as in render when the file has no camera keys / no
  * full lights, and are refused when it has: the file would override them
  * silently otherwise). Without camera keys, a camera in the scene or
- * --camera, the camera is render's automatic one (app_defaults.h), and so
+ * --camera, the camera is render's automatic one (pf_defaults.h), and so
  * is the light. --exposure auto is picked on frame 0 and held. Instant Radiosity regenerates every VPL when a light
  * moves (the expected baseline); a moving camera alone moves none.
  *
@@ -318,7 +318,7 @@ int app_sequence(const pf_options *o)
     double t_load = pf_time_now();
     pf_options so = *o;
     so.scene_path = seq->scene_embedded ? NULL : seq->scene_path;
-    so.width = width; /* the automatic light aims through this image (app_defaults.h) */
+    so.width = width; /* the automatic light aims through this image (pf_defaults.h) */
     so.height = height;
     if (seq->camera.count) {
         so.has_camera = 1;

@@ -20,7 +20,7 @@
  *   --light spot:x,y,z:dx,dy,dz:inner_deg,outer_deg:r,g,b:I
  *   --light dir:dx,dy,dz:r,g,b:E                 (E in W/m^2)
  * --light may repeat; given lights replace the scene's own lights. Without
- * them a scene gets an automatic camera and light (src/app/app_defaults.h).
+ * them a scene gets an automatic camera and light (src/scene/pf_defaults.h).
  * --exposure takes STOPS or "auto" (exposure_auto; the PNG only). */
 #ifndef PF_CLI_H
 #define PF_CLI_H
@@ -98,7 +98,7 @@ typedef struct pf_options {
     uint64_t max_memory;    /* --max-memory: memory budget in bytes (0: half the machine's; pf_budget.h) */
     pf_isa isa;
     float exposure; /* stops; PNG scale 2^exposure */
-    int exposure_auto; /* --exposure auto: picked from the image (app_defaults_exposure); exposure is then 0 */
+    int exposure_auto; /* --exposure auto: picked from the image (pf_defaults_exposure); exposure is then 0 */
     int has_camera;
     pf_vec3 camera_eye, camera_target;
     float camera_fovy_deg;

@@ -1,5 +1,5 @@
-/* app_defaults: the automatic camera, light and exposure (app_defaults.h). */
-#include "app_defaults.h"
+/* pf_defaults: the automatic camera, light and exposure (pf_defaults.h). */
+#include "pf_defaults.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -7,7 +7,7 @@
 #include <string.h>
 
 #define APP__ENCLOSURE_RAYS 26 /* the directions {-1,0,1}^3 without 0 */
-#define APP__GRID 7            /* app_defaults_light: 7 x 7 camera rays */
+#define APP__GRID 7            /* pf_defaults_light: 7 x 7 camera rays */
 
 /* t[i] = distance along unit dir[i] from org[i] to the closest triangle
  * (either side), INFINITY for a miss. Moeller & Trumbore 1997, in double so
@@ -43,7 +43,7 @@ static void app__cast(const pf_scene *s, const pf_vec3 *org, const pf_vec3 *dir,
 
 static float app__clamp_coord(float x) { return pf_clampf(x, -PF_SCENE_MAX_COORD, PF_SCENE_MAX_COORD); }
 
-void app_defaults_camera(app_default_camera *out, const pf_scene *s)
+void pf_defaults_camera(pf_default_camera *out, const pf_scene *s)
 {
     memset(out, 0, sizeof *out);
     out->fovy_deg = APP_DEFAULT_FOVY_DEG;
@@ -110,7 +110,7 @@ static int app__float_cmp(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-void app_defaults_light(pf_light *out, float *median, const pf_scene *s, const pf_camera *cam, uint32_t width,
+void pf_defaults_light(pf_light *out, float *median, const pf_scene *s, const pf_camera *cam, uint32_t width,
                         uint32_t height)
 {
     /* 7 x 7 rays through the image and one straight up from the eye */
@@ -147,7 +147,7 @@ void app_defaults_light(pf_light *out, float *median, const pf_scene *s, const p
     *median = d;
 }
 
-float app_defaults_exposure(const float *rgb, uint32_t width, uint32_t height, double *log_average)
+float pf_defaults_exposure(const float *rgb, uint32_t width, uint32_t height, double *log_average)
 {
     /* Reinhard et al. 2002, Eq. 1: exp(mean(log L)) over the lit pixels
      * (black background and unlit pixels would drag the mean to -inf) */
@@ -168,7 +168,7 @@ float app_defaults_exposure(const float *rgb, uint32_t width, uint32_t height, d
     return (float)fmin(fmax(stops, -64.0), 64.0);
 }
 
-int app_defaults_nearly_black(const float *rgb, uint32_t width, uint32_t height, float exposure)
+int pf_defaults_nearly_black(const float *rgb, uint32_t width, uint32_t height, float exposure)
 {
     const float scale = exp2f(exposure);
     uint64_t bright = 0, count = (uint64_t)width * height;

@@ -64,10 +64,10 @@ static inline void tu_fx_begin_with(tu_fx *x, const tu_fx_desc *d)
         assert_true(x->scene.camera_count > 0);
         cam = &x->scene.cameras[0];
     }
-    if (gi_frame_init(&x->f, &x->scene, x->rt, x->rs, x->jobs, cam, d->w, d->h, d->shadow_size ? d->shadow_size : 64,
-                      &err) != PF_OK)
-        fail_msg("%s", err.message);
-    if (d->io && gi_frame_enable_indirect(&x->f, d->io, d->indirect_only, &err) != PF_OK) fail_msg("%s", err.message);
+    gi_frame_desc fd = {.scene = &x->scene, .rt = x->rt, .jobs = x->jobs, .raster = x->rs, .camera = cam, .width = d->w,
+                        .height = d->h, .shadow_size = d->shadow_size ? d->shadow_size : 64, .indirect = d->io,
+                        .indirect_only = d->indirect_only};
+    if (gi_frame_create(&x->f, &fd, &err) != PF_OK) fail_msg("%s", err.message);
 }
 
 /* Validates x->scene, then builds Embree, `threads` workers, the rasterizer

@@ -451,7 +451,9 @@ static void check_vs_embree(const char *path)
                     .build_threads = 2, .w = W, .h = H, .cam = &cam, .shadow_size = 1024};
     tu_fx_begin_with(&x, &d);
     gi_frame *a = &x.f, b;
-    assert_int_equal(gi_frame_init(&b, &x.scene, x.rt, x.rs, x.jobs, &cam, W, H, 0, &err), PF_OK);
+    gi_frame_desc bd = {.scene = &x.scene, .rt = x.rt, .jobs = x.jobs, .raster = x.rs, .camera = &cam, .width = W,
+                        .height = H};
+    assert_int_equal(gi_frame_create(&b, &bd, &err), PF_OK);
     gi_stage_gbuffer_raster(a);
     gi_stage_gbuffer_resolve(a);
     gi_stage_gbuffer_raytrace(&b);
@@ -543,7 +545,8 @@ static void check_simd_resolve(const char *path, int textured)
     assert_int_equal(rs_context_create(&ctx, &s, jobs, RS_SIMD_SCALAR, &err), PF_OK);
     pf_camera cam = scene_camera(&s);
     gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &s, NULL, ctx, jobs, &cam, W, H, 0, &err), PF_OK);
+    gi_frame_desc fd = {.scene = &s, .jobs = jobs, .raster = ctx, .camera = &cam, .width = W, .height = H};
+    assert_int_equal(gi_frame_create(&f, &fd, &err), PF_OK);
     gi_stage_gbuffer_raster(&f);
     rs_gbuffer *g = &f.gbuf;
     float *planes[] = {g->depth, g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z, g->alb_r, g->alb_g, g->alb_b};

@@ -603,7 +603,9 @@ static void simd_check_scene(const char *path, const pf_light lights[3], const v
     /* the direct-light stage, scalar rows against 8-wide rows (width 197
      * leaves a partial group of 5 pixels at the end of every row) */
     gi_frame f;
-    assert_int_equal(gi_frame_init(&f, &w.scene, w.rt, w.ctx, w.jobs, &cam, 197, 120, 0, &err), PF_OK);
+    gi_frame_desc fd = {.scene = &w.scene, .rt = w.rt, .jobs = w.jobs, .raster = w.ctx, .camera = &cam, .width = 197,
+                        .height = 120};
+    assert_int_equal(gi_frame_create(&f, &fd, &err), PF_OK);
     rs_simd best = rs_context_simd(w.ctx);
     gi_frame_render_raster(&f);
     size_t bytes = (size_t)197 * 120 * 3 * sizeof(float);

@@ -605,13 +605,15 @@ softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, u
 /* ---------------------------------------------------------------- frames */
 
 /* As app_frame_init with the program's defaults for every option the API
- * does not take: the budget, gi_frame_init, then the many-light stages
+ * does not take: the budget, gi_frame_create, then the many-light stages
  * (app_indirect_options) unless SOFTGI_DIRECT_ONLY. */
 static pf_result api__frame_init(softgi_context *c, pf_error *e)
 {
     pf_result r = api__budget_check(c, e);
     if (r != PF_OK) return r;
-    r = gi_frame_init(&c->frame, &c->scene, c->rt, c->raster, c->jobs, &c->camera, c->width, c->height, 0, e);
+    gi_frame_desc fd = {.scene = &c->scene, .rt = c->rt, .jobs = c->jobs, .raster = c->raster, .camera = &c->camera,
+                        .width = c->width, .height = c->height};
+    r = gi_frame_create(&c->frame, &fd, e);
     if (r != PF_OK) return r;
     if (!(c->flags & SOFTGI_DIRECT_ONLY)) {
         gi_indirect_options io;

@@ -215,7 +215,10 @@ static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *b
     if (rs_context_create(&r->rs, scene, r->jobs, rs_simd_for_isa(isa), &err) != PF_OK ||
         rs_para_context_create(&r->para, scene, NULL, &err) != PF_OK ||
         pf_camera_look_at(&r->cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), &err) != PF_OK ||
-        gi_frame_init(&r->f, scene, NULL, r->rs, r->jobs, &r->cam, BENCH_W, BENCH_H, 0, &err) != PF_OK)
+        gi_frame_create(&r->f,
+                        &(gi_frame_desc){.scene = scene, .jobs = r->jobs, .raster = r->rs, .camera = &r->cam,
+                                         .width = BENCH_W, .height = BENCH_H},
+                        &err) != PF_OK)
         goto fail;
     r->have_frame = 1;
     if (rs_gbuffer_init(&r->eg, BENCH_W, BENCH_H, &err) != PF_OK) goto fail;

@@ -374,7 +374,9 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         out[m].vpl_budget = vpls;
         out[m].threads = threads;
         out[m].pipeline = modes[m];
-        if ((r = gi_frame_init(&f[m], lit, rt, rs, jobs, &cam, BF_W, BF_H, 0, err)) != PF_OK) break;
+        gi_frame_desc fd = {.scene = lit, .rt = rt, .jobs = jobs, .raster = rs, .camera = &cam, .width = BF_W,
+                            .height = BF_H};
+        if ((r = gi_frame_create(&f[m], &fd, err)) != PF_OK) break;
         ready++;
         /* the command line's method, --param and --visibility; --vpls and
          * --pipeline are this configuration's (defaults as `softgi render`) */

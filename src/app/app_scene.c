@@ -279,18 +279,14 @@ pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene
 {
     pf_result r = app_budget_check(o, scene, width, height, 1, indirect, err);
     if (r != PF_OK) return r;
-    r = gi_frame_init(f, scene, rt, raster, jobs, camera, width, height, o->shadow_size, err);
-    if (r != PF_OK) return r;
-    if (o->area_strata || o->area_points)
-        r = gi_frame_set_area_sampling(f, o->area_strata ? o->area_strata : GI_AREA_DEFAULT_STRATA,
-                                       o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS, err);
-    if (r == PF_OK && indirect && !o->direct_only) {
-        gi_indirect_options io;
-        r = app_indirect_options(o, &io, err);
-        if (r == PF_OK) r = gi_frame_enable_indirect(f, &io, o->indirect_only, err);
-    }
-    if (r != PF_OK) gi_frame_free(f);
-    return r;
+    gi_indirect_options io;
+    int with_indirect = indirect && !o->direct_only;
+    if (with_indirect && (r = app_indirect_options(o, &io, err)) != PF_OK) return r;
+    gi_frame_desc d = {.scene = scene, .rt = rt, .jobs = jobs, .raster = raster, .camera = camera,
+                       .width = width, .height = height, .shadow_size = o->shadow_size,
+                       .area_strata = o->area_strata, .area_points = o->area_points,
+                       .indirect = with_indirect ? &io : NULL, .indirect_only = o->indirect_only};
+    return gi_frame_create(f, &d, err);
 }
 
 pf_result app_setup_begin(const pf_options *o, app_setup *s, pf_stage_times *t, pf_error *err)

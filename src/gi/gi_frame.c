@@ -199,8 +199,8 @@ pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_
 pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err)
 {
     memset(f, 0, sizeof *f);
-    if (!d || !d->scene || !d->rt || !d->jobs || d->width == 0 || d->height == 0)
-        return pf_error_set(err, PF_ERR_ARGUMENT, "frame: a scene, its Embree scene, a job system and a size are required");
+    if (!d || !d->scene || !d->jobs || d->width == 0 || d->height == 0)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "frame: a scene, a job system and a size are required");
     const pf_camera *cam = d->camera;
     if (!cam) {
         if (d->scene->camera_count == 0) return pf_error_set(err, PF_ERR_ARGUMENT, "frame: the scene has no camera");

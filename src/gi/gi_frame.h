@@ -189,7 +189,7 @@ typedef struct gi_frame {
 /* What a frame is set up with (sokol style: zero means the default). */
 typedef struct gi_frame_desc {
     const pf_scene *scene;       /* required; validated */
-    const pf_rt *rt;             /* required: Embree's scene of `scene` */
+    const pf_rt *rt;             /* Embree's scene of `scene`; NULL: no ray-traced stages (raster only) */
     pf_jobs *jobs;               /* required */
     rs_context *raster;          /* NULL: only the ray-traced frame is available */
     const pf_camera *camera;     /* NULL: the scene's first camera (the scene must have one) */

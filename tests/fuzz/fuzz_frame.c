@@ -513,11 +513,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     double t_rt = pf_time_now();
     if (r == PF_OK && !c.raytrace) r = rs_context_create(&rs, &scene, fz_jobs, c.simd, &err);
     if (r == PF_OK) {
-        r = gi_frame_init(&f, &scene, rt, rs, fz_jobs, &cam, c.width, c.height, c.shadow_size, &err);
+        gi_frame_desc fd = {.scene = &scene, .rt = rt, .jobs = fz_jobs, .raster = rs, .camera = &cam,
+                            .width = c.width, .height = c.height, .shadow_size = c.shadow_size,
+                            .area_strata = c.strata, .area_points = c.points,
+                            .indirect = c.direct_only ? NULL : &c.io, .indirect_only = c.indirect_only};
+        r = gi_frame_create(&f, &fd, &err);
         have_frame = r == PF_OK;
     }
-    if (r == PF_OK) r = gi_frame_set_area_sampling(&f, c.strata, c.points, &err);
-    if (r == PF_OK && !c.direct_only) r = gi_frame_enable_indirect(&f, &c.io, c.indirect_only, &err);
     if (r != PF_OK) {
         /* A refusal with a message is a legitimate answer (e.g. imperfect
          * shadow maps refuse a scene whose triangles all have zero area,

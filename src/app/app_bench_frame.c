@@ -71,11 +71,11 @@
 #define BF_MAX_CONFIGS 8 /* per scene: 2 VPL counts x 2 thread counts x pipelining off/on */
 #define BF_LIGHT_PERIOD 16 /* --moving-light: frames per circle */
 #define BF_LIGHT_RADIUS 0.01f /* --moving-light: circle radius / scene diagonal */
-#define BF_UPDATE_STAGE "VPL update" /* gi_frame.c's / gi_indirect.c's name for step 3 */
+#define BF_UPDATE_STAGE (gi_stage_get(GI_STAGE_VPL_UPDATE)->name) /* the stage table's name of step 3 */
 #define BF_TARGET_FPS 15.0
 #define BF_TARGET_VPLS 256u
 #define BF_TARGET_THREADS 2u
-#define BF_MAPS_STAGE "VPL paraboloid maps" /* gi_frame.c's name for step 4 */
+#define BF_MAPS_STAGE (gi_stage_get(GI_STAGE_VPL_MAPS)->name) /* and of step 4 */
 #define BF_TAIL_STAGE "(end of frame: wait for jobs)"
 #define BF_SERIAL_TARGET 0.05 /* issue 13: serial part <= 5% of the 1-thread frame */
 
@@ -508,8 +508,10 @@ static void bf__union(pf_stage_times *rows, const bf_result *res, uint32_t n, in
  * compose are not indirect light and not in these columns. */
 static void bf__print_hedman_table2(const bf_result *res, uint32_t n)
 {
-    static const char *const shading[] = {"gbuffer raster (visibility)", "gbuffer resolve (attributes)", "split",
-                                          "assign VPLs to tiles", "accumulate", "combine", "filter"};
+    static const gi_stage_id shading[] = {GI_STAGE_GBUFFER_RASTER, GI_STAGE_GBUFFER_RESOLVE, GI_STAGE_SPLIT,
+                                          GI_STAGE_ASSIGN,         GI_STAGE_ACCUMULATE,      GI_STAGE_COMBINE,
+                                          GI_STAGE_COMPENSATE,     GI_STAGE_FILTER,          GI_STAGE_UPSAMPLE,
+                                          GI_STAGE_TEMPORAL};
     printf("in Hedman 2017 Table 2's columns (ms):\n");
     pf_stage_times rows;
     bf__union(&rows, res, n, 1);
@@ -526,7 +528,7 @@ static void bf__print_hedman_table2(const bf_result *res, uint32_t n)
             double sampling = bf__stage_ms(&res[c].stages, BF_UPDATE_STAGE);
             double maps = bf__stage_ms(&res[c].stages, BF_MAPS_STAGE), shade = 0.0;
             for (size_t k = 0; k < sizeof shading / sizeof shading[0]; k++)
-                shade += bf__stage_ms(&res[c].stages, shading[k]);
+                shade += bf__stage_ms(&res[c].stages, gi_stage_get(shading[k])->name);
             const double v[] = {sampling, maps, shade, maps + shade, sampling + maps + shade};
             printf("  %8.2f %6s", v[l], "");
         }
@@ -581,7 +583,9 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
     }
     printf("\nfirst frame (all VPLs new):\n%-28s", "  frame (wall clock) ms");
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].first_ms, "");
-    printf("\n%-28s", "  " BF_MAPS_STAGE " ms");
+    char maps_row[64];
+    snprintf(maps_row, sizeof maps_row, "  %s ms", BF_MAPS_STAGE);
+    printf("\n%-28s", maps_row);
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %5.1f%%", bf__stage_ms(&res[c].first, BF_MAPS_STAGE),
                                             100.0 * bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_ms);
     printf("\n%-28s", "  maps rendered");

@@ -29,6 +29,7 @@
 
 #include "pf_cli.h"
 #include "pf_jobs.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 static char g_tmp[256];
@@ -369,11 +370,53 @@ static int teardown(void **state)
     return tu_tmpdir_remove(g_tmp);
 }
 
+/* A long stage's progress (gi_frame.progress): the VPL maps of a first frame
+ * are reported in pieces, done rising to the total, and listening changes
+ * no bit of the image. */
+typedef struct maps_log {
+    uint32_t calls, last_done, total;
+    int rising;
+} maps_log;
+
+static void on_progress(void *user, const char *what, uint32_t done, uint32_t total)
+{
+    maps_log *l = user;
+    assert_non_null(strstr(what, "paraboloid"));
+    l->rising &= done > l->last_done && done <= total;
+    l->calls++, l->last_done = done, l->total = total;
+}
+
+static void test_maps_progress(void **state)
+{
+    (void)state;
+    tu_fx a, b;
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.vpls = 300;
+    tu_load(&a.scene, SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf");
+    tu_load(&b.scene, SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf");
+    tu_fx_begin(&a, 2, RS_SIMD_SCALAR, 48, 36, &a.scene.cameras[0], &io, 1);
+    tu_fx_begin(&b, 2, RS_SIMD_SCALAR, 48, 36, &b.scene.cameras[0], &io, 1);
+    maps_log l = {0, 0, 0, 1};
+    b.f.progress = on_progress, b.f.progress_user = &l;
+    gi_frame_render_raster(&a.f);
+    gi_frame_render_raster(&b.f);
+    print_message("%u progress reports, the last %u of %u maps\n", l.calls, l.last_done, l.total);
+    assert_true(l.calls >= 2);
+    assert_true(l.rising);
+    assert_int_equal(l.last_done, l.total);
+    assert_int_equal(l.total, b.f.ind.maps_rendered);
+    assert_memory_equal(a.f.final, b.f.final, 48 * 36 * 3 * sizeof(float));
+    tu_fx_end(&a);
+    tu_fx_end(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_parse),
         cmocka_unit_test(test_jobs_profile),
+        cmocka_unit_test(test_maps_progress),
         cmocka_unit_test(test_bad_ranges),
         cmocka_unit_test(test_sequence_merge),
         cmocka_unit_test(test_evaluate_merge),

@@ -95,6 +95,14 @@ static void app__render_stage(void *user, const char *name, double ms)
     app_progress_update(&p->bar, 0.0, 0.0, p->what);
 }
 
+/* gi_frame_progress_fn: a long stage's progress (the VPL maps). */
+static void app__render_work(void *user, const char *what, uint32_t done, uint32_t total)
+{
+    app__render_progress *p = user;
+    snprintf(p->what, sizeof p->what, "%s %u/%u", what, done, total);
+    app_progress_update(&p->bar, done, total, p->what);
+}
+
 int app_render(const pf_options *o)
 {
     pf_error err;
@@ -135,6 +143,7 @@ int app_render(const pf_options *o)
     app__render_progress prog = {.stages = 0};
     app_progress_begin(&prog.bar, "render", o->quiet);
     pf_stage_hook hook = pf_stage_hook_set((pf_stage_hook){prog.bar.on ? app__render_stage : NULL, &prog});
+    if (prog.bar.on) frame.progress = app__render_work, frame.progress_user = &prog;
     if (o->raytrace) gi_frame_render_raytraced(&frame);
     else gi_frame_render_raster(&frame);
     pf_stage_hook_set(hook);

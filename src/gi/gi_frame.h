@@ -159,8 +159,16 @@ typedef struct gi_area_maps {
     int rendered;          /* maps drawn (at the first frame) */
 } gi_area_maps;
 
+/* Progress of a long stage (the VPLs' maps of a first frame with many
+ * VPLs): `done` of `total` units of the stage `what`, called on the thread
+ * that renders the frame, between pieces of work; it must not touch the
+ * frame. NULL: nobody listens. */
+typedef void (*gi_frame_progress_fn)(void *user, const char *what, uint32_t done, uint32_t total);
+
 typedef struct gi_frame {
     /* inputs (not owned) */
+    gi_frame_progress_fn progress; /* may be NULL; set after gi_frame_create */
+    void *progress_user;
     const pf_scene *scene;
     const pf_rt *rt;
     pf_jobs *jobs;

@@ -14,6 +14,7 @@
 #endif
 
 #define GI__DEFAULT_CLAMP 400.0f
+#define GI__MAPS_CHUNK 64u /* VPL maps rendered between two progress reports */
 /* Paraboloid maps are 2 bytes a texel: 32768 maps of 128^2 = 1 GiB. */
 #define GI__MAX_MAP_BYTES ((size_t)4 << 30)
 
@@ -310,7 +311,12 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     /* Each run of consecutive slots whose VPL is new or moved is rendered in
      * one call, straight into its slots (the call spreads the run's maps
      * over the workers); unmoved VPLs keep last frame's maps. */
-    uint32_t N = ind->vpls.count;
+    uint32_t N = ind->vpls.count, todo = 0;
+    for (uint32_t i = 0; i < N; i++) todo += ind->vpls.v[i].moved || i >= ind->atlas_slots;
+    /* Runs of at most GI__MAPS_CHUNK maps, so a listener hears of progress
+     * between them (a first frame of 100,000 VPLs takes minutes); the maps
+     * are independent, so the pieces change no bits. */
+    const uint32_t chunk = f->progress ? GI__MAPS_CHUNK : UINT32_MAX;
     for (uint32_t i = 0; i < N;) {
         const gi_vpl *v = &ind->vpls.v[i];
         if (!v->moved && i < ind->atlas_slots) {
@@ -318,7 +324,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
             continue;
         }
         uint32_t start = i;
-        for (; i < N && (ind->vpls.v[i].moved || i >= ind->atlas_slots); i++) {
+        for (; i < N && i - start < chunk && (ind->vpls.v[i].moved || i >= ind->atlas_slots); i++) {
             ind->map_pos[i] = ind->vpls.v[i].pos;
             ind->map_nrm[i] = ind->vpls.v[i].nrm;
             ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
@@ -326,6 +332,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         rs_para_render(ind->atlas + start * map, ind->para, f->jobs, ind->map_pos + start, ind->map_nrm + start,
                        i - start, ind->range, NULL);
         ind->maps_rendered += i - start;
+        if (f->progress) f->progress(f->progress_user, gi_stage_get(GI_STAGE_VPL_MAPS)->name, ind->maps_rendered, todo);
     }
     ind->atlas_slots = N;
 }

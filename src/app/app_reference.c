@@ -19,6 +19,7 @@
 #include "app.h"
 #include "app_progress.h"
 #include "gi_reference.h"
+#include "gi_metrics.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_jobs.h"
@@ -62,6 +63,8 @@ int app_reference(const pf_options *o)
     /* Path trace */
     gi_reference_options ro;
     app_reference_options(o, &ro);
+    float *noise = r == PF_OK ? malloc((size_t)width * height * sizeof(float)) : NULL;
+    ro.noise_out = noise; /* NULL (no estimate) if short of memory */
     app_progress prog;
     app_progress_begin(&prog, "reference", o->quiet);
     if (prog.on) {
@@ -98,6 +101,11 @@ int app_reference(const pf_options *o)
             pf_stage_print(&t, stdout);
             if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
             else printf("wrote %s\n", out.linear);
+            if (noise)
+                printf("noise: %.4f mean relative standard error per pixel (luminance > %g; it falls as 1/sqrt(spp) "
+                       "only where the variance is finite)\n",
+                       gi_reference_noise(noise, image, (size_t)width * height, GI_METRICS_MRE_FLOOR),
+                       (double)GI_METRICS_MRE_FLOOR);
             fflush(stdout); /* before the hint on stderr */
         }
         app_hint_dark(o, image, width, height, exposure);
@@ -106,6 +114,7 @@ int app_reference(const pf_options *o)
                    pf_isa_name(su.isa));
     }
     free(image);
+    free(noise);
     app_setup_end(&su);
     return status;
 }

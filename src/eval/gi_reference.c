@@ -64,6 +64,7 @@ typedef struct gi__ref_ctx {
     const gi_area_lights *area; /* the scene's emissive triangles */
     gi_reference_progress_fn progress;
     void *progress_user;
+    float *noise;               /* opts->noise_out: per-pixel relative standard error, or NULL */
     uint32_t caller_worker; /* the job system's id of the thread that waits */
     atomic_uint rows_done;
 } gi__ref_ctx;
@@ -160,7 +161,7 @@ static void gi__clamp_segment(const gi__ref_ctx *c, gi__path *P, const pf_surfac
 /* One sample index for n <= 8 neighbouring pixels of row y: traces their paths
  * together and adds each path's radiance to acc. */
 static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint32_t n, uint32_t sample,
-                             double acc[PF_RT_WIDTH][3])
+                             double acc[PF_RT_WIDTH][4])
 {
     const pf_scene *s = c->scene;
     gi__path paths[PF_RT_WIDTH];
@@ -255,7 +256,20 @@ static void gi__trace_packet(const gi__ref_ctx *c, uint32_t x0, uint32_t y, uint
         acc[i][0] += paths[i].L.x;
         acc[i][1] += paths[i].L.y;
         acc[i][2] += paths[i].L.z;
+        double Y = pf_luminance(paths[i].L); /* for the noise estimate only */
+        acc[i][3] += Y * Y;
     }
+}
+
+/* The relative standard error of pixel i's mean luminance from its sums of
+ * Y and Y^2 over spp samples: sqrt(var / spp) / mean, var the unbiased
+ * sample variance; NaN when the mean is 0 or spp is 1. */
+static float gi__relative_stderr(const double acc[4], uint32_t spp)
+{
+    double mean = (0.2126 * acc[0] + 0.7152 * acc[1] + 0.0722 * acc[2]) / spp;
+    if (!(mean > 0.0) || spp < 2) return NAN;
+    double var = (acc[3] / spp - mean * mean) * spp / (spp - 1);
+    return (float)(sqrt(fmax(var, 0.0) / spp) / mean);
 }
 
 static void gi__reference_row(void *ctx, uint32_t y, uint32_t worker)
@@ -264,11 +278,13 @@ static void gi__reference_row(void *ctx, uint32_t y, uint32_t worker)
     float *out = c->out + (size_t)y * c->width * 3;
     for (uint32_t x0 = 0; x0 < c->width; x0 += PF_RT_WIDTH) {
         uint32_t n = c->width - x0 < PF_RT_WIDTH ? c->width - x0 : PF_RT_WIDTH;
-        double acc[PF_RT_WIDTH][3];
+        double acc[PF_RT_WIDTH][4];
         memset(acc, 0, sizeof acc);
         for (uint32_t sample = 0; sample < c->spp; sample++) gi__trace_packet(c, x0, y, n, sample, acc);
-        for (uint32_t i = 0; i < n; i++)
+        for (uint32_t i = 0; i < n; i++) {
             for (int ch = 0; ch < 3; ch++) out[3 * (x0 + i) + ch] = (float)(acc[i][ch] / c->spp);
+            if (c->noise) c->noise[(size_t)y * c->width + x0 + i] = gi__relative_stderr(acc[i], c->spp);
+        }
     }
     /* Progress: a relaxed counter (it orders nothing: the image is only read
      * after pf_jobs_parallel_for returns, which synchronises); reported only
@@ -310,6 +326,7 @@ static pf_result gi__reference_setup(gi__ref_ctx *c, gi_area_lights *area, float
     c->area = area;
     c->progress = o.progress;
     c->progress_user = o.progress_user;
+    c->noise = o.noise_out;
     c->caller_worker = pf_jobs_thread_count(jobs) - 1u;
     atomic_init(&c->rows_done, 0u);
     return PF_OK;
@@ -345,7 +362,7 @@ static void gi__reference_pixel(void *ctx, uint32_t i, uint32_t worker)
     const gi__pixels_ctx *p = ctx;
     gi__ref_ctx *c = p->c;
     uint32_t x = p->xy[2 * i], y = p->xy[2 * i + 1];
-    double acc[PF_RT_WIDTH][3];
+    double acc[PF_RT_WIDTH][4];
     memset(acc, 0, sizeof acc);
     for (uint32_t sample = 0; sample < c->spp; sample++) gi__trace_packet(c, x, y, 1, sample, acc);
     float *out = c->out + ((size_t)y * c->width + x) * 3;
@@ -369,4 +386,17 @@ pf_result gi_reference_render_pixels(float *out_rgb, const pf_scene *scene, cons
     if (count) pf_jobs_parallel_for(jobs, gi__reference_pixel, &p, count, 1);
     gi_area_lights_free(&area);
     return PF_OK;
+}
+
+double gi_reference_noise(const float *noise, const float *rgb, size_t pixel_count, float floor)
+{
+    double s = 0.0;
+    size_t n = 0;
+    for (size_t i = 0; i < pixel_count; i++) {
+        float Y = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+        if (!(Y > floor) || !(noise[i] == noise[i])) continue;
+        s += noise[i];
+        n++;
+    }
+    return n ? s / (double)n : 0.0;
 }

@@ -118,7 +118,17 @@ typedef struct gi_reference_options {
     float clamp;
     gi_reference_progress_fn progress; /* may be NULL */
     void *progress_user;
+    /* Optional (NULL: none), width * height floats, caller-owned: each
+     * pixel's relative standard error of its mean luminance, sqrt(s^2 / spp)
+     * / mean with s^2 the samples' variance (NaN where the mean is 0), so a
+     * user can see how far the reference itself is from converged
+     * (gi_reference_noise summarises it). gi_reference_render only. */
+    float *noise_out;
 } gi_reference_options;
+
+/* The mean of the per-pixel relative standard errors over the pixels whose
+ * mean luminance exceeds `floor` (the pixels the quality metrics use). */
+double gi_reference_noise(const float *noise, const float *rgb, size_t pixel_count, float floor);
 
 /* Renders the reference image into out_rgb (width * height * 3 floats, linear
  * RGB, top row first; caller-owned). rt must be built from `scene`. Returns

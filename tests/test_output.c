@@ -496,7 +496,8 @@ static void test_exr_stage_dumps(void **state)
     make_dir("%s/dumps%s", "", dir, sizeof dir);
     static const char *const formats[3] = {"", "--dump-format both", "--dump-format exr"};
     static const char *const exrs[] = {"00-depth", "01-position", "02-normal", "03-albedo", "06-direct",
-                                       "10-split", "11-accumulated", "12-combined", "13-filtered", "14-final"};
+                                       "10-split", "11-accumulated", "12-combined", "13-filtered", "20-clamp",
+                                       "14-final"};
     const int nexr = (int)(sizeof exrs / sizeof exrs[0]);
     uint64_t hash = 0;
     for (int k = 0; k < 3; k++) {
@@ -510,8 +511,8 @@ static void test_exr_stage_dumps(void **state)
         snprintf(p, sizeof p, "%s/d%d", dir, k);
         int temps, files = count_entries(p, &temps);
         assert_int_equal(temps, 0);
-        /* 15 pictures (png), 10 float files (exr), captions.txt */
-        assert_int_equal(files, (k < 2 ? 15 : 0) + (k > 0 ? nexr : 0) + 1);
+        /* 21 pictures (png) and ranges.txt, 11 float files (exr), captions.txt */
+        assert_int_equal(files, (k < 2 ? 21 + 1 : 0) + (k > 0 ? nexr : 0) + 1);
         size_t n;
         snprintf(p, sizeof p, "%s/d%d/captions.txt", dir, k);
         char *captions = read_all(p, &n);

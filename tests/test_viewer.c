@@ -180,8 +180,10 @@ static void test_keys_settings_and_stepper(void **state)
     if (status != 2 || !strstr(out, "unknown key 'nosuchkey'")) fail_msg("%s: exit %d:\n%s", cmd, status, out);
 }
 
-/* The expected dump: the views available for the given settings. */
-static void check_dump(const char *dir, int indirect, int para_maps)
+/* The expected dump: the views available for the given settings; the
+ * VPL-update views' captions name the method `m` and say why (m NULL:
+ * no indirect light). */
+static void check_dump(const char *dir, int indirect, int para_maps, const gi_vpl_method *m)
 {
     char path[1024], line[1024], want[1024];
     snprintf(path, sizeof path, "%s/captions.txt", dir);
@@ -189,8 +191,8 @@ static void check_dump(const char *dir, int indirect, int para_maps)
     if (!cap) fail_msg("%s is missing", path);
     for (int v = 0; v < GI_VIEW_COUNT; v++) {
         int expected = 1;
-        if (v >= GI_VIEW_VPLS && v <= GI_VIEW_FILTERED) expected = indirect;
-        if (v == GI_VIEW_VPL_MAP) expected = indirect && para_maps;
+        if ((v >= GI_VIEW_VPLS && v <= GI_VIEW_FILTERED) || v >= GI_VIEW_VPL_BOUNCE) expected = indirect;
+        if (v == GI_VIEW_VPL_MAP || v == GI_VIEW_VPL_ATLAS) expected = indirect && para_maps;
         snprintf(path, sizeof path, "%s/%02d-%s.png", dir, v, gi_view_name((gi_view_id)v));
         if (tu_file_exists(path) != expected)
             fail_msg("%s should %s", path, expected ? "exist" : "not be written (the frame has no such data)");
@@ -201,6 +203,14 @@ static void check_dump(const char *dir, int indirect, int para_maps)
         const gi_stage_info *st = gi_stage_get(gi_view_stage((gi_view_id)v));
         assert_non_null(strstr(what, st->name));
         snprintf(want, sizeof want, "%02d-%s.png: %s\n", v, gi_view_name((gi_view_id)v), what);
+        if (m && gi_view_stage((gi_view_id)v) == GI_STAGE_VPL_UPDATE) {
+            /* gi_view_describe_frame: the method's paper and why */
+            snprintf(want, sizeof want, "%02d-%s.png: step %u, %s by %s: ", v, gi_view_name((gi_view_id)v), st->step,
+                     st->name, m->paper);
+            if (!fgets(line, sizeof line, cap) || strncmp(line, want, strlen(want)) != 0 || !strstr(line, m->why))
+                fail_msg("%s/captions.txt: got '%s', want '%s...%s'", dir, line, want, m->why);
+            continue;
+        }
         if (!fgets(line, sizeof line, cap) || strcmp(line, want) != 0)
             fail_msg("%s/captions.txt: got '%s', want '%s'", dir, line, want);
     }
@@ -225,7 +235,7 @@ static void test_dump_every_method(void **state)
         snprintf(png, sizeof png, "%s/render-%s.png", g_tmp, name);
         snprintf(args, sizeof args, "render %s --method %s --vpls 64 -q --dump-stages %s -o %s", SIZE, name, dir, png);
         tu_softgi_expect(args, 0, NULL);
-        check_dump(dir, 1, 1);
+        check_dump(dir, 1, 1, m);
         /* the final view is the PNG render writes */
         snprintf(args, sizeof args, "%s/14-final.png", dir);
         if (!same_file(args, png)) fail_msg("method %s: %s differs from %s", name, args, png);
@@ -236,11 +246,11 @@ static void test_dump_every_method(void **state)
     snprintf(dir, sizeof dir, "%s/dump-raytrace", g_tmp);
     snprintf(args, sizeof args, "render %s --visibility raytrace -q --dump-stages %s -o %s/rt.png", SIZE, dir, g_tmp);
     tu_softgi_expect(args, 0, NULL);
-    check_dump(dir, 1, 0);
+    check_dump(dir, 1, 0, gi_vpl_method_find("ir"));
     snprintf(dir, sizeof dir, "%s/dump-direct", g_tmp);
     snprintf(args, sizeof args, "render %s --direct-only -q --dump-stages %s -o %s/do.png", SIZE, dir, g_tmp);
     tu_softgi_expect(args, 0, NULL);
-    check_dump(dir, 0, 0);
+    check_dump(dir, 0, 0, NULL);
 }
 
 /* The viewer's dump is the render's dump, file for file. */

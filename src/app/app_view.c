@@ -17,12 +17,15 @@
  * the probe. Keys: H.
  *
  * Teaching mode (the stepper): P pauses on the current frame and N / B
- * step through its stages in the order they run (gi_view.h: G-buffer
- * channels, shadow map, direct light, VPLs over the image and from above,
- * one VPL's paraboloid map, split, accumulated, combined, filtered, final),
- * each with its one-line caption naming the paper section it implements;
- * V lists the views to jump to. `--dump-stages DIR` writes the same pictures
- * (gi_dump_stages).
+ * step through its stages in the order they run (gi_view_order: G-buffer
+ * channels, shadow map, direct light, VPLs over the image, from above, by
+ * bounce and by "moved", the method's own view, one VPL's paraboloid map and
+ * the atlas of all, split, tile assignment, clamp mask, accumulated,
+ * combined, filtered, final), each with its legend and its one-line
+ * caption naming the paper section it implements (for the VPL views, the
+ * method and why it chooses VPLs so: gi_view_describe_frame); V lists the
+ * views to jump to, in the same order. `--dump-stages DIR` writes the same
+ * pictures (gi_dump_stages).
  *
  * Inspector: a left click probes the pixel under the cursor (gi_probe.h:
  * its G-buffer values, direct light, tile and filtered irradiance, final
@@ -471,13 +474,14 @@ static void view_toggle_grab(view_app *a)
 /* The view on screen: the stepper's stage while paused, else the final image. */
 static gi_view_id view_shown(const view_app *a) { return a->paused ? (gi_view_id)a->stage : GI_VIEW_FINAL; }
 
-/* Next (+1) or previous (-1) stage view the frame has, from `from`. */
+/* Next (+1) or previous (-1) stage view the frame has, from `from`, in
+ * the order the frame computes them (gi_view_order). */
 static int view_next_stage(const view_app *a, int from, int step)
 {
-    int s = from;
+    int s = (int)gi_view_rank((gi_view_id)from);
     for (int k = 0; k < GI_VIEW_COUNT; k++) {
         s = (s + step + GI_VIEW_COUNT) % GI_VIEW_COUNT;
-        if (gi_view_available(&a->frame, (gi_view_id)s)) return s;
+        if (gi_view_available(&a->frame, gi_view_order((uint32_t)s))) return (int)gi_view_order((uint32_t)s);
     }
     return GI_VIEW_FINAL;
 }
@@ -518,8 +522,8 @@ static void view_click(view_app *a, float wx, float wy)
     if (a->list_open) {
         int row = (int)floorf((wy - (float)a->list_y0) / (float)(GI_FONT_CELL_H + 1));
         if (wx >= (float)a->list_x && wx < (float)(a->list_x + a->list_w) && row >= 0 && row < a->list_rows) {
-            int id = a->list_row0 + row;
-            if (id < GI_VIEW_COUNT && gi_view_available(&a->frame, (gi_view_id)id)) view_jump(a, id);
+            int rank = a->list_row0 + row, id = (int)gi_view_order((uint32_t)rank);
+            if (rank < GI_VIEW_COUNT && gi_view_available(&a->frame, (gi_view_id)id)) view_jump(a, id);
             return;
         }
     }
@@ -1091,17 +1095,19 @@ static void view_draw_probe_marker(view_app *a)
  * the y above it. */
 static int view_draw_caption(view_app *a)
 {
-    char text[1024];
+    char text[1536];
     int shown = 0, total = 0;
-    for (int v = 0; v < GI_VIEW_COUNT; v++)
-        if (gi_view_available(&a->frame, (gi_view_id)v)) {
+    for (uint32_t k = 0; k < GI_VIEW_COUNT; k++)
+        if (gi_view_available(&a->frame, gi_view_order(k))) {
             total++;
-            if (v <= a->stage) shown++;
+            if (k <= gi_view_rank((gi_view_id)a->stage)) shown++;
         }
-    char what[400];
-    gi_view_describe((gi_view_id)a->stage, what, sizeof what);
+    char what[1024];
+    gi_view_describe_frame(&a->frame, (gi_view_id)a->stage, what, sizeof what);
     snprintf(text, sizeof text, "[%d/%d %s] %s", shown, total, gi_view_name((gi_view_id)a->stage), what);
-    if (a->stage == GI_VIEW_VPL_MAP || a->stage == GI_VIEW_VPLS || a->stage == GI_VIEW_VPL_OVERHEAD) {
+    if (a->stage == GI_VIEW_VPL_MAP || a->stage == GI_VIEW_VPLS || a->stage == GI_VIEW_VPL_OVERHEAD ||
+        a->stage == GI_VIEW_VPL_BOUNCE || a->stage == GI_VIEW_VPL_MOVED || a->stage == GI_VIEW_VPL_ATLAS ||
+        a->stage == GI_VIEW_TILES || a->stage == GI_VIEW_METHOD) {
         char more[96];
         uint32_t n = a->frame.ind.vpls.count;
         snprintf(more, sizeof more, "  [VPL %u of %u, K: next]", n ? a->vpl_pick % n : 0, n);
@@ -1186,8 +1192,10 @@ static void view_draw_help(view_app *a, int bottom)
     }
 }
 
-/* The list of views to jump to, paged around the cursor: "> NN name" for
- * the one shown, the cursor in yellow, views without data grey. */
+/* The list of views to jump to, in the order the frame computes them
+ * (gi_view_order), paged around the cursor: "> NN name" for the one shown
+ * (NN: the dump's file number), the cursor in yellow, views without data
+ * grey. */
 static void view_draw_list(view_app *a, int bottom)
 {
     int rows = (bottom - 8) / VIEW_ROW - 1;
@@ -1195,14 +1203,14 @@ static void view_draw_list(view_app *a, int bottom)
         a->hud_omitted++;
         return;
     }
-    int row0 = a->list_cursor / rows * rows;
+    int row0 = (int)gi_view_rank((gi_view_id)a->list_cursor) / rows * rows;
     int count = GI_VIEW_COUNT - row0 < rows ? GI_VIEW_COUNT - row0 : rows;
     a->list_x = 4, a->list_w = 18 * GI_FONT_CELL_W, a->list_rows = count, a->list_row0 = row0;
     view_text_line(a, 4, 4, "views (V closes)", view_yellow);
     a->list_y0 = 4 + VIEW_ROW;
     char line[64];
     for (int k = 0; k < count; k++) {
-        int v = row0 + k;
+        int v = (int)gi_view_order((uint32_t)(row0 + k));
         snprintf(line, sizeof line, "%s %02d %-13s", v == (int)view_shown(a) ? ">" : " ", v, gi_view_name((gi_view_id)v));
         const uint8_t *rgb = !gi_view_available(&a->frame, (gi_view_id)v) ? view_grey
                              : v == a->list_cursor                         ? view_yellow

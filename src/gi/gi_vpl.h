@@ -94,6 +94,45 @@ pf_result gi_param_f32(const gi_params *p, const char *key, float lo, float hi, 
 pf_result gi_param_choice(const gi_params *p, const char *key, const char *const *names, uint32_t *out,
                           pf_error *err);
 
+/* What a method's internal view (gi_vpl_method.view) is given: the frame's
+ * camera and image, the VPL set the frame shaded with, and drawing helpers
+ * that the view layer (src/view/gi_view.c) supplies, so a method draws its
+ * own state without including the view's headers. A view only reads the
+ * method's state (const); every helper is deterministic. With --pipeline on
+ * the state is one update ahead of `vpls` (gi_indirect.h, "Pipelining"). */
+typedef struct gi_vpl_view_ctx gi_vpl_view_ctx;
+struct gi_vpl_view_ctx {
+    const pf_scene *scene;
+    const pf_rt *rt;
+    const pf_camera *camera;
+    uint32_t width, height;  /* of rgb: RGB8, top row first */
+    const gi_vpl_set *vpls;  /* the set the frame shaded with */
+    uint32_t vpl;            /* the chosen VPL (index into vpls; 0 when empty) */
+    uint32_t bounces;        /* the frame's --bounces */
+    void *canvas;            /* the view layer's own (legend record) */
+    /* rgb <- the frame's final image, dimmed (a background for overlays) */
+    void (*background)(const gi_vpl_view_ctx *c, uint8_t *rgb);
+    /* world point -> continuous pixel position (x right, y down); 0 behind the camera */
+    int (*project)(const gi_vpl_view_ctx *c, pf_vec3 p, float *x, float *y);
+    /* 1 if the camera sees world point p (an Embree ray from the eye) */
+    int (*visible)(const gi_vpl_view_ctx *c, pf_vec3 p);
+    void (*fill)(const gi_vpl_view_ctx *c, uint8_t *rgb, int x, int y, int w, int h, const uint8_t col[3]);
+    void (*line)(const gi_vpl_view_ctx *c, uint8_t *rgb, int x0, int y0, int x1, int y1, const uint8_t col[3]);
+    /* text in the built-in font (scale 1); returns the width drawn */
+    int (*text)(const gi_vpl_view_ctx *c, uint8_t *rgb, int x, int y, const char *s, const uint8_t col[3]);
+    /* the heat colour map, t in [0, 1] (dark blue, red, yellow, white) */
+    void (*heat)(float t, uint8_t col[3]);
+    /* a categorical colour for index k (clusters, bounces) */
+    void (*palette)(uint32_t k, uint8_t col[3]);
+    /* the view's legend: a heat colour bar from lo to hi labelled `what`
+     * (sqrt_scale: colours follow sqrt((v - lo) / (hi - lo))); the view
+     * layer records the range (gi_view_legend) */
+    void (*legend)(const gi_vpl_view_ctx *c, uint8_t *rgb, const char *what, float lo, float hi, int sqrt_scale);
+    /* or a key: n swatches with their names under the title `what` */
+    void (*key)(const gi_vpl_view_ctx *c, uint8_t *rgb, const char *what, const char *const *names,
+                const uint8_t (*colours)[3], uint32_t n);
+};
+
 typedef struct gi_vpl_method {
     const char *name;
     const char *paper; /* what it implements, for captions */
@@ -112,6 +151,21 @@ typedef struct gi_vpl_method {
      * methods with camera-side samples (SMC's X, TCAS's and InvTM's
      * importance, SSVP's screen-space VPLs, MIR's camera paths). */
     int gbuffer_free;
+    /* Optional (NULL: none), for learners (issue 16 item 6; gi_view.h's
+     * GI_VIEW_METHOD and captions). Kept at the end so positional
+     * initialisers stay valid.
+     * why: one line, why the method chooses its VPLs this way, with the
+     * paper section ("IIR keeps valid VPLs ... (Laine 2007 Sec. 4.2)").
+     * view_caption: what `view` draws, one line.
+     * view: draws the method's own state into rgb (ctx->width x height);
+     * returns 0 when it has nothing to show (rgb then undefined).
+     * bounce: the light bounce VPL v stands for (1 = lit directly by a
+     * light), 0 when the method does not know; `bounces` is the frame's
+     * --bounces. Reads v (and its id) only. */
+    const char *why;
+    const char *view_caption;
+    int (*view)(const void *state, const gi_vpl_view_ctx *ctx, uint8_t *rgb);
+    uint32_t (*bounce)(const void *state, const gi_vpl *v, uint32_t bounces);
 } gi_vpl_method;
 
 /* The methods softgi has, by name ("ir", "iir", ...). NULL if unknown. */

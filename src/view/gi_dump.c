@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_view_draw.h"
 #include "pf_imageio.h"
 
 int gi_dump_has_exr(gi_view_id id)
@@ -24,7 +25,8 @@ int gi_dump_has_exr(gi_view_id id)
     case GI_VIEW_ACCUMULATED:
     case GI_VIEW_COMBINED:
     case GI_VIEW_FILTERED:
-    case GI_VIEW_FINAL: return 1;
+    case GI_VIEW_FINAL:
+    case GI_VIEW_CLAMP: return 1;
     default: return 0;
     }
 }
@@ -77,6 +79,7 @@ static uint32_t gi__dump_float(const gi_frame *f, gi_view_id id, float *px)
     const float *rgb = NULL;
     switch (id) {
     case GI_VIEW_DEPTH: memcpy(px, g->depth, n * sizeof(float)); return 1;
+    case GI_VIEW_CLAMP: gi_view_clamp_counts(f, px); return 1;
     case GI_VIEW_POSITION: gi__dump_planes(f, g->pos_x, g->pos_y, g->pos_z, px); return 4;
     case GI_VIEW_NORMAL: gi__dump_planes(f, g->nrm_x, g->nrm_y, g->nrm_z, px); return 4;
     case GI_VIEW_ALBEDO: gi__dump_planes(f, g->alb_r, g->alb_g, g->alb_b, px); return 4;
@@ -99,8 +102,8 @@ static uint32_t gi__dump_float(const gi_frame *f, gi_view_id id, float *px)
 
 static pf_result gi__dump_exr(const gi_frame *f, gi_view_id v, const char *path, float *px, pf_error *err)
 {
-    char comment[512], text[400];
-    gi_view_describe(v, text, sizeof text);
+    char comment[1200], text[1024];
+    gi_view_describe_frame(f, v, text, sizeof text);
     snprintf(comment, sizeof comment, "softgi stage %02d-%s: %s", (int)v, gi_view_name(v), text);
     uint32_t channels = gi__dump_float(f, v, px);
     return pf_imageio_write_exr(path, px, f->width, f->height, channels, PF_IMAGEIO_DATA, comment, err);
@@ -111,16 +114,30 @@ static pf_result gi__dump_exr(const gi_frame *f, gi_view_id v, const char *path,
 typedef struct gi__dump_captions {
     const gi_frame *f;
     gi_dump_format format;
+    const gi_view_legend *legend; /* per view, GI_VIEW_COUNT (PNG dumps) */
 } gi__dump_captions;
+
+/* ranges.txt: "NN-name.png: legend" for every picture with a legend (the
+ * value range its colours span, as drawn). */
+static int gi__print_ranges(FILE *out, void *user)
+{
+    const gi__dump_captions *c = user;
+    for (int v = 0; v < GI_VIEW_COUNT; v++) {
+        gi_view_id id = (gi_view_id)v;
+        if (!gi_view_available(c->f, id) || !c->legend[v].present) continue;
+        if (fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name(id), c->legend[v].text) < 0) return 1;
+    }
+    return 0;
+}
 
 static int gi__print_captions(FILE *out, void *user)
 {
     const gi__dump_captions *c = user;
-    char text[400];
+    char text[1024];
     for (int v = 0; v < GI_VIEW_COUNT; v++) {
         gi_view_id id = (gi_view_id)v;
         if (!gi_view_available(c->f, id)) continue;
-        gi_view_describe(id, text, sizeof text);
+        gi_view_describe_frame(c->f, id, text, sizeof text);
         if ((c->format & GI_DUMP_PNG) && fprintf(out, "%02d-%s.png: %s\n", v, gi_view_name(id), text) < 0) return 1;
         if ((c->format & GI_DUMP_EXR) && gi_dump_has_exr(id) &&
             fprintf(out, "%02d-%s.exr: %s\n", v, gi_view_name(id), text) < 0)
@@ -145,11 +162,13 @@ pf_result gi_dump_stages(const gi_frame *f, const char *dir, const gi_view_setti
     }
     char path[4200];
     pf_result r = PF_OK;
+    gi_view_legend legend[GI_VIEW_COUNT];
+    memset(legend, 0, sizeof legend);
     for (int v = 0; v < GI_VIEW_COUNT && r == PF_OK; v++) {
         gi_view_id id = (gi_view_id)v;
         if (!gi_view_available(f, id)) continue;
         if (format & GI_DUMP_PNG) {
-            gi_view_render(f, id, s, rgb8);
+            gi_view_render_legend(f, id, s, rgb8, &legend[v]);
             snprintf(path, sizeof path, "%s/%02d-%s.png", dir, v, gi_view_name(id));
             r = gi_view_write_png(path, rgb8, f->width, f->height, err);
         }
@@ -161,8 +180,10 @@ pf_result gi_dump_stages(const gi_frame *f, const char *dir, const gi_view_setti
     free(rgb8);
     free(px);
     /* captions.txt last: one line per file written */
-    gi__dump_captions c = {f, format};
+    gi__dump_captions c = {f, format, legend};
     snprintf(path, sizeof path, "%s/captions.txt", dir);
     if (r == PF_OK) r = pf_imageio_write_text(path, gi__print_captions, &c, err);
+    snprintf(path, sizeof path, "%s/ranges.txt", dir);
+    if (r == PF_OK && (format & GI_DUMP_PNG)) r = pf_imageio_write_text(path, gi__print_ranges, &c, err);
     return r;
 }

@@ -3,8 +3,10 @@
  *
  * png (the default): gi_view_render's pictures, DIR/NN-name.png (NN = the
  *   gi_view_id), byte for byte what the stepper of `softgi view` shows, and
- *   DIR/captions.txt ("NN-name.png: description" a line, gi_view_describe:
- *   the step, stage and paper from the stage table, then what the view shows).
+ *   DIR/captions.txt ("NN-name.png: description" a line,
+ *   gi_view_describe_frame: the step, stage and paper from the stage table,
+ *   then what the view shows; for the VPL views the method's paper and why
+ *   it chooses VPLs as it does).
  * exr: the stages' float data, DIR/NN-name.exr (OpenEXR, 32-bit float,
  *   pf_exr.h), beside the pictures of the same NN, each with its caption in
  *   the file's "comments" attribute:
@@ -19,9 +21,15 @@
  *     12-combined     RGB   irradiance before the filter
  *     13-filtered     RGB   irradiance after the filter
  *     14-final        RGB   the composed linear radiance (the render's image)
+ *     20-clamp        Y     per pixel, how many of its tile's VPLs light it
+ *                           with the bounded geometry term clamped
  *   Views that are drawings rather than data (primitive ids, the shadow
- *   map, the VPL overlays, a VPL's paraboloid map) have no .exr; views the
- *   frame does not have (gi_view_available) have neither file.
+ *   map, the VPL overlays, a VPL's paraboloid map, the atlas, the tiles,
+ *   the method's own view) have no .exr; views the frame does not have
+ *   (gi_view_available) have neither file.
+ * png also writes DIR/ranges.txt: "NN-name.png: legend" for every picture
+ *   with a legend (gi_view_legend: what its colours stand for and the
+ *   smallest and largest value they span, as drawn into the picture).
  * both: both sets. With exr in the format, captions.txt lists every file
  * written, one "NN-name.ext: caption" line each.
  * Values: anything but NaN (positions and normals are signed, depth holds

@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_probe.h"
+#include "gi_view_draw.h"
 #include "pf_imageio.h"
 
 /* The views: file-name part, the stage whose output each shows (its step,
@@ -20,7 +22,9 @@ typedef struct gi__view_info {
 } gi__view_info;
 
 static const gi__view_info gi__views[GI_VIEW_COUNT] = {
-    [GI_VIEW_DEPTH] = {"depth", GI_STAGE_GBUFFER_RASTER, "view-space distance of the visible surface, near = bright"},
+    [GI_VIEW_DEPTH] = {"depth", GI_STAGE_GBUFFER_RASTER,
+                       "view-space distance of the visible surface, near = bright; every later stage reads these "
+                       "planes, so shading costs per pixel, not per triangle"},
     [GI_VIEW_POSITION] = {"position", GI_STAGE_GBUFFER_RESOLVE, "world position of the visible surface"},
     [GI_VIEW_NORMAL] = {"normal", GI_STAGE_GBUFFER_RESOLVE, "shading normal, turned to face the camera"},
     [GI_VIEW_ALBEDO] = {"albedo", GI_STAGE_GBUFFER_RESOLVE, "filtered baseColor, linear RGB"},
@@ -28,21 +32,68 @@ static const gi__view_info gi__views[GI_VIEW_COUNT] = {
     [GI_VIEW_SHADOW_MAP] = {"shadow-map", GI_STAGE_SHADOW_MAPS,
                             "light 0's map, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF"},
     [GI_VIEW_DIRECT] = {"direct", GI_STAGE_DIRECT_SHADOWMAP, "every light with its shadow test, albedo E / pi"},
-    [GI_VIEW_VPLS] = {"vpls", GI_STAGE_VPL_UPDATE, "each VPL drawn where it projects, coloured by its intensity"},
+    [GI_VIEW_VPLS] = {"vpls", GI_STAGE_VPL_UPDATE,
+                      "the VPLs the camera sees, coloured by intensity (hidden ones are not drawn); each re-emits the "
+                      "light it received, standing in for the indirect light"},
     [GI_VIEW_VPL_OVERHEAD] = {"vpl-overhead", GI_STAGE_VPL_UPDATE,
                               "VPLs from above (cut at eye height), coloured by intensity; lights yellow, camera and "
                               "frustum green (Hedman 2017 Fig. 3)"},
-    [GI_VIEW_VPL_MAP] = {"vpl-map", GI_STAGE_VPL_MAPS, "the chosen VPL's paraboloid map (white box), near = bright"},
-    [GI_VIEW_SPLIT] = {"split", GI_STAGE_SPLIT, "the split G-buffer's normals: n x m tiles, each the image "
-                                                "sub-sampled with its own offset"},
+    [GI_VIEW_VPL_MAP] = {"vpl-map", GI_STAGE_VPL_MAPS,
+                         "the chosen VPL's paraboloid map (white box), near = bright: what the VPL sees, so its light "
+                         "casts shadows"},
+    [GI_VIEW_SPLIT] = {"split", GI_STAGE_SPLIT,
+                       "the split G-buffer's normals: n x m tiles, each the image sub-sampled with its own offset, so "
+                       "each tile can shade with its own share of the VPLs"},
     [GI_VIEW_ACCUMULATED] = {"accumulated", GI_STAGE_ACCUMULATE,
                              "each tile's irradiance from its share of the VPLs, in tile layout"},
     [GI_VIEW_COMBINED] = {"combined", GI_STAGE_COMBINE,
                           "the tiles back in image layout; the n x m structured noise is visible (Laine 2007 Fig. 4a)"},
     [GI_VIEW_FILTERED] = {"filtered", GI_STAGE_FILTER,
-                          "the filtered irradiance (default: Laine 2007 Fig. 5's geometry-aware box)"},
+                          "the filtered irradiance (default: Laine 2007 Fig. 5's geometry-aware box): averaging n x m "
+                          "neighbours gives each pixel every tile's VPLs back"},
     [GI_VIEW_FINAL] = {"final", GI_STAGE_COMPOSE, "emission + direct + albedo / pi x filtered indirect, linear RGB"},
+    [GI_VIEW_VPL_BOUNCE] = {"vpl-bounce", GI_STAGE_VPL_UPDATE,
+                            "the VPLs the camera sees, by light bounce (1 = lit by a light; grey: the method does not "
+                            "say); hidden ones are not drawn"},
+    [GI_VIEW_VPL_MOVED] = {"vpl-moved", GI_STAGE_VPL_UPDATE,
+                           "the VPLs the camera sees: green moved or new this frame (its map is re-rendered), blue "
+                           "kept (its map is reused: why incremental methods are fast)"},
+    [GI_VIEW_METHOD] = {"method", GI_STAGE_VPL_UPDATE, "the VPL method's own state"},
+    [GI_VIEW_VPL_ATLAS] = {"vpl-atlas", GI_STAGE_VPL_MAPS,
+                           "every VPL's paraboloid map, near = bright (green frame: re-rendered this frame, white: the "
+                           "chosen VPL); one map per VPL is the cost incremental methods save"},
+    [GI_VIEW_TILES] = {"tiles", GI_STAGE_ASSIGN,
+                       "the tile assignment: each tile of the split mosaic with the VPLs it shades with; each pixel "
+                       "pays for 1 / (n m) of the VPLs and the filter averages the n x m neighbours back"},
+    [GI_VIEW_CLAMP] = {"clamp", GI_STAGE_ACCUMULATE,
+                       "the clamp mask: how many of a pixel's VPLs the bounded geometry term min(G, b) clamped; it "
+                       "trades the 1 / r^2 spikes near a VPL for missing energy in corners (survey Sec. 5)"},
 };
+
+/* The stepper's order: the outline's steps (gi_frame.h), each view after
+ * the views of the same or earlier steps (the clamp mask, step 7, before
+ * the accumulated tiles it explains). */
+static const gi_view_id gi__order[GI_VIEW_COUNT] = {
+    GI_VIEW_DEPTH,       GI_VIEW_POSITION,   GI_VIEW_NORMAL,      GI_VIEW_ALBEDO,       GI_VIEW_PRIM,
+    GI_VIEW_SHADOW_MAP,  GI_VIEW_DIRECT,     GI_VIEW_VPLS,        GI_VIEW_VPL_OVERHEAD, GI_VIEW_VPL_BOUNCE,
+    GI_VIEW_VPL_MOVED,   GI_VIEW_METHOD,     GI_VIEW_VPL_MAP,     GI_VIEW_VPL_ATLAS,    GI_VIEW_SPLIT,
+    GI_VIEW_TILES,       GI_VIEW_CLAMP,      GI_VIEW_ACCUMULATED, GI_VIEW_COMBINED,     GI_VIEW_FILTERED,
+    GI_VIEW_FINAL,
+};
+
+gi_view_id gi_view_order(uint32_t k) { return k < GI_VIEW_COUNT ? gi__order[k] : GI_VIEW_FINAL; }
+
+uint32_t gi_view_rank(gi_view_id id)
+{
+    for (uint32_t k = 0; k < GI_VIEW_COUNT; k++)
+        if (gi__order[k] == id) return k;
+    return GI_VIEW_COUNT - 1;
+}
+
+const gi_vpl_method *gi_view_method(const gi_frame *f)
+{
+    return f->indirect && f->ind.opt.method ? f->ind.opt.method : &gi_method_ir;
+}
 
 const char *gi_view_name(gi_view_id id) { return (unsigned)id < GI_VIEW_COUNT ? gi__views[id].name : "?"; }
 
@@ -59,14 +110,30 @@ int gi_view_describe(gi_view_id id, char *buf, size_t n)
     return snprintf(buf, n, "step %u, %s (%s): %s", st->step, st->name, st->paper, gi_view_caption(id));
 }
 
+int gi_view_describe_frame(const gi_frame *f, gi_view_id id, char *buf, size_t n)
+{
+    if (!f->indirect || gi_view_stage(id) != GI_STAGE_VPL_UPDATE) return gi_view_describe(id, buf, n);
+    const gi_stage_info *st = gi_stage_get(GI_STAGE_VPL_UPDATE);
+    const gi_vpl_method *m = gi_view_method(f);
+    const char *what = id == GI_VIEW_METHOD && m->view_caption ? m->view_caption : gi_view_caption(id);
+    return snprintf(buf, n, "step %u, %s by %s: %s. Why: %s", st->step, st->name, m->paper, what,
+                    m->why ? m->why : "-");
+}
+
 int gi_view_available(const gi_frame *f, gi_view_id id)
 {
     switch (id) {
     case GI_VIEW_SHADOW_MAP:
         return f->raster && f->show_direct && f->shadows_rendered && f->shadows.count > 0 && f->shadows.maps[0].depth;
     case GI_VIEW_DIRECT: return f->show_direct;
+    case GI_VIEW_VPL_ATLAS:
     case GI_VIEW_VPL_MAP: return f->indirect && f->ind.para && f->ind.vpls.count > 0 && f->ind.atlas_slots > 0;
+    case GI_VIEW_METHOD: return f->indirect && f->ind.method_state && gi_view_method(f)->view;
     case GI_VIEW_VPLS:
+    case GI_VIEW_VPL_BOUNCE:
+    case GI_VIEW_VPL_MOVED:
+    case GI_VIEW_TILES:
+    case GI_VIEW_CLAMP:
     case GI_VIEW_VPL_OVERHEAD:
     case GI_VIEW_SPLIT:
     case GI_VIEW_ACCUMULATED:
@@ -78,7 +145,7 @@ int gi_view_available(const gi_frame *f, gi_view_id id)
 
 /* ------------------------------------------------------------ pixels */
 
-static uint8_t gi__unit(float v)
+uint8_t gi_view_draw_unit(float v)
 {
     if (!(v > 0.0f)) return 0;
     if (!(v < 1.0f)) return 255;
@@ -130,29 +197,56 @@ static void gi__box(uint8_t *rgb, uint32_t w, uint32_t h, int x, int y, int rad,
     gi__line(rgb, w, h, x - rad, y + rad, x - rad, y - rad, r, g, b);
 }
 
+void gi_view_draw_put(uint8_t *rgb, uint32_t w, uint32_t h, int x, int y, const uint8_t c[3])
+{
+    gi__put(rgb, w, h, x, y, c[0], c[1], c[2]);
+}
+
+void gi_view_draw_line(uint8_t *rgb, uint32_t w, uint32_t h, int x0, int y0, int x1, int y1, const uint8_t c[3])
+{
+    gi__line(rgb, w, h, x0, y0, x1, y1, c[0], c[1], c[2]);
+}
+
+void gi_view_draw_box(uint8_t *rgb, uint32_t w, uint32_t h, int x, int y, int rad, const uint8_t c[3])
+{
+    gi__box(rgb, w, h, x, y, rad, c[0], c[1], c[2]);
+}
+
 /* Heat colour map for t in [0, 1]: dark blue -> red -> yellow -> white. */
-static void gi__heat(float t, uint8_t c[3])
+void gi_view_draw_heat(float t, uint8_t c[3])
 {
     t = pf_clampf(t, 0.0f, 1.0f);
-    c[0] = gi__unit(3.0f * t);
-    c[1] = gi__unit(3.0f * t - 1.0f);
-    c[2] = gi__unit(t < 1.0f / 3.0f ? 0.4f + 0.6f * (1.0f - 3.0f * t) * 0.5f : 3.0f * t - 2.0f);
+    c[0] = gi_view_draw_unit(3.0f * t);
+    c[1] = gi_view_draw_unit(3.0f * t - 1.0f);
+    c[2] = gi_view_draw_unit(t < 1.0f / 3.0f ? 0.4f + 0.6f * (1.0f - 3.0f * t) * 0.5f : 3.0f * t - 2.0f);
+}
+
+void gi_view_draw_palette(uint32_t k, uint8_t c[3])
+{
+    static const uint8_t pal[12][3] = {{230, 25, 75},   {60, 180, 75},  {255, 225, 25}, {67, 99, 216},
+                                       {245, 130, 49},  {145, 30, 180}, {66, 212, 244}, {240, 50, 230},
+                                       {191, 239, 69},  {250, 190, 212}, {70, 153, 144}, {220, 190, 255}};
+    memcpy(c, pal[k % 12], 3);
 }
 
 
-/* VPL k's colour: its luminance relative to the brightest VPL, square-root
- * scaled so that dim VPLs stay visible. */
-static void gi__vpl_colour(const gi_vpl_set *set, float max_lum, uint32_t k, uint8_t c[3])
+void gi_view_vpl_range(const gi_vpl_set *set, float *lo, float *hi)
 {
-    float t = max_lum > 0.0f ? pf_luminance(set->v[k].intensity) / max_lum : 0.0f;
-    gi__heat(sqrtf(pf_clampf(t, 0.0f, 1.0f)), c);
+    *lo = INFINITY, *hi = -INFINITY;
+    for (uint32_t k = 0; k < set->count; k++) {
+        float l = pf_luminance(set->v[k].intensity);
+        if (!(l > 0.0f)) continue; /* an empty slot */
+        *lo = fminf(*lo, l), *hi = fmaxf(*hi, l);
+    }
+    if (!(*lo <= *hi)) *lo = *hi = 0.0f;
 }
 
-static float gi__max_lum(const gi_vpl_set *set)
+/* VPL colour: its luminance from the set's smallest (lo) to its largest
+ * (hi), square-root scaled so that dim VPLs stay visible. */
+void gi_view_vpl_colour(float lum, float lo, float hi, uint8_t c[3])
 {
-    float m = 0.0f;
-    for (uint32_t k = 0; k < set->count; k++) m = fmaxf(m, pf_luminance(set->v[k].intensity));
-    return m;
+    float t = hi > lo ? (lum - lo) / (hi - lo) : 1.0f;
+    gi_view_draw_heat(sqrtf(pf_clampf(t, 0.0f, 1.0f)), c);
 }
 
 /* ------------------------------------------------------------ font */
@@ -295,38 +389,159 @@ static void gi__unavailable(uint8_t *rgb, uint32_t w, uint32_t h, const char *ms
     gi_view_text(rgb, w, h, ((int)w - tw) / 2, (int)h / 2 - GI_FONT_CELL_H / 2, 1, msg, 200, 200, 200);
 }
 
+/* ------------------------------------------------------------ legends */
+
+void gi_view_bar_grey(float t, const void *user, uint8_t c[3])
+{
+    (void)user;
+    c[0] = c[1] = c[2] = gi_view_draw_unit(t);
+}
+
+void gi_view_bar_grey_rev(float t, const void *user, uint8_t c[3])
+{
+    (void)user;
+    c[0] = c[1] = c[2] = gi_view_draw_unit(1.0f - t);
+}
+
+void gi_view_bar_heat(float t, const void *user, uint8_t c[3])
+{
+    (void)user;
+    gi_view_draw_heat(t, c);
+}
+
+void gi_view_bar_heat_sqrt(float t, const void *user, uint8_t c[3])
+{
+    (void)user;
+    gi_view_draw_heat(sqrtf(pf_clampf(t, 0.0f, 1.0f)), c);
+}
+
+void gi_view_bar_display(float t, const void *user, uint8_t c[3])
+{
+    const float *u = user; /* lo, hi, exposure scale */
+    c[0] = c[1] = c[2] = pf_imageio_display(u[0] + t * (u[1] - u[0]), u[2]);
+}
+
+/* sRGB-encoded grey from lo to hi (user: float[2]), as the albedo view. */
+static void gi__bar_srgb(float t, const void *user, uint8_t c[3])
+{
+    const float *u = user;
+    c[0] = c[1] = c[2] = gi_view_draw_unit(pf_linear_to_srgb(u[0] + t * (u[1] - u[0])));
+}
+
+static int gi__legend_fits(uint32_t w, uint32_t h) { return w >= GI_VIEW_LEGEND_MIN_W && h >= GI_VIEW_LEGEND_MIN_H; }
+
+#define GI__BAR_W 100
+#define GI__BAR_H 8
+
+void gi_view_draw_legend_bar(uint8_t *rgb, uint32_t w, uint32_t h, gi_view_legend *lg, const char *what, float lo,
+                             float hi, gi_view_bar_fn bar, const void *user)
+{
+    gi_view_legend tmp;
+    if (!lg) lg = &tmp;
+    memset(lg, 0, sizeof *lg);
+    lg->present = 1, lg->has_range = 1, lg->lo = lo, lg->hi = hi;
+    snprintf(lg->what, sizeof lg->what, "%s", what);
+    snprintf(lg->text, sizeof lg->text, "%s: %.4g .. %.4g", what, (double)lo, (double)hi);
+    if (!gi__legend_fits(w, h)) return;
+    const char *text = lg->text;
+    char shortc[64];
+    if ((int)strlen(text) * GI_FONT_CELL_W > (int)w - 16) { /* too wide: the range alone */
+        snprintf(shortc, sizeof shortc, "%.4g .. %.4g", (double)lo, (double)hi);
+        text = shortc;
+    }
+    int tw = (int)strlen(text) * GI_FONT_CELL_W, bw = tw > GI__BAR_W ? tw : GI__BAR_W;
+    int bh = GI_FONT_CELL_H + GI__BAR_H + 8;
+    int x0 = (int)w - bw - 8, y0 = (int)h - bh - 4;
+    gi_view_shade_rect(rgb, w, h, x0 - 3, y0 - 2, bw + 6, bh + 2);
+    gi_view_text(rgb, w, h, x0, y0, 1, text, 230, 230, 230);
+    int by = y0 + GI_FONT_CELL_H + 3, bx = x0 + bw - GI__BAR_W;
+    for (int i = 0; i < GI__BAR_W; i++) {
+        uint8_t c[3];
+        bar((float)i / (float)(GI__BAR_W - 1), user, c);
+        for (int j = 0; j < GI__BAR_H; j++) gi__put(rgb, w, h, bx + i, by + j, c[0], c[1], c[2]);
+    }
+}
+
+void gi_view_draw_legend_key(uint8_t *rgb, uint32_t w, uint32_t h, gi_view_legend *lg, const char *what,
+                             const char *const *names, const uint8_t (*colours)[3], uint32_t n)
+{
+    gi_view_legend tmp;
+    if (!lg) lg = &tmp;
+    memset(lg, 0, sizeof *lg);
+    lg->present = 1;
+    snprintf(lg->what, sizeof lg->what, "%s", what);
+    size_t len = (size_t)snprintf(lg->text, sizeof lg->text, "%s", what);
+    for (uint32_t k = 0; k < n && len < sizeof lg->text; k++)
+        len += (size_t)snprintf(lg->text + len, sizeof lg->text - len, "%s%s", k ? ", " : ": ", names[k]);
+    if (!gi__legend_fits(w, h)) return;
+    int bw = (int)strlen(what) * GI_FONT_CELL_W;
+    for (uint32_t k = 0; k < n; k++) {
+        int ew = 12 + (int)strlen(names[k]) * GI_FONT_CELL_W;
+        if (ew > bw) bw = ew;
+    }
+    int rows = (what[0] ? 1 : 0) + (int)n, bh = rows * (GI_FONT_CELL_H + 1) + 2;
+    int x0 = (int)w - bw - 8, y0 = (int)h - bh - 4, y = y0;
+    gi_view_shade_rect(rgb, w, h, x0 - 3, y0 - 2, bw + 6, bh + 2);
+    if (what[0]) {
+        gi_view_text(rgb, w, h, x0, y, 1, what, 230, 230, 230);
+        y += GI_FONT_CELL_H + 1;
+    }
+    for (uint32_t k = 0; k < n; k++, y += GI_FONT_CELL_H + 1) {
+        gi_view_fill_rect(rgb, w, h, x0, y + 2, 8, 7, colours[k][0], colours[k][1], colours[k][2]);
+        gi_view_text(rgb, w, h, x0 + 12, y, 1, names[k], 230, 230, 230);
+    }
+}
+
 /* ------------------------------------------------------------ views */
 
-static void gi__view_gbuffer(const gi_frame *f, gi_view_id id, uint8_t *rgb)
+/* The G-buffer channels. Depth: near (the smallest view depth) white, the
+ * farthest black; positions: each axis from its smallest to its largest
+ * value in the image; normals: -1 .. 1; albedo: sRGB-encoded. Pixels
+ * without a surface are black. */
+static void gi__view_gbuffer(const gi_frame *f, gi_view_id id, uint8_t *rgb, gi_view_legend *lg)
 {
     const rs_gbuffer *g = &f->gbuf;
-    size_t n = (size_t)f->width * f->height;
-    float dmax = 0.0f;
-    if (id == GI_VIEW_DEPTH)
-        for (size_t i = 0; i < n; i++)
-            if (isfinite(g->depth[i]) && g->depth[i] > dmax) dmax = g->depth[i];
-    pf_vec3 lo = f->scene->bounds_min, ext = pf_v3_sub(f->scene->bounds_max, f->scene->bounds_min);
+    const uint32_t W = f->width, H = f->height;
+    size_t n = (size_t)W * H;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint32_t plo = UINT32_MAX, phi = 0, seen = 0;
+    const float *pl[3] = {g->pos_x, g->pos_y, g->pos_z};
+    if (id == GI_VIEW_ALBEDO) pl[0] = g->alb_r, pl[1] = g->alb_g, pl[2] = g->alb_b;
+    for (size_t i = 0; i < n; i++) {
+        if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
+        seen++;
+        if (g->prim[i] < plo) plo = g->prim[i];
+        if (g->prim[i] > phi) phi = g->prim[i];
+        if (id == GI_VIEW_DEPTH) {
+            if (isfinite(g->depth[i])) lo[0] = fminf(lo[0], g->depth[i]), hi[0] = fmaxf(hi[0], g->depth[i]);
+        } else if (id == GI_VIEW_POSITION || id == GI_VIEW_ALBEDO)
+            for (int c = 0; c < 3; c++) lo[c] = fminf(lo[c], pl[c][i]), hi[c] = fmaxf(hi[c], pl[c][i]);
+    }
+    if (!seen) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0.0f;
+    if (id == GI_VIEW_DEPTH && !(lo[0] <= hi[0])) lo[0] = hi[0] = 0.0f; /* no finite depth */
+    float alo = fminf(lo[0], fminf(lo[1], lo[2])), ahi = fmaxf(hi[0], fmaxf(hi[1], hi[2]));
     for (size_t i = 0; i < n; i++) {
         uint8_t *o = rgb + 3 * i;
         int empty = g->prim[i] == RS_GBUFFER_EMPTY;
         switch (id) {
-        case GI_VIEW_DEPTH:
-            o[0] = o[1] = o[2] = isfinite(g->depth[i]) && dmax > 0.0f ? gi__unit(1.0f - g->depth[i] / dmax) : 0;
+        case GI_VIEW_DEPTH: {
+            float t = hi[0] > lo[0] ? 1.0f - (g->depth[i] - lo[0]) / (hi[0] - lo[0]) : 1.0f; /* nearest white */
+            o[0] = o[1] = o[2] = !empty && isfinite(g->depth[i]) ? gi_view_draw_unit(t) : 0;
             break;
+        }
         case GI_VIEW_POSITION:
-            o[0] = empty ? 0 : gi__unit((g->pos_x[i] - lo.x) / ext.x);
-            o[1] = empty ? 0 : gi__unit((g->pos_y[i] - lo.y) / ext.y);
-            o[2] = empty ? 0 : gi__unit((g->pos_z[i] - lo.z) / ext.z);
+            for (int c = 0; c < 3; c++)
+                o[c] = empty ? 0 : gi_view_draw_unit(hi[c] > lo[c] ? (pl[c][i] - lo[c]) / (hi[c] - lo[c]) : 0.5f);
             break;
         case GI_VIEW_NORMAL:
-            o[0] = empty ? 0 : gi__unit(0.5f + 0.5f * g->nrm_x[i]);
-            o[1] = empty ? 0 : gi__unit(0.5f + 0.5f * g->nrm_y[i]);
-            o[2] = empty ? 0 : gi__unit(0.5f + 0.5f * g->nrm_z[i]);
+            o[0] = empty ? 0 : gi_view_draw_unit(0.5f + 0.5f * g->nrm_x[i]);
+            o[1] = empty ? 0 : gi_view_draw_unit(0.5f + 0.5f * g->nrm_y[i]);
+            o[2] = empty ? 0 : gi_view_draw_unit(0.5f + 0.5f * g->nrm_z[i]);
             break;
         case GI_VIEW_ALBEDO:
-            o[0] = empty ? 0 : gi__unit(pf_linear_to_srgb(g->alb_r[i]));
-            o[1] = empty ? 0 : gi__unit(pf_linear_to_srgb(g->alb_g[i]));
-            o[2] = empty ? 0 : gi__unit(pf_linear_to_srgb(g->alb_b[i]));
+            o[0] = empty ? 0 : gi_view_draw_unit(pf_linear_to_srgb(g->alb_r[i]));
+            o[1] = empty ? 0 : gi_view_draw_unit(pf_linear_to_srgb(g->alb_g[i]));
+            o[2] = empty ? 0 : gi_view_draw_unit(pf_linear_to_srgb(g->alb_b[i]));
             break;
         default: { /* primitive id: a hash colour per triangle */
             uint32_t hsh = g->prim[i] * 2654435761u;
@@ -335,6 +550,39 @@ static void gi__view_gbuffer(const gi_frame *f, gi_view_id id, uint8_t *rgb)
             o[2] = empty ? 0 : (uint8_t)(hsh >> 16 & 255);
         }
         }
+    }
+    char what[64];
+    switch (id) {
+    case GI_VIEW_DEPTH:
+        gi_view_draw_legend_bar(rgb, W, H, lg, "view depth", lo[0], hi[0], gi_view_bar_grey_rev, NULL);
+        break;
+    case GI_VIEW_POSITION: {
+        char nx[48], ny[48], nz[48];
+        snprintf(nx, sizeof nx, "R = x %.4g .. %.4g", (double)lo[0], (double)hi[0]);
+        snprintf(ny, sizeof ny, "G = y %.4g .. %.4g", (double)lo[1], (double)hi[1]);
+        snprintf(nz, sizeof nz, "B = z %.4g .. %.4g", (double)lo[2], (double)hi[2]);
+        const char *names[3] = {nx, ny, nz};
+        const uint8_t cols[3][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}};
+        gi_view_draw_legend_key(rgb, W, H, lg, "world position", names, cols, 3);
+        if (lg) lg->has_range = 1, lg->lo = alo, lg->hi = ahi;
+        break;
+    }
+    case GI_VIEW_NORMAL: {
+        const char *names[3] = {"R = x", "G = y", "B = z"};
+        const uint8_t cols[3][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}};
+        gi_view_draw_legend_key(rgb, W, H, lg, "unit normal, -1 .. 1", names, cols, 3);
+        break;
+    }
+    case GI_VIEW_ALBEDO: {
+        const float u[2] = {alo, ahi};
+        gi_view_draw_legend_bar(rgb, W, H, lg, "linear albedo", alo, ahi, gi__bar_srgb, u);
+        break;
+    }
+    default:
+        snprintf(what, sizeof what, "%u pixels see triangles %u .. %u", seen, seen ? plo : 0, seen ? phi : 0);
+        gi_view_draw_legend_key(rgb, W, H, lg, what, NULL, NULL, 0);
+        if (lg) lg->has_range = 1, lg->lo = (float)(seen ? plo : 0), lg->hi = (float)(seen ? phi : 0);
+        break;
     }
 }
 
@@ -362,6 +610,23 @@ static void gi__view_radiance(const gi_frame *f, const float *src, float exposur
     pf_jobs_parallel_for(f->jobs, gi__display_row, &c, f->height, 8);
 }
 
+void gi_view_draw_dim_final(const gi_frame *f, float exposure, uint8_t *rgb)
+{
+    gi__view_radiance(f, f->final, exposure, rgb);
+    for (size_t i = 0; i < (size_t)f->width * f->height * 3; i++) rgb[i] = (uint8_t)(rgb[i] / 2);
+}
+
+/* The legend of a radiance or irradiance buffer of `count` RGB values:
+ * their smallest and largest component, through the display transform. */
+static void gi__radiance_legend(const gi_frame *f, const float *src, size_t count, float exposure, uint8_t *rgb,
+                                gi_view_legend *lg, const char *what)
+{
+    float u[3] = {INFINITY, -INFINITY, exp2f(exposure)};
+    for (size_t i = 0; i < 3 * count; i++) u[0] = fminf(u[0], src[i]), u[1] = fmaxf(u[1], src[i]);
+    if (!(u[0] <= u[1])) u[0] = u[1] = 0.0f;
+    gi_view_draw_legend_bar(rgb, f->width, f->height, lg, what, u[0], u[1], gi_view_bar_display, u);
+}
+
 /* A buffer of the indirect image (w x h; the frame's size unless
  * --indirect-scale > 1, then each of its pixels drawn as a scale x scale
  * block: frame pixel (x, y) shows gi_indirect_pixel). */
@@ -383,7 +648,7 @@ static void gi__view_indirect_image(const gi_frame *f, const float *src, float e
 
 /* Light 0's shadow map: one face fitted in the image, or a cube's six faces
  * as a 3 x 2 grid (+x -x +y on top, -y +z -z below). */
-static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb)
+static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb, gi_view_legend *lg)
 {
     uint32_t W = f->width, H = f->height;
     memset(rgb, 0, (size_t)W * H * 3);
@@ -392,55 +657,27 @@ static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb)
     uint32_t cell = W / cols < H / rows ? W / cols : H / rows;
     if (cell == 0) return;
     uint32_t ox = (W - cell * cols) / 2, oy = (H - cell * rows) / 2;
+    /* one scale for every face: 0 (nothing, or the far end) .. the largest
+     * stored value (reversed depth: near = large = bright) */
+    size_t texels = (size_t)m->size * m->size;
+    float zmax = 0.0f;
     for (uint32_t face = 0; face < m->face_count && face < 6; face++) {
         const float *d = rs_shadow_map_face(m, face);
-        size_t texels = (size_t)m->size * m->size;
-        float zmax = 0.0f;
         for (size_t i = 0; i < texels; i++) zmax = fmaxf(zmax, d[i]);
+    }
+    for (uint32_t face = 0; face < m->face_count && face < 6; face++) {
+        const float *d = rs_shadow_map_face(m, face);
         uint32_t cx = ox + (face % cols) * cell, cy = oy + (face / cols) * cell;
         for (uint32_t y = 0; y < cell; y++)
             for (uint32_t x = 0; x < cell; x++) {
                 uint32_t tx = (uint32_t)((uint64_t)x * m->size / cell), ty = (uint32_t)((uint64_t)y * m->size / cell);
                 float v = zmax > 0.0f ? d[(size_t)ty * m->size + tx] / zmax : 0.0f; /* reversed depth: near = 1 */
                 uint8_t *o = rgb + 3 * ((size_t)(cy + y) * W + cx + x);
-                o[0] = o[1] = o[2] = gi__unit(v);
+                o[0] = o[1] = o[2] = gi_view_draw_unit(v);
             }
         if (m->face_count == 6) gi__box(rgb, W, H, (int)(cx + cell / 2), (int)(cy + cell / 2), (int)cell / 2, 90, 90, 160);
     }
-}
-
-/* Projects world point p with the frame's camera; 0 if behind it. */
-static int gi__project(const gi_frame *f, const rs_mat4 *vp, pf_vec3 p, int *px, int *py)
-{
-    float c[4];
-    rs_mat4_transform(vp, p, c);
-    if (!(c[3] > 0.0f)) return 0;
-    float x = (c[0] / c[3] * 0.5f + 0.5f) * (float)f->width, y = (0.5f - c[1] / c[3] * 0.5f) * (float)f->height;
-    if (!(fabsf(x) < 1e6f && fabsf(y) < 1e6f)) return 0;
-    *px = (int)floorf(x), *py = (int)floorf(y);
-    return 1;
-}
-
-/* The VPLs as 3x3 points over the final image, coloured by intensity; the
- * chosen VPL in a white box. */
-static void gi__view_vpls(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb)
-{
-    uint32_t W = f->width, H = f->height;
-    gi__view_radiance(f, f->final, s->exposure, rgb);
-    for (size_t i = 0; i < (size_t)W * H * 3; i++) rgb[i] = (uint8_t)(rgb[i] / 2); /* dim the image under the dots */
-    rs_mat4 vp = rs_mat4_camera(&f->camera, W, H);
-    const gi_vpl_set *set = &f->ind.vpls;
-    float maxl = gi__max_lum(set);
-    for (uint32_t k = 0; k < set->count; k++) {
-        int px, py;
-        if (!gi__project(f, &vp, set->v[k].pos, &px, &py)) continue;
-        uint8_t c[3];
-        gi__vpl_colour(set, maxl, k, c);
-        gi_view_fill_rect(rgb, W, H, px - 1, py - 1, 3, 3, c[0], c[1], c[2]);
-    }
-    int px, py;
-    if (set->count && gi__project(f, &vp, set->v[s->vpl % set->count].pos, &px, &py))
-        gi__box(rgb, W, H, px, py, 4, 255, 255, 255);
+    gi_view_draw_legend_bar(rgb, W, H, lg, "reversed depth (near = 1)", 0.0f, zmax, gi_view_bar_grey, NULL);
 }
 
 /* Overhead view: the scene seen straight down (+x right, +z down),
@@ -492,7 +729,7 @@ static void gi__overhead_row(void *ctx, uint32_t y, uint32_t worker)
             pf_surface sf;
             pf_rt_surface(f->rt, &hits[k], 0.0f, &sf);
             float shade = 0.25f + 0.75f * fabsf(sf.ng.y); /* floors bright, walls seen edge-on dark */
-            for (int c = 0; c < 3; c++) p[c] = gi__unit(pf_linear_to_srgb(sf.albedo[c] * shade) * 0.8f);
+            for (int c = 0; c < 3; c++) p[c] = gi_view_draw_unit(pf_linear_to_srgb(sf.albedo[c] * shade) * 0.8f);
         }
         for (uint32_t k = 0; k < n && o->frustum; k++) /* the frustum as a green region (Hedman 2017 Fig. 3) */
             if (gi__in_frustum(o, rays[k].org.x, rays[k].org.z)) {
@@ -509,7 +746,7 @@ static void gi__overhead_point(const gi__overhead *o, pf_vec3 p, int *px, int *p
     *px = (int)floorf(pf_clampf(x, -1e6f, 1e6f)), *py = (int)floorf(pf_clampf(y, -1e6f, 1e6f));
 }
 
-static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb)
+static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb, gi_view_legend *lg)
 {
     uint32_t W = f->width, H = f->height;
     const pf_scene *sc = f->scene;
@@ -552,12 +789,15 @@ static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint
     gi_view_fill_rect(rgb, W, H, ex - 2, ey - 2, 5, 5, 40, 255, 40);
     /* VPLs */
     const gi_vpl_set *set = &f->ind.vpls;
-    float maxl = gi__max_lum(set);
+    float lo, hi;
+    gi_view_vpl_range(set, &lo, &hi);
     for (uint32_t k = 0; k < set->count; k++) {
         int px, py;
         uint8_t c[3];
+        float l = pf_luminance(set->v[k].intensity);
+        if (!(l > 0.0f)) continue; /* an empty slot */
         gi__overhead_point(&o, set->v[k].pos, &px, &py);
-        gi__vpl_colour(set, maxl, k, c);
+        gi_view_vpl_colour(l, lo, hi, c);
         gi_view_fill_rect(rgb, W, H, px - 1, py - 1, 3, 3, c[0], c[1], c[2]);
     }
     if (set->count) {
@@ -578,11 +818,12 @@ static void gi__view_overhead(const gi_frame *f, const gi_view_settings *s, uint
             gi__line(rgb, W, H, px, py, ax, ay, 255, 230, 0);
         }
     }
+    gi_view_draw_legend_bar(rgb, W, H, lg, "VPL luminance (W/sr)", lo, hi, gi_view_bar_heat_sqrt, NULL);
 }
 
 /* The chosen VPL's paraboloid map (R x R codes) fitted in the image:
  * near = bright, nothing hit = dark blue, outside the disc = black. */
-static void gi__view_vpl_map(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb)
+static void gi__view_vpl_map(const gi_frame *f, const gi_view_settings *s, uint8_t *rgb, gi_view_legend *lg)
 {
     uint32_t W = f->width, H = f->height;
     memset(rgb, 0, (size_t)W * H * 3);
@@ -592,20 +833,41 @@ static void gi__view_vpl_map(const gi_frame *f, const gi_view_settings *s, uint8
     const uint16_t *map = ind->atlas + (size_t)k * R * R;
     uint32_t side = W < H ? W : H;
     uint32_t ox = (W - side) / 2, oy = (H - side) / 2;
+    float lo, hi;
+    gi_view_para_range(map, R, ind->range, &lo, &hi);
     for (uint32_t y = 0; y < side; y++)
         for (uint32_t x = 0; x < side; x++) {
             uint32_t i = (uint32_t)((uint64_t)x * R / side), j = (uint32_t)((uint64_t)y * R / side);
-            uint16_t code = map[(size_t)j * R + i];
             uint8_t *o = rgb + 3 * ((size_t)(oy + y) * W + ox + x);
-            if (code == RS_PARA_OUTSIDE) continue;
-            if (code == RS_PARA_EMPTY) {
-                o[0] = 20, o[1] = 20, o[2] = 80;
-                continue;
-            }
-            float d = rs_para_decode(code, ind->range);
-            o[0] = o[1] = o[2] = gi__unit(1.0f - d / ind->range);
+            gi_view_para_texel(map[(size_t)j * R + i], ind->range, lo, hi, o);
         }
     gi__box(rgb, W, H, (int)(ox + side / 2), (int)(oy + side / 2), (int)side / 2, 255, 255, 255);
+    gi_view_draw_legend_bar(rgb, W, H, lg, "distance from the VPL", lo, hi, gi_view_bar_grey_rev, NULL);
+}
+
+void gi_view_para_range(const uint16_t *map, uint32_t R, float range, float *lo, float *hi)
+{
+    *lo = INFINITY, *hi = -INFINITY;
+    for (size_t i = 0; i < (size_t)R * R; i++) {
+        if (map[i] == RS_PARA_OUTSIDE || map[i] == RS_PARA_EMPTY) continue;
+        float d = rs_para_decode(map[i], range);
+        *lo = fminf(*lo, d), *hi = fmaxf(*hi, d);
+    }
+    if (!(*lo <= *hi)) *lo = *hi = 0.0f;
+}
+
+void gi_view_para_texel(uint16_t code, float range, float lo, float hi, uint8_t o[3])
+{
+    if (code == RS_PARA_OUTSIDE) {
+        o[0] = o[1] = o[2] = 0;
+        return;
+    }
+    if (code == RS_PARA_EMPTY) {
+        o[0] = 20, o[1] = 20, o[2] = 80;
+        return;
+    }
+    float d = rs_para_decode(code, range);
+    o[0] = o[1] = o[2] = gi_view_draw_unit(hi > lo ? 1.0f - (d - lo) / (hi - lo) : 1.0f);
 }
 
 /* The mosaic's layout: tile (i, j) drawn at (i w0, j h0), w0 x h0 being
@@ -631,7 +893,7 @@ size_t gi_view_mosaic_index(const gi_frame *f, uint32_t u, uint32_t v)
 /* A split-layout buffer (3 floats a texel) as the n x m mosaic of tiles
  * (gi_view_mosaic_index). Unit data (normals) is remapped from [-1, 1];
  * irradiance goes through the display transform. */
-static void gi__view_mosaic(const gi_frame *f, int normals, float exposure, uint8_t *rgb)
+static void gi__view_mosaic(const gi_frame *f, int normals, float exposure, uint8_t *rgb, gi_view_legend *lg)
 {
     const gi_indirect *ind = &f->ind;
     uint32_t W = f->width, H = f->height;
@@ -644,27 +906,43 @@ static void gi__view_mosaic(const gi_frame *f, int normals, float exposure, uint
             uint8_t *o = rgb + 3 * ((size_t)y * W + x);
             if (normals) {
                 int valid = ind->split_valid[k] != 0;
-                o[0] = valid ? gi__unit(0.5f + 0.5f * ind->split_nx[k]) : 0;
-                o[1] = valid ? gi__unit(0.5f + 0.5f * ind->split_ny[k]) : 0;
-                o[2] = valid ? gi__unit(0.5f + 0.5f * ind->split_nz[k]) : 0;
+                o[0] = valid ? gi_view_draw_unit(0.5f + 0.5f * ind->split_nx[k]) : 0;
+                o[1] = valid ? gi_view_draw_unit(0.5f + 0.5f * ind->split_ny[k]) : 0;
+                o[2] = valid ? gi_view_draw_unit(0.5f + 0.5f * ind->split_nz[k]) : 0;
             } else {
                 for (int c = 0; c < 3; c++) o[c] = pf_imageio_display(ind->split_e[3 * k + c], scale);
             }
         }
+    if (normals) {
+        const char *names[3] = {"R = x", "G = y", "B = z"};
+        const uint8_t cols[3][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}};
+        gi_view_draw_legend_key(rgb, W, H, lg, "split normal, -1 .. 1", names, cols, 3);
+    } else {
+        gi__radiance_legend(f, ind->split_e, (size_t)ind->w * ind->h, exposure, rgb, lg, "tile irradiance (W/m2)");
+    }
 }
 
-int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_in, uint8_t *rgb)
+int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s, uint8_t *rgb)
+{
+    return gi_view_render_legend(f, id, s, rgb, NULL);
+}
+
+int gi_view_render_legend(const gi_frame *f, gi_view_id id, const gi_view_settings *s_in, uint8_t *rgb,
+                          gi_view_legend *lg)
 {
     gi_view_settings s;
     memset(&s, 0, sizeof s);
     if (s_in) s = *s_in;
+    if (lg) memset(lg, 0, sizeof *lg);
     uint32_t W = f->width, H = f->height;
     if (!gi_view_available(f, id)) {
         gi__unavailable(rgb, W, H,
                         id == GI_VIEW_SHADOW_MAP ? "no shadow map (ray-traced frame, no lights or --indirect-only)"
                         : id == GI_VIEW_DIRECT   ? "no direct light (--indirect-only)"
-                        : id == GI_VIEW_VPL_MAP  ? "no paraboloid maps (--visibility raytrace, no VPLs or --direct-only)"
-                                                 : "no indirect light (--direct-only)");
+                        : id == GI_VIEW_VPL_MAP || id == GI_VIEW_VPL_ATLAS
+                            ? "no paraboloid maps (--visibility raytrace, no VPLs or --direct-only)"
+                        : id == GI_VIEW_METHOD ? "this VPL method has no view of its own"
+                                               : "no indirect light (--direct-only)");
         return 0;
     }
     switch (id) {
@@ -672,29 +950,42 @@ int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s_i
     case GI_VIEW_POSITION:
     case GI_VIEW_NORMAL:
     case GI_VIEW_ALBEDO:
-    case GI_VIEW_PRIM: gi__view_gbuffer(f, id, rgb); break;
-    case GI_VIEW_SHADOW_MAP: gi__view_shadow_map(f, rgb); break;
-    case GI_VIEW_DIRECT: gi__view_radiance(f, f->direct, s.exposure, rgb); break;
-    case GI_VIEW_VPLS: gi__view_vpls(f, &s, rgb); break;
-    case GI_VIEW_VPL_OVERHEAD: gi__view_overhead(f, &s, rgb); break;
-    case GI_VIEW_VPL_MAP: gi__view_vpl_map(f, &s, rgb); break;
-    case GI_VIEW_SPLIT: gi__view_mosaic(f, 1, s.exposure, rgb); break;
-    case GI_VIEW_ACCUMULATED: gi__view_mosaic(f, 0, s.exposure, rgb); break;
-    case GI_VIEW_COMBINED: gi__view_indirect_image(f, f->ind.combined, s.exposure, rgb); break;
-    case GI_VIEW_FILTERED: gi__view_radiance(f, f->ind.filtered, s.exposure, rgb); break;
-    default: gi__view_radiance(f, f->final, s.exposure, rgb); break;
+    case GI_VIEW_PRIM: gi__view_gbuffer(f, id, rgb, lg); break;
+    case GI_VIEW_SHADOW_MAP: gi__view_shadow_map(f, rgb, lg); break;
+    case GI_VIEW_DIRECT:
+        gi__view_radiance(f, f->direct, s.exposure, rgb);
+        gi__radiance_legend(f, f->direct, (size_t)W * H, s.exposure, rgb, lg, "direct radiance");
+        break;
+    case GI_VIEW_VPL_OVERHEAD: gi__view_overhead(f, &s, rgb, lg); break;
+    case GI_VIEW_VPL_MAP: gi__view_vpl_map(f, &s, rgb, lg); break;
+    case GI_VIEW_SPLIT: gi__view_mosaic(f, 1, s.exposure, rgb, lg); break;
+    case GI_VIEW_ACCUMULATED: gi__view_mosaic(f, 0, s.exposure, rgb, lg); break;
+    case GI_VIEW_COMBINED:
+        gi__view_indirect_image(f, f->ind.combined, s.exposure, rgb);
+        gi__radiance_legend(f, f->ind.combined, (size_t)f->ind.w * f->ind.h, s.exposure, rgb, lg,
+                            "irradiance (W/m2)");
+        break;
+    case GI_VIEW_FILTERED:
+        gi__view_radiance(f, f->ind.filtered, s.exposure, rgb);
+        gi__radiance_legend(f, f->ind.filtered, (size_t)W * H, s.exposure, rgb, lg, "filtered irradiance (W/m2)");
+        break;
+    case GI_VIEW_FINAL: gi__view_radiance(f, f->final, s.exposure, rgb); break; /* the render's PNG: no legend */
+    default: return gi_view_learn_render(f, id, &s, rgb, lg);
     }
     return 1;
 }
 
 /* ------------------------------------------------------------ pixels of a view */
 
-static int gi__mosaic_view(gi_view_id id) { return id == GI_VIEW_SPLIT || id == GI_VIEW_ACCUMULATED; }
+static int gi__mosaic_view(gi_view_id id)
+{
+    return id == GI_VIEW_SPLIT || id == GI_VIEW_ACCUMULATED || id == GI_VIEW_TILES;
+}
 
 static int gi__image_layout_view(gi_view_id id)
 {
     return id != GI_VIEW_SHADOW_MAP && id != GI_VIEW_VPL_OVERHEAD && id != GI_VIEW_VPL_MAP && !gi__mosaic_view(id) &&
-           (unsigned)id < GI_VIEW_COUNT;
+           id != GI_VIEW_METHOD && id != GI_VIEW_VPL_ATLAS && (unsigned)id < GI_VIEW_COUNT;
 }
 
 int gi_view_frame_pixel(const gi_frame *f, gi_view_id id, uint32_t u, uint32_t v, uint32_t *x, uint32_t *y)

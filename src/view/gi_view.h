@@ -9,10 +9,22 @@
  * the image and from above with the camera frustum (Hedman 2017 Fig. 3's
  * overhead view), one VPL's paraboloid shadow map (Sec. 4.6, Brabec 2002),
  * the split tiles, the per-tile accumulation, the combined and the filtered
- * irradiance (Sec. 5) and the final image. Every view is an RGB8 image of
- * the frame's size (maps are fitted into it, centred on black), with a
- * one-line caption (gi_view_caption) saying what the stage does and which
- * paper section it implements.
+ * irradiance (Sec. 5) and the final image. Issue 16 item 6 ("the frame
+ * taken apart", gi_view_learn.c) adds the VPLs coloured by light bounce and
+ * by "moved this frame", the VPL method's own view (gi_vpl_method.view: IR's
+ * light paths, IIR's Delaunay/Voronoi domain, SMC's candidates and kNN
+ * radii, MIR's candidates by image contribution, InvTM's and TCAS's
+ * importance map with the samples and chains, SSVP's clusters), every VPL's
+ * paraboloid map as an atlas, the tile assignment and the clamp mask of the
+ * bounded geometry term. The VPL overlays are occlusion-aware: a VPL the
+ * camera does not see (an Embree ray from the eye) is not drawn. Every view
+ * is an RGB8 image of the frame's size (maps are fitted into it, centred on
+ * black) with a legend in its bottom-right corner (gi_view_legend: what the
+ * colours stand for and the smallest and largest value they span; not on
+ * the final image, which is the render's PNG byte for byte), and a
+ * one-line caption (gi_view_caption, gi_view_describe_frame) saying what
+ * the stage does, which paper section it implements and, for the VPL
+ * views, why the frame's method chooses VPLs as it does.
  *
  * For the viewer's inspector, gi_view_frame_pixel / gi_view_view_pixel map
  * a view's pixels to the frame's and back (the identity for views in image
@@ -23,8 +35,15 @@
  * Display transforms: radiance and irradiance views go through the PNG
  * writer's transform (pf_imageio_display: 2^exposure, Reinhard, sRGB), so
  * the final view is byte for byte the PNG `softgi render` writes; data views
- * (depth, positions, normals, ...) are mapped to [0, 1] and quantised as
- * round(255 v) with no tone mapping. */
+ * are mapped to [0, 1] from their legend's range (depth: nearest white,
+ * farthest black; positions: each axis from its smallest to its largest
+ * value; normals: -1 .. 1) and quantised as round(255 v) with no tone
+ * mapping.
+ *
+ * Numbers: a view's gi_view_id is its file number in the dumps
+ * (NN-name.png); the views of issue 16 item 6 were appended (15..20), and
+ * gi_view_order gives the order the frame computes them, which the stepper
+ * and the viewer's list follow. */
 #ifndef GI_VIEW_H
 #define GI_VIEW_H
 
@@ -49,8 +68,39 @@ typedef enum gi_view_id {
     GI_VIEW_COMBINED,
     GI_VIEW_FILTERED,
     GI_VIEW_FINAL,
+    /* issue 16 item 6, "the frame taken apart" (appended: the numbers of the
+     * views above are kept; gi_view_order gives the stepper's order, by
+     * stage) */
+    GI_VIEW_VPL_BOUNCE,   /* the VPLs the camera sees, coloured by light bounce */
+    GI_VIEW_VPL_MOVED,    /* the VPLs the camera sees: moved this frame (new map) or kept */
+    GI_VIEW_METHOD,       /* the VPL method's own state (gi_vpl_method.view) */
+    GI_VIEW_VPL_ATLAS,    /* every VPL's paraboloid map, tiled */
+    GI_VIEW_TILES,        /* the tile assignment: each tile's VPLs over its mosaic tile */
+    GI_VIEW_CLAMP,        /* the clamp mask: how many of a pixel's VPLs the bound clamped */
     GI_VIEW_COUNT
 } gi_view_id;
+
+/* The views in the order the frame computes them (the stepper's N / B and
+ * the viewer's list): k = 0 .. GI_VIEW_COUNT-1 -> a view; gi_view_rank is
+ * the inverse. */
+gi_view_id gi_view_order(uint32_t k);
+uint32_t gi_view_rank(gi_view_id id);
+
+/* A view's legend: what its colours mean and the range of values they span
+ * (`lo`, `hi`: the shown buffer's minimum and maximum, over the pixels or
+ * items it shows), drawn into the picture's bottom-right corner as a colour
+ * bar or a key when the picture is large enough (GI_VIEW_LEGEND_MIN_W x
+ * _H) and recorded here either way. The final view has none: it is the
+ * render's PNG, byte for byte. */
+#define GI_VIEW_LEGEND_MIN_W 200u
+#define GI_VIEW_LEGEND_MIN_H 120u
+typedef struct gi_view_legend {
+    int present;   /* 0: the view has no legend */
+    int has_range; /* 1: lo and hi hold a numeric range (else a key only) */
+    float lo, hi;
+    char what[64];  /* what the colours stand for ("view depth") */
+    char text[160]; /* the legend's text as drawn: "view depth: 0.512 .. 3.27" or the key */
+} gi_view_legend;
 
 /* What a view depends on beyond the frame. Zero-initialised = defaults. */
 typedef struct gi_view_settings {
@@ -69,14 +119,28 @@ gi_stage_id gi_view_stage(gi_view_id id);
  * snprintf returns. */
 int gi_view_describe(gi_view_id id, char *buf, size_t n);
 /* 1 if the frame has what the view shows (the VPL views need the indirect
- * stages; the shadow-map view a rasterized frame with direct light). */
+ * stages; the paraboloid-map views exact paraboloid maps; the method view a
+ * method with a view; the shadow-map view a rasterized frame with direct
+ * light). */
 int gi_view_available(const gi_frame *f, gi_view_id id);
 
 /* Draws view `id` of the frame's last render into rgb (width * height * 3
  * bytes, top row first). Returns 0 (and draws a black image saying why) when
- * the view is not available. Uses the frame's job system for the overhead
- * view's rays; deterministic for any thread count. */
+ * the view is not available. Uses the frame's job system (the overhead
+ * view's rays, the clamp mask) and Embree (the overlays' visibility);
+ * deterministic for any thread count. */
 int gi_view_render(const gi_frame *f, gi_view_id id, const gi_view_settings *s, uint8_t *rgb);
+/* The same, also giving the legend (may be NULL). */
+int gi_view_render_legend(const gi_frame *f, gi_view_id id, const gi_view_settings *s, uint8_t *rgb,
+                          gi_view_legend *legend);
+/* The description for this frame: gi_view_describe, and for the views of
+ * the VPL update (vpls, vpl-overhead, vpl-bounce, vpl-moved, method) the
+ * frame's method with its paper and why it chooses VPLs as it does
+ * (gi_vpl_method.why). The dump's captions.txt, the EXR comments and the
+ * stepper's HUD show it. */
+int gi_view_describe_frame(const gi_frame *f, gi_view_id id, char *buf, size_t n);
+/* The frame's VPL method (Instant Radiosity when none was given). */
+const gi_vpl_method *gi_view_method(const gi_frame *f);
 
 /* Which frame pixel (x, y) view `id` draws at its pixel (u, v): the same
  * pixel for the views in image layout, the mosaic's inverse for the split

@@ -84,6 +84,7 @@
  * Parameters (--param KEY=VALUE): recalcMin (4), recalcMax (8), albedoLod
  * (4). maxLights is the VPL budget (--vpls, 256 by default). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -577,6 +578,174 @@ static pf_result gi__iir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     return gi__iir_emit(s, out, err);
 }
 
+/* ------------------------------------------------------------ the view (issue 16 item 6) */
+
+/* Where sampling point dp of a domain is drawn: the disc as itself; the
+ * sphere as two discs side by side, the upper hemisphere (z >= 0) left and
+ * the lower right, each by Lambert's azimuthal equal-area projection (equal
+ * areas stay equal, so Voronoi areas, which set the intensities, read true). */
+typedef struct gi__iir_canvas {
+    int sphere;
+    float cx[2], cy, r;
+} gi__iir_canvas;
+
+static int gi__iir_to_canvas(const gi__iir_canvas *c, const double dp[3], float *x, float *y)
+{
+    if (!c->sphere) {
+        *x = c->cx[0] + c->r * (float)dp[0], *y = c->cy - c->r * (float)dp[1];
+        return 0;
+    }
+    int lower = dp[2] < 0.0;
+    double z = fabs(dp[2]), k = 1.0 / sqrt(1.0 + z); /* |(x, y)| sqrt(2 / (1 + z)) / sqrt(2) */
+    *x = c->cx[lower] + c->r * (float)(dp[0] * k), *y = c->cy - c->r * (float)(dp[1] * k);
+    return lower;
+}
+
+/* The inverse for the pixel (x, y): 0 outside the discs. */
+static int gi__iir_from_canvas(const gi__iir_canvas *c, float x, float y, double dp[3])
+{
+    for (int h = 0; h < (c->sphere ? 2 : 1); h++) {
+        double u = (x - c->cx[h]) / c->r, v = (c->cy - y) / c->r, q = u * u + v * v;
+        if (q > 1.0) continue;
+        if (!c->sphere) {
+            dp[0] = u, dp[1] = v, dp[2] = 0.0;
+            return 1;
+        }
+        double z = 1.0 - q, k = sqrt(1.0 + z); /* inverse of the projection above */
+        dp[0] = u * k, dp[1] = v * k, dp[2] = h ? -z : z;
+        return 1;
+    }
+    return 0;
+}
+
+static double gi__iir_dist2(int sphere, const double a[3], const double b[3])
+{
+    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = sphere ? a[2] - b[2] : 0.0;
+    return d0 * d0 + d1 * d1 + d2 * d2;
+}
+
+/* Light l's sampling domain: every pixel coloured by its nearest sample
+ * (the Voronoi regions whose areas give the intensities, Sec. 4.7) in the
+ * heat colour of that VPL's intensity (an empty sample, whose ray left the
+ * scene, dark grey), the Delaunay edges whose shortest one picks the next
+ * deletion (Sec. 4.5), the samples (white; new this frame green; empty
+ * red) and the centre of the largest empty circle, where the next VPL goes
+ * (Sec. 4.6, yellow). The light is the chosen VPL's, else light 0. */
+static int gi__iir_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    const gi__iir_state *s = state;
+    if (!s || !s->ndom || !s->slot) return 0;
+    uint32_t l = 0;
+    if (c->vpls->count && c->vpl < s->budget && s->slot[c->vpl].kind != GI__EMPTY) l = s->slot[c->vpl].light;
+    const gi__domain *d = &s->dom[l];
+    const gi_dt *dt = &d->dt;
+    const int sphere = dt->domain == GI_DT_SPHERE;
+    gi__iir_canvas cv;
+    cv.sphere = sphere;
+    float side = sphere ? fminf(0.5f * (float)c->width, (float)c->height) : fminf((float)c->width, (float)c->height);
+    cv.r = 0.45f * side;
+    cv.cy = 0.5f * (float)c->height;
+    cv.cx[0] = sphere ? 0.25f * (float)c->width : 0.5f * (float)c->width;
+    cv.cx[1] = 0.75f * (float)c->width;
+    /* the samples of this domain and their luminance range */
+    uint32_t n = 0, fresh = 0, empty = 0;
+    float lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = 0; i < s->budget; i++) {
+        const gi__slot *q = &s->slot[i];
+        if (q->kind == GI__EMPTY || q->light != l || !dt->present[i]) continue;
+        n++, fresh += q->born, empty += q->kind == GI__MISS;
+        if (q->kind != GI__VPL) continue;
+        float y = pf_luminance(q->intensity);
+        lo = fminf(lo, y), hi = fmaxf(hi, y);
+    }
+    if (!(lo <= hi)) lo = hi = 0.0f;
+    if (!n) return 0;
+    /* Voronoi regions: the nearest present sample per pixel (ties: the
+     * lower slot), by brute force */
+    for (uint32_t y = 0; y < c->height; y++)
+        for (uint32_t x = 0; x < c->width; x++) {
+            double dp[3];
+            uint8_t *o = rgb + 3 * ((size_t)y * c->width + x);
+            if (!gi__iir_from_canvas(&cv, (float)x + 0.5f, (float)y + 0.5f, dp)) {
+                o[0] = o[1] = o[2] = 0;
+                continue;
+            }
+            uint32_t best = UINT32_MAX;
+            double bd = INFINITY;
+            for (uint32_t i = 0; i < s->budget; i++) {
+                if (s->slot[i].kind == GI__EMPTY || s->slot[i].light != l || !dt->present[i]) continue;
+                double e = gi__iir_dist2(sphere, dp, dt->p[i]);
+                if (e < bd) bd = e, best = i;
+            }
+            const gi__slot *q = &s->slot[best];
+            if (q->kind != GI__VPL) {
+                o[0] = o[1] = o[2] = 45;
+                continue;
+            }
+            float t = hi > lo ? (pf_luminance(q->intensity) - lo) / (hi - lo) : 1.0f;
+            c->heat(sqrtf(t), o);
+            o[0] = (uint8_t)(o[0] * 3 / 4), o[1] = (uint8_t)(o[1] * 3 / 4), o[2] = (uint8_t)(o[2] * 3 / 4);
+        }
+    /* Delaunay edges (each drawn from both sides: the same pixels) */
+    static const uint8_t edge[3] = {200, 200, 210};
+    for (uint32_t t = 0; t < dt->tri_count; t++) {
+        const gi_dt_tri *T = &dt->tri[t];
+        if (!T->alive) continue;
+        for (int e = 0; e < 3; e++) {
+            uint32_t a = T->v[e], b = T->v[(e + 1) % 3];
+            if (a == GI_DT_INF || b == GI_DT_INF) continue;
+            /* the arc in 8 pieces (a straight line on the disc) */
+            for (int k = 0; k < (sphere ? 8 : 1); k++) {
+                double p0[3], p1[3];
+                for (int j = 0; j < 3; j++) {
+                    p0[j] = dt->p[a][j] + (dt->p[b][j] - dt->p[a][j]) * k / (sphere ? 8.0 : 1.0);
+                    p1[j] = dt->p[a][j] + (dt->p[b][j] - dt->p[a][j]) * (k + 1) / (sphere ? 8.0 : 1.0);
+                }
+                if (sphere) {
+                    double n0 = sqrt(p0[0] * p0[0] + p0[1] * p0[1] + p0[2] * p0[2]);
+                    double n1 = sqrt(p1[0] * p1[0] + p1[1] * p1[1] + p1[2] * p1[2]);
+                    if (!(n0 > 0.0 && n1 > 0.0)) continue;
+                    for (int j = 0; j < 3; j++) p0[j] /= n0, p1[j] /= n1;
+                }
+                float x0, y0, x1, y1;
+                if (gi__iir_to_canvas(&cv, p0, &x0, &y0) != gi__iir_to_canvas(&cv, p1, &x1, &y1)) continue;
+                c->line(c, rgb, (int)floorf(x0), (int)floorf(y0), (int)floorf(x1), (int)floorf(y1), edge);
+            }
+        }
+    }
+    /* the samples */
+    static const uint8_t white[3] = {255, 255, 255}, green[3] = {60, 240, 60}, red[3] = {240, 60, 60},
+                         yellow[3] = {255, 230, 0};
+    for (uint32_t i = 0; i < s->budget; i++) {
+        const gi__slot *q = &s->slot[i];
+        if (q->kind == GI__EMPTY || q->light != l || !dt->present[i]) continue;
+        float x, y;
+        gi__iir_to_canvas(&cv, dt->p[i], &x, &y);
+        const uint8_t *col = q->kind == GI__MISS ? red : q->born ? green : white;
+        c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, col);
+    }
+    /* the largest empty circle: where Sec. 4.6 puts the next VPL */
+    double centre[3];
+    gi_dt_largest_empty(dt, centre, NULL);
+    float ex, ey;
+    gi__iir_to_canvas(&cv, centre, &ex, &ey);
+    c->line(c, rgb, (int)ex - 5, (int)ey, (int)ex + 5, (int)ey, yellow);
+    c->line(c, rgb, (int)ex, (int)ey - 5, (int)ex, (int)ey + 5, yellow);
+    char text[160];
+    snprintf(text, sizeof text, "light %u, %s: %u samples, %u new (green), %u empty (red)", l,
+             d->area ? "area lights, disc" : sphere ? "point light, sphere (upper | lower)" : "disc", n, fresh, empty);
+    c->text(c, rgb, 4, 2, text, white);
+    c->text(c, rgb, 4, 12, "Voronoi regions by intensity, Delaunay edges, next insertion (yellow)", yellow);
+    c->legend(c, rgb, "VPL luminance", lo, hi, 1);
+    return 1;
+}
+
+static uint32_t gi__iir_bounce(const void *state, const gi_vpl *v, uint32_t bounces)
+{
+    (void)state, (void)v, (void)bounces;
+    return 1; /* single bounce: first hits of rays from the lights */
+}
+
 const gi_vpl_method gi_method_iir = {
     .name = "iir",
     .paper = "Incremental Instant Radiosity (Laine 2007 Sec. 4)",
@@ -585,4 +754,12 @@ const gi_vpl_method gi_method_iir = {
     .destroy = gi__iir_destroy,
     .parts = NULL,
     .gbuffer_free = 1,
+    .why = "re-rendering a paraboloid map per VPL is the cost, so IIR keeps every VPL that is still valid and "
+           "replaces only a few a frame, where the Voronoi regions of its light's domain are sparsest (Laine 2007 "
+           "Sec. 4.2-4.6)",
+    .view_caption = "the light's sampling domain: Voronoi regions coloured by VPL intensity (their areas are the "
+                    "weights, Sec. 4.7), Delaunay edges (the shortest picks the next deletion, Sec. 4.5), the largest "
+                    "empty circle (the next VPL, Sec. 4.6)",
+    .view = gi__iir_view,
+    .bounce = gi__iir_bounce,
 };

@@ -24,6 +24,8 @@
  * to `bounces` VPLs per path. Paths are started until the VPL budget is
  * filled, and every intensity is divided by the number of paths started
  * (survey Sec. 4.1, last step). VPL ids are path * bounces + k. */
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -103,6 +105,66 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     return PF_OK;
 }
 
+/* The light paths over the image (issue 16 item 6): each VPL the camera
+ * sees as a dot in its bounce's colour, and every path segment between two
+ * VPLs of one path (ids path * B + k and + k + 1, consecutive in the set)
+ * as a line, so the random walks of Keller 1997 can be followed; segments
+ * with an end behind the camera are left out. */
+static int gi__ir_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    (void)state;
+    const gi_vpl_set *set = c->vpls;
+    const uint32_t B = c->bounces ? c->bounces : 3;
+    if (!set->count) return 0;
+    c->background(c, rgb);
+    uint32_t paths = 0, seen = 0;
+    for (uint32_t i = 0; i < set->count; i++) {
+        const gi_vpl *v = &set->v[i];
+        float x0, y0, x1, y1;
+        uint8_t col[3];
+        paths += v->id % B == 0;
+        if (i > 0 && v->id % B != 0 && set->v[i - 1].id + 1 == v->id && c->project(c, set->v[i - 1].pos, &x0, &y0) &&
+            c->project(c, v->pos, &x1, &y1)) {
+            c->palette(v->id % B, col);
+            col[0] = (uint8_t)(col[0] / 2), col[1] = (uint8_t)(col[1] / 2), col[2] = (uint8_t)(col[2] / 2);
+            c->line(c, rgb, (int)floorf(x0), (int)floorf(y0), (int)floorf(x1), (int)floorf(y1), col);
+        }
+    }
+    for (uint32_t i = 0; i < set->count; i++) {
+        const gi_vpl *v = &set->v[i];
+        float x, y;
+        uint8_t col[3];
+        if (!c->project(c, v->pos, &x, &y) || !c->visible(c, v->pos)) continue;
+        c->palette(v->id % B, col);
+        c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, col);
+        seen++;
+    }
+    char text[128];
+    static const uint8_t white[3] = {255, 255, 255};
+    snprintf(text, sizeof text, "%u VPLs on %u light paths (%u seen); lines: the walks, colour: bounce", set->count,
+             paths, seen);
+    c->text(c, rgb, 4, 2, text, white);
+    char names[4][24];
+    const char *np[4];
+    uint8_t cols[4][3];
+    uint32_t nk = B < 4 ? B : 4;
+    for (uint32_t k = 0; k < nk; k++) {
+        snprintf(names[k], sizeof names[k], k + 1 < nk || nk == B ? "bounce %u" : "bounce %u+", k + 1);
+        np[k] = names[k];
+        c->palette(k, cols[k]);
+    }
+    c->key(c, rgb, "light bounce", np, (const uint8_t(*)[3])cols, nk);
+    return 1;
+}
+
+/* VPL ids are path * bounces + k, k = 0 for the first hit (issue 16 item
+ * 6's bounce overlay). */
+static uint32_t gi__ir_bounce(const void *state, const gi_vpl *v, uint32_t bounces)
+{
+    (void)state;
+    return v->id % (bounces ? bounces : 3) + 1;
+}
+
 const gi_vpl_method gi_method_ir = {
     .name = "ir",
     .paper = "Instant Radiosity (Keller 1997; survey Sec. 4.1)",
@@ -111,4 +173,11 @@ const gi_vpl_method gi_method_ir = {
     .destroy = gi__ir_destroy,
     .parts = NULL,
     .gbuffer_free = 1,
+    .why = "the light's paths are the simplest unbiased way to spread flux over the scene: a VPL at every bounce "
+           "of a random walk from the lights, so the indirect light converges as VPLs are added (Keller 1997; "
+           "survey Sec. 4.1)",
+    .view_caption = "the light paths: each VPL the camera sees in its bounce's colour, the walks between the VPLs "
+                    "of one path as lines",
+    .view = gi__ir_view,
+    .bounce = gi__ir_bounce,
 };

@@ -64,6 +64,7 @@
  * parallel loops whose items write disjoint slots, reduced in index order
  * afterwards. Random numbers hash stable ids only. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -429,6 +430,47 @@ static pf_result gi__mir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     return PF_OK;
 }
 
+/* ------------------------------------------------------------ the view (issue 16 item 6) */
+
+/* Steps 1-4 over the image: the camera points (grey), the candidates the
+ * camera sees, in heat colours by their image-contribution estimate g
+ * (step 3; those the camera does not see are left out), and the VPLs the
+ * resampling kept (white boxes). */
+static int gi__mir_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    const gi__mir_state *s = state;
+    if (!s || !s->count || !s->g) return 0;
+    static const uint8_t grey[3] = {150, 150, 150}, white[3] = {255, 255, 255};
+    c->background(c, rgb);
+    float x, y, lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = 0; i < s->pcount; i++)
+        if (c->project(c, s->xp[i], &x, &y)) c->fill(c, rgb, (int)floorf(x), (int)floorf(y), 1, 1, grey);
+    for (uint32_t i = 0; i < s->count; i++) lo = fminf(lo, s->g[i]), hi = fmaxf(hi, s->g[i]);
+    if (!(lo <= hi)) lo = hi = 0.0f;
+    uint32_t seen = 0;
+    for (uint32_t i = 0; i < s->count; i++) {
+        if (!c->project(c, s->cand[i].pos, &x, &y) || !c->visible(c, s->cand[i].pos)) continue;
+        uint8_t col[3];
+        c->heat(hi > lo ? sqrtf((s->g[i] - lo) / (hi - lo)) : 1.0f, col);
+        c->fill(c, rgb, (int)floorf(x), (int)floorf(y), 1, 1, col);
+        seen++;
+    }
+    for (uint32_t i = 0; i < c->vpls->count; i++) {
+        const gi_vpl *v = &c->vpls->v[i];
+        if (!c->project(c, v->pos, &x, &y) || !c->visible(c, v->pos)) continue;
+        c->line(c, rgb, (int)floorf(x) - 2, (int)floorf(y) - 2, (int)floorf(x) + 2, (int)floorf(y) - 2, white);
+        c->line(c, rgb, (int)floorf(x) - 2, (int)floorf(y) + 2, (int)floorf(x) + 2, (int)floorf(y) + 2, white);
+        c->line(c, rgb, (int)floorf(x) - 2, (int)floorf(y) - 2, (int)floorf(x) - 2, (int)floorf(y) + 2, white);
+        c->line(c, rgb, (int)floorf(x) + 2, (int)floorf(y) - 2, (int)floorf(x) + 2, (int)floorf(y) + 2, white);
+    }
+    char text[128];
+    snprintf(text, sizeof text, "%u camera points (grey), %u candidates (%u seen), %u VPLs kept (white)", s->pcount,
+             s->count, seen, c->vpls->count);
+    c->text(c, rgb, 4, 2, text, white);
+    c->legend(c, rgb, "image contribution g", lo, hi, 1);
+    return 1;
+}
+
 const gi_vpl_method gi_method_mir = {
     .name = "mir",
     .paper = "MIR-style resampled light paths (Hedman 2017 Sec. 5.1)",
@@ -436,4 +478,9 @@ const gi_vpl_method gi_method_mir = {
     .update = gi__mir_update,
     .destroy = gi__mir_destroy,
     .parts = NULL,
+    .view_caption = "the camera points (grey), the light-path candidates by their estimated image contribution "
+                    "(heat) and the VPLs the 256:1 resampling kept (white boxes)",
+    .view = gi__mir_view,
+    .why = "most light paths from the lights end where the camera never looks, so MIR traces many and keeps the "
+           "ones that contribute most to the image, resampled 256:1 (Hedman 2017 Sec. 5.1's baseline)",
 };

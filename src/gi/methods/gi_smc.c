@@ -121,6 +121,7 @@
  *                  cell's area (point)
  *   photons=16     light paths per VPL for flux=photons */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -1153,6 +1154,82 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 
 static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc_state *)state)->parts; }
 
+/* ---------------------------------------------------------------- the view (issue 16 item 6) */
+
+/* A circle of radius r around p in the plane of normal n, projected. */
+static void gi__smc_view_circle(const gi_vpl_view_ctx *c, uint8_t *rgb, pf_vec3 p, pf_vec3 n, float r,
+                                const uint8_t col[3])
+{
+    pf_vec3 t, b;
+    pf_v3_basis(n, &t, &b);
+    float px = 0.0f, py = 0.0f;
+    int have = 0;
+    for (int k = 0; k <= 24; k++) {
+        float a = 2.0f * PF_PI * (float)k / 24.0f, x, y;
+        pf_vec3 q = pf_v3_add(p, pf_v3_add(pf_v3_scale(t, r * cosf(a)), pf_v3_scale(b, r * sinf(a))));
+        int ok = c->project(c, q, &x, &y);
+        if (ok && have) c->line(c, rgb, (int)floorf(px), (int)floorf(py), (int)floorf(x), (int)floorf(y), col);
+        have = ok, px = x, py = y;
+    }
+}
+
+/* The last iteration of Algorithm 1 over the image: the directly visible
+ * points X of line 3 (grey), the candidates that line 6 resampled (cyan),
+ * and the VPLs of Y the camera sees, coloured by the intensity lines 9-17
+ * rank them by (Eq. 6, L / p) with the disc of their kNN radius r_k (Eq. 7:
+ * p = k / (I pi r_k^2)) in their tangent plane: green when new in the last
+ * update, red when the visibility test of line 4 failed, grey otherwise. */
+static int gi__smc_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    const gi__smc_state *s = state;
+    if (!s || !s->I || !s->y) return 0;
+    static const uint8_t grey[3] = {150, 150, 150}, cyan[3] = {40, 220, 230}, green[3] = {60, 240, 60},
+                         red[3] = {240, 60, 60}, white[3] = {255, 255, 255};
+    c->background(c, rgb);
+    float x, y;
+    for (uint32_t i = 0; i < s->x_count; i++)
+        if (c->project(c, s->x[i].p, &x, &y)) c->fill(c, rgb, (int)floorf(x), (int)floorf(y), 1, 1, grey);
+    uint32_t cand_seen = 0;
+    for (uint32_t i = 0; i < s->cand_count; i++) {
+        const gi__smc_cand *C = &s->raw[s->cand[i]];
+        if (!c->project(c, C->pos, &x, &y) || !c->visible(c, C->pos)) continue;
+        c->fill(c, rgb, (int)floorf(x), (int)floorf(y), 2, 2, cyan);
+        cand_seen++;
+    }
+    float lo = INFINITY, hi = -INFINITY;
+    uint32_t alive = 0, fresh = 0, invalid = 0;
+    for (uint32_t i = 0; i < s->I; i++) {
+        const gi__smc_vpl *v = &s->y[i];
+        if (!v->alive || !isfinite(v->intensity)) continue;
+        lo = fminf(lo, v->intensity), hi = fmaxf(hi, v->intensity);
+    }
+    if (!(lo <= hi)) lo = hi = 0.0f;
+    const uint32_t k = s->prm.k ? s->prm.k : gi__smc_render_k(s->I);
+    const uint32_t last = s->updates ? s->updates - 1 : 0;
+    for (uint32_t i = 0; i < s->I; i++) {
+        const gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        alive++, fresh += v->born == last, invalid += !v->valid;
+        if (!c->project(c, v->pos, &x, &y) || !c->visible(c, v->pos)) continue;
+        if (v->density > 0.0f && isfinite(v->density)) {
+            float r = sqrtf((float)k / ((float)s->I * PF_PI * v->density));
+            gi__smc_view_circle(c, rgb, v->pos, v->ng, r, !v->valid ? red : v->born == last ? green : grey);
+        }
+        uint8_t col[3];
+        float t = hi > lo && isfinite(v->intensity) ? (v->intensity - lo) / (hi - lo) : 1.0f;
+        c->heat(sqrtf(t), col);
+        c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, col);
+    }
+    char text[160];
+    snprintf(text, sizeof text, "X: %u points (grey), %u candidates (cyan, %u seen), Y: %u VPLs, %u new, %u invalid",
+             s->x_count, s->cand_count, cand_seen, alive, fresh, invalid);
+    c->text(c, rgb, 4, 2, text, white);
+    snprintf(text, sizeof text, "circles: kNN radius r_k, k = %u (Eq. 7)", k);
+    c->text(c, rgb, 4, 12, text, white);
+    c->legend(c, rgb, "Eq. 6 intensity L / p", lo, hi, 1);
+    return 1;
+}
+
 const gi_vpl_method gi_method_smc = {
     .name = "smc",
     .paper = "Sequential Monte Carlo Instant Radiosity (Hedman 2017 Sec. 3, Algorithm 1)",
@@ -1160,4 +1237,10 @@ const gi_vpl_method gi_method_smc = {
     .update = gi__smc_update,
     .destroy = gi__smc_destroy,
     .parts = gi__smc_parts,
+    .why = "only VPLs that light what the camera sees matter, so SMC samples candidates from the camera's points, "
+           "keeps the strong ones and replaces at most Mmax a frame where VPLs are sparse or invisible (Hedman 2017 "
+           "Sec. 3, Algorithm 1)",
+    .view_caption = "the last iteration: visible points X (grey), resampled candidates (cyan), the VPLs by Eq. 6 "
+                    "intensity with their kNN radius (Eq. 7; green new, red failed visibility)",
+    .view = gi__smc_view,
 };

@@ -100,6 +100,7 @@
  * 0x80000000 | cluster << 16 | sample. Moved flags compare with the previous
  * frame's VPL in the same slot (as gi_ir.c). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -484,6 +485,74 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     return PF_OK;
 }
 
+/* ------------------------------------------------------------- the view (issue 16 item 6) */
+
+/* The clusters of III-B over the image: each first-bounce VPL the camera
+ * sees in its cluster's colour (3x3), each centroid as a cross with its
+ * normal (the point its paraboloid RSM of III-C is rendered from), and the
+ * second-bounce VPLs made from that cluster's map as single dots of the
+ * same colour. */
+static int gi__ssvp_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    const gi__ssvp_state *s = state;
+    if (!s || !s->have_centroids || !s->fpos) return 0;
+    static const uint8_t white[3] = {255, 255, 255};
+    c->background(c, rgb);
+    uint32_t nf = 0, nonempty = 0;
+    for (uint32_t k = 0; k < s->clusters; k++) nf += s->members[k], nonempty += s->members[k] > 0;
+    float x, y;
+    uint8_t col[3];
+    for (uint32_t i = 0; i < nf && i < s->first; i++) {
+        if (!c->project(c, s->fpos[i], &x, &y) || !c->visible(c, s->fpos[i])) continue;
+        c->palette(s->assign[i], col);
+        c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, col);
+    }
+    uint32_t second = 0;
+    for (uint32_t i = 0; i < c->vpls->count; i++) {
+        const gi_vpl *v = &c->vpls->v[i];
+        if (!(v->id & 0x80000000u)) continue;
+        second++;
+        if (!c->project(c, v->pos, &x, &y) || !c->visible(c, v->pos)) continue;
+        c->palette((v->id >> 16) & 0x7fffu, col);
+        c->fill(c, rgb, (int)floorf(x), (int)floorf(y), 1, 1, col);
+    }
+    float diag = pf_v3_length(pf_v3_sub(c->scene->bounds_max, c->scene->bounds_min));
+    for (uint32_t k = 0; k < s->clusters; k++) {
+        if (!s->members[k] || !c->project(c, s->cpos[k], &x, &y)) continue;
+        float nx, ny;
+        c->palette(k, col);
+        c->line(c, rgb, (int)floorf(x) - 6, (int)floorf(y), (int)floorf(x) + 6, (int)floorf(y), white);
+        c->line(c, rgb, (int)floorf(x), (int)floorf(y) - 6, (int)floorf(x), (int)floorf(y) + 6, white);
+        c->fill(c, rgb, (int)floorf(x) - 2, (int)floorf(y) - 2, 5, 5, col);
+        if (c->project(c, pf_v3_add(s->cpos[k], pf_v3_scale(s->cnrm[k], 0.05f * diag)), &nx, &ny))
+            c->line(c, rgb, (int)floorf(x), (int)floorf(y), (int)floorf(nx), (int)floorf(ny), col);
+    }
+    char text[160];
+    snprintf(text, sizeof text, "%u first-bounce VPLs in %u clusters (k-means, %u iterations), %u second-bounce VPLs",
+             nf, nonempty, s->last_iterations, second);
+    c->text(c, rgb, 4, 2, text, white);
+    c->text(c, rgb, 4, 12, "crosses: centroids and normals (one paraboloid RSM each, III-C)", white);
+    /* the key: the clusters' colours and sizes (the first 8) */
+    char names[8][32];
+    const char *np[8];
+    uint8_t cols[8][3];
+    uint32_t nk = 0;
+    for (uint32_t k = 0; k < s->clusters && nk < 8; k++) {
+        if (!s->members[k]) continue;
+        snprintf(names[nk], sizeof names[nk], "cluster %u: %u VPLs", k, s->members[k]);
+        np[nk] = names[nk];
+        c->palette(k, cols[nk++]);
+    }
+    c->key(c, rgb, "k-means clusters (Eq. 2)", np, (const uint8_t(*)[3])cols, nk);
+    return 1;
+}
+
+static uint32_t gi__ssvp_bounce(const void *state, const gi_vpl *v, uint32_t bounces)
+{
+    (void)state, (void)bounces;
+    return v->id & 0x80000000u ? 2u : 1u; /* second-bounce ids carry the high bit */
+}
+
 const gi_vpl_method gi_method_ssvp = {
     .name = "ssvp",
     .paper = "Screen-space VPL propagation, two bounces (Aranha, Sec. III)",
@@ -491,4 +560,10 @@ const gi_vpl_method gi_method_ssvp = {
     .update = gi__ssvp_update,
     .destroy = gi__ssvp_destroy,
     .parts = NULL,
+    .why = "a second bounce costs one map per VPL, so SSVP clusters the first-bounce VPLs (k-means, Eq. 2) and "
+           "renders one paraboloid RSM per cluster to place the second-bounce VPLs (Aranha Sec. III-B, III-C)",
+    .view_caption = "the first-bounce VPLs by cluster colour, the centroids with their normals (one RSM each) and "
+                    "the second-bounce VPLs each cluster's map gave (dots)",
+    .view = gi__ssvp_view,
+    .bounce = gi__ssvp_bounce,
 };

@@ -5,6 +5,13 @@
  *   with shared/ beside it);
  * - every kind of bad input gives its code and a message naming the place;
  * - interpolation is exact at keys and at midpoints;
+ * - "emitters": good and bad entries (every error path names its place),
+ *   the quads they add to a scene (counts, material, face normal, bounds,
+ *   "lights": [] clearing the scene's lights), the scene function's own
+ *   checks and overflow guard, and the area-light table
+ *   (gi_area_lights_build) finding the quad with its area and power and an
+ *   irradiance that matches the analytic form factor of a square, and end
+ *   to end a Cornell-box sequence lit by its emitter alone;
  * - end to end on a tiny embedded-Cornell sequence: the frame files exist,
  *   `softgi compare` reads the folder, a moving camera under a static light
  *   moves no VPL after frame 0, a moving light moves all of them, and the
@@ -20,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_area.h"
 #include "pf_sequence.h"
 #include "pf_imageio.h"
 #include "test_util.h"
@@ -73,6 +81,8 @@ static void test_shipped_files(void **state)
         {"scenes/sequences/sibenik-light.seq.json", 0, 1},
         {"scenes/sequences/conference-camera.seq.json", 1, 0},
         {"scenes/sequences/conference-light.seq.json", 0, 1},
+        {"scenes/sequences/sibenik-area.seq.json", 1, 0},
+        {"scenes/sequences/conference-area.seq.json", 1, 0},
     };
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         char path[1024];
@@ -112,6 +122,15 @@ static void test_shipped_files(void **state)
         }
         if (cam_moves != files[i].moving_camera || light_moves != files[i].moving_light)
             fail_msg("%s: camera moves %d, light moves %d", files[i].file, cam_moves, light_moves);
+        /* the area-lit ones: one emitter facing down, no punctual light */
+        if (strstr(files[i].file, "-area.")) {
+            assert_int_equal(s.emitter_count, 1);
+            assert_true(s.lights_replace && s.light_count == 0);
+            pf_vec3 n;
+            assert_int_equal(pf_scene_emitter_quad_check(s.emitters[0].quad, s.emitters[0].emission, &n, &err), PF_OK);
+            assert_true(n.y < -0.999f);
+        } else
+            assert_int_equal(s.emitter_count, 0);
         pf_sequence_free(&s);
     }
 }
@@ -280,7 +299,59 @@ static void test_bad_inputs(void **state)
          PF_ERR_PARSE, "camera[0]: unknown key 'fov'"},
         /* lights */
         {HEAD "\"lights\": {}}", PF_ERR_PARSE, "lights: expected an array, got an object"},
-        {HEAD "\"lights\": []}", PF_ERR_PARSE, "lights: is empty"},
+        {HEAD "\"lights\": []}", PF_ERR_PARSE, "lights: is empty, which means no punctual light: give \"emitters\""},
+        /* emitters (QUAD: a good unit square in y = 1 facing down) */
+#define QUAD "[[0,1,0], [1,1,0], [1,1,1], [0,1,1]]"
+        {HEAD "\"emitters\": {}}", PF_ERR_PARSE, "emitters: expected an array, got an object"},
+        {HEAD "\"emitters\": []}", PF_ERR_PARSE, "emitters: is empty"},
+        {HEAD "\"emitters\": [1]}", PF_ERR_PARSE, "emitters[0]: expected an object, got a number"},
+        {HEAD "\"emitters\": [{\"emission\": [1,1,1]}]}", PF_ERR_PARSE, "emitters[0]: missing key 'quad'"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD "}]}", PF_ERR_PARSE, "emitters[0]: missing key 'emission'"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,1,1], \"keys\": []}]}", PF_ERR_PARSE,
+         "emitters[0]: unknown key 'keys' (expected: quad, emission, two_sided)"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,1,1], \"quad\": " QUAD "}]}", PF_ERR_PARSE,
+         "emitters[0]: key 'quad' given twice"},
+        {HEAD "\"emitters\": [{\"quad\": \"square\", \"emission\": [1,1,1]}]}", PF_ERR_PARSE,
+         "emitters[0].quad: expected 4 corners [[x,y,z], ...], got a string"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [1,1,1]], \"emission\": [1,1,1]}]}", PF_ERR_PARSE,
+         "emitters[0].quad: expected 4 corners [[x,y,z], ...], got another number of elements"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1], [1,1,1], [0,1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad[1]: expected an array of 3 numbers, got 2 elements"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [\"1\",1,1], [0,1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad[2][0]: expected a number, got a string"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,2e7,0], [1,1,0], [1,1,1], [0,1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_NONFINITE, "emitters[0].quad[0][1]: |2e+07| exceeds 1e+07"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [1,1,1], [0,1,1e999]], \"emission\": [1,1,1]}]}",
+         PF_ERR_NONFINITE, "emitters[0].quad[3][2]: number is not finite"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,1]}]}", PF_ERR_PARSE,
+         "emitters[0].emission: expected an array of 3 numbers, got 2 elements"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,-1,1]}]}", PF_ERR_PARSE,
+         "emitters[0].emission: emission must be >= 0"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [0,0,0]}]}", PF_ERR_PARSE,
+         "emitters[0].emission: emission is zero"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,2e10,1]}]}", PF_ERR_NONFINITE,
+         "emitters[0].emission[1]: |2e+10| exceeds 1e+10"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,1,1], \"two_sided\": 1}]}", PF_ERR_PARSE,
+         "emitters[0].two_sided: expected true or false, got a number"},
+        {HEAD "\"emitters\": [{\"quad\": [[1,1,1], [1,1,1], [1,1,1], [1,1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: the four corners coincide"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [2,1,0], [3,1,0]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: the quad has no area"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,1], [1,1,0], [0,1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: the quad has no area (corners repeated or collinear, or out of order as a bow-tie)"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,0,0], [3,1,0], [3,0,0], [0,2,0]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: corner 1: the quad is not convex"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,0,0], [4,0,0], [1,1,0], [0,4,0]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: corner 2: the quad is not convex with its corners in order (corners 1, 2, 3"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [1,1,1], [1,1,1.5]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: corner 2: the quad is not convex with its corners in order (corners 1, 2, 3 are collinear"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,1,0], [1,1,0], [1,1,1], [0,1.1,1]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: not planar: corner"},
+        {HEAD "\"emitters\": [{\"quad\": [[0,0,0], [1e-7,0,0], [1e-7,1e-7,0], [0,1e-7,0]], \"emission\": [1,1,1]}]}",
+         PF_ERR_PARSE, "emitters[0].quad: the quad's area 1e-14 is below 1e-12"},
+        {HEAD "\"emitters\": [{\"quad\": " QUAD ", \"emission\": [1,1,1]}, 7]}", PF_ERR_PARSE,
+         "emitters[1]: expected an object, got a number"},
+#undef QUAD
         {HEAD "\"lights\": [1]}", PF_ERR_PARSE, "lights[0]: expected an object, got a number"},
         {HEAD "\"lights\": [{}]}", PF_ERR_PARSE, "lights[0]: missing key 'light' (index of a scene light) or 'type'"},
         {HEAD "\"lights\": [{\"light\": 0, \"type\": \"point\"}]}", PF_ERR_PARSE, "not both"},
@@ -388,6 +459,272 @@ static void test_bad_inputs(void **state)
     /* files */
     assert_int_equal(pf_sequence_load(&s, "/nonexistent/x.seq.json", &err), PF_ERR_IO);
     assert_non_null(strstr(err.message, "/nonexistent/x.seq.json: cannot open"));
+}
+
+/* ---------------------------------------------------------------- emitters */
+
+static void test_emitters_parse(void **state)
+{
+    (void)state;
+    pf_sequence s;
+    parse_ok(&s, HEAD "\"lights\": [], \"emitters\": ["
+                      "{\"comment\": \"down\", \"quad\": [[0,2,0], [1,2,0], [1,2,1], [0,2,1]], \"emission\": [17, 12, 4]},"
+                      "{\"quad\": [[0,0,0], [0,1,0], [0,1,1], [0,0,1]], \"emission\": [1e10, 0, 0], \"two_sided\": true},"
+                      "{\"quad\": [[0,0,5], [2,0,5], [2,3,5], [0,3,5]], \"emission\": [1, 1, 1], \"two_sided\": false}]}");
+    assert_int_equal(s.emitter_count, 3);
+    assert_true(s.lights_replace);
+    assert_int_equal(s.light_count, 0);
+    assert_null(s.lights);
+    assert_true(s.emitters[0].quad[2].x == 1.0f && s.emitters[0].quad[2].y == 2.0f && s.emitters[0].quad[2].z == 1.0f);
+    assert_true(s.emitters[0].emission.x == 17.0f && s.emitters[0].emission.z == 4.0f);
+    assert_false(s.emitters[0].two_sided);
+    assert_true(s.emitters[1].two_sided);
+    assert_true(s.emitters[1].emission.x == 1e10f);
+    assert_false(s.emitters[2].two_sided);
+    pf_sequence_free(&s);
+    assert_int_equal(s.emitter_count, 0);
+
+    /* emitters with the scene's lights kept (no "lights") */
+    parse_ok(&s, HEAD "\"emitters\": [{\"quad\": [[0,2,0], [1,2,0], [1,2,1], [0,2,1]], \"emission\": [1, 1, 1]}]}");
+    assert_int_equal(s.emitter_count, 1);
+    assert_false(s.lights_replace);
+    pf_sequence_free(&s);
+
+    /* a file's limit: PF_SEQUENCE_MAX_EMITTERS, then one too many */
+    for (uint32_t n = PF_SEQUENCE_MAX_EMITTERS; n <= PF_SEQUENCE_MAX_EMITTERS + 1; n++) {
+        char json[8192];
+        size_t len = (size_t)snprintf(json, sizeof json, HEAD "\"emitters\": [");
+        for (uint32_t i = 0; i < n; i++)
+            len += (size_t)snprintf(json + len, sizeof json - len,
+                                    "%s{\"quad\": [[0,%u,0], [1,%u,0], [1,%u,1], [0,%u,1]], \"emission\": [1,1,1]}",
+                                    i ? ", " : "", i, i, i, i);
+        snprintf(json + len, sizeof json - len, "]}");
+        if (n == PF_SEQUENCE_MAX_EMITTERS) {
+            parse_ok(&s, json);
+            assert_int_equal(s.emitter_count, n);
+            assert_true(s.emitters[n - 1].quad[0].y == (float)(n - 1));
+            pf_sequence_free(&s);
+        } else
+            expect_bad(json, PF_ERR_PARSE, "emitters: 17 emitters (at most 16)");
+    }
+
+    /* a failure after good emitters leaves nothing behind */
+    pf_error err;
+    const char *j = HEAD "\"emitters\": [{\"quad\": [[0,2,0], [1,2,0], [1,2,1], [0,2,1]], \"emission\": [1, 1, 1]}],"
+                         " \"track\": 3}";
+    assert_int_equal(pf_sequence_parse(&s, j, strlen(j), "t.seq.json", &err), PF_ERR_PARSE);
+    assert_int_equal(s.emitter_count, 0);
+    pf_sequence_free(&s);
+}
+
+/* One triangle in y = 0 with one grey material: a scene built in memory. */
+static void tiny_scene(pf_scene *sc)
+{
+    memset(sc, 0, sizeof *sc);
+    sc->vertex_count = 3;
+    sc->positions = calloc(4, sizeof *sc->positions);
+    sc->normals = calloc(3, sizeof *sc->normals);
+    sc->uvs = calloc(3, sizeof *sc->uvs);
+    sc->tri_count = 1;
+    sc->indices = calloc(3, sizeof *sc->indices);
+    sc->tri_material = calloc(1, sizeof *sc->tri_material);
+    sc->material_count = 1;
+    sc->materials = calloc(1, sizeof *sc->materials);
+    assert_true(sc->positions && sc->normals && sc->uvs && sc->indices && sc->tri_material && sc->materials);
+    sc->positions[1] = pf_v3(0, 0, 1);
+    sc->positions[2] = pf_v3(1, 0, 0);
+    for (int i = 0; i < 3; i++) {
+        sc->normals[i] = pf_v3(0, 1, 0);
+        sc->indices[i] = (uint32_t)i;
+    }
+    for (int k = 0; k < 4; k++) sc->materials[0].base_color[k] = 0.5f;
+    sc->materials[0].base_color_texture = -1;
+}
+
+static void test_emitter_geometry(void **state)
+{
+    (void)state;
+    pf_error err;
+    pf_scene sc;
+    tiny_scene(&sc);
+    /* a 2 x 1 panel at y = 3 facing down (counter-clockwise from below) */
+    const pf_vec3 q[4] = {pf_v3(-1, 3, 0), pf_v3(1, 3, 0), pf_v3(1, 3, 1), pf_v3(-1, 3, 1)};
+    assert_int_equal(pf_scene_add_emitter_quad(&sc, q, pf_v3(5, 4, 3), 0, &err), PF_OK);
+    assert_int_equal(sc.vertex_count, 7);
+    assert_int_equal(sc.tri_count, 3);
+    assert_int_equal(sc.material_count, 2);
+    for (int i = 0; i < 4; i++) {
+        assert_memory_equal(&sc.positions[3 + i], &q[i], sizeof q[i]);
+        assert_true(sc.normals[3 + i].x == 0.0f && sc.normals[3 + i].y == -1.0f && sc.normals[3 + i].z == 0.0f);
+    }
+    assert_true(sc.uvs[3].x == 0.0f && sc.uvs[3].y == 0.0f && sc.uvs[5].x == 1.0f && sc.uvs[5].y == 1.0f);
+    assert_true(pf_v3_is_finite(sc.positions[7])); /* the padding element exists */
+    static const uint32_t idx[6] = {3, 4, 5, 3, 5, 6};
+    assert_memory_equal(&sc.indices[3], idx, sizeof idx);
+    assert_int_equal(sc.tri_material[1], 1);
+    assert_int_equal(sc.tri_material[2], 1);
+    const pf_material *m = &sc.materials[1];
+    assert_true(m->emission[0] == 5.0f && m->emission[1] == 4.0f && m->emission[2] == 3.0f);
+    assert_true(m->base_color[0] == 0.78f && m->base_color[3] == 1.0f && m->base_color_texture == -1);
+    assert_false(m->double_sided);
+    assert_int_equal(m->alpha_mode, PF_ALPHA_OPAQUE);
+    /* both triangles face down: the emitting side */
+    for (uint32_t t = 1; t < 3; t++) {
+        pf_vec3 n = pf_scene_face_normal(&sc, t);
+        assert_true(n.y < -0.9999f);
+    }
+    /* the caller validates: the bounds now hold the panel */
+    assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+    assert_true(sc.bounds_min.x == -1.0f && sc.bounds_max.x == 1.0f && sc.bounds_max.y == 3.0f &&
+                sc.bounds_min.y == 0.0f && sc.bounds_max.z == 1.0f);
+    /* a second one, two-sided: its own material */
+    const pf_vec3 w[4] = {pf_v3(2, 0, 0), pf_v3(2, 1, 0), pf_v3(2, 1, 1), pf_v3(2, 0, 1)};
+    assert_int_equal(pf_scene_add_emitter_quad(&sc, w, pf_v3(1, 1, 1), 1, &err), PF_OK);
+    assert_int_equal(sc.material_count, 3);
+    assert_true(sc.materials[2].double_sided);
+    assert_true(pf_scene_face_normal(&sc, 3).x > 0.9999f); /* (0,1,0) x (0,1,1) = +X */
+    assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+    assert_true(sc.bounds_max.x == 2.0f);
+
+    /* refused: the scene is left as it was */
+    const pf_vec3 bad_nan[4] = {pf_v3(NAN, 0, 0), q[1], q[2], q[3]};
+    const pf_vec3 bad_huge[4] = {q[0], q[1], pf_v3(1, 3e7f, 1), q[3]};
+    const pf_vec3 flat[4] = {q[0], q[0], q[0], q[0]};
+    const struct {
+        const pf_vec3 *q;
+        float e;
+        pf_result code;
+        const char *needle;
+    } bad[] = {
+        {bad_nan, 1, PF_ERR_NONFINITE, "corner 0 is not finite"},
+        {bad_huge, 1, PF_ERR_NONFINITE, "corner 2 (1, 3e+07, 1) lies beyond |x| <= 1e+07"},
+        {flat, 1, PF_ERR_PARSE, "the four corners coincide"},
+        {q, NAN, PF_ERR_NONFINITE, "emission is not finite"},
+        {q, -1, PF_ERR_PARSE, "emission must be >= 0"},
+        {q, 0, PF_ERR_PARSE, "emission is zero"},
+        {q, 2e10f, PF_ERR_NONFINITE, "exceeds softgi's limit"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        memset(&err, 0, sizeof err);
+        assert_int_equal(pf_scene_add_emitter_quad(&sc, bad[i].q, pf_v3(bad[i].e, bad[i].e, bad[i].e), 0, &err), bad[i].code);
+        if (!strstr(err.message, bad[i].needle)) fail_msg("case %zu: '%s' lacks '%s'", i, err.message, bad[i].needle);
+        assert_int_equal(sc.vertex_count, 11);
+        assert_int_equal(sc.tri_count, 5);
+        assert_int_equal(sc.material_count, 3);
+    }
+    /* the counts' overflow guard, before any allocation */
+    uint32_t vc = sc.vertex_count;
+    sc.vertex_count = UINT32_MAX - 4;
+    assert_int_equal(pf_scene_add_emitter_quad(&sc, q, pf_v3(1, 1, 1), 0, &err), PF_ERR_OUT_OF_MEMORY);
+    assert_non_null(strstr(err.message, "too large"));
+    assert_int_equal(sc.vertex_count, UINT32_MAX - 4);
+    sc.vertex_count = vc;
+    pf_scene_free(&sc);
+
+    /* into an empty scene (NULL arrays): a scene of one emitter */
+    memset(&sc, 0, sizeof sc);
+    assert_int_equal(pf_scene_add_emitter_quad(&sc, q, pf_v3(1, 1, 1), 0, &err), PF_OK);
+    assert_int_equal(sc.vertex_count, 4);
+    assert_int_equal(sc.tri_count, 2);
+    assert_int_equal(sc.material_count, 1);
+    assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+    pf_scene_free(&sc);
+}
+
+/* pf_sequence_apply_emitters on a glTF scene with a point light: the quad
+ * is added, "lights": [] clears the light, validation passes, and the
+ * bounds hold the quad. */
+static void test_emitter_apply(void **state)
+{
+    (void)state;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/cornell-box/cornell-box.gltf", SOFTGI_SOURCE_DIR);
+    pf_error err;
+    pf_scene sc;
+    pf_gltf_options go;
+    memset(&go, 0, sizeof go);
+    if (pf_gltf_load(&sc, path, &go, &err) != PF_OK) fail_msg("%s", err.message);
+    assert_true(sc.light_count >= 1);
+    assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+    const uint32_t tris = sc.tri_count, mats = sc.material_count;
+    const float top = sc.bounds_max.y + 1.0f;
+    char json[1024];
+    snprintf(json, sizeof json,
+             HEAD "\"lights\": [], \"emitters\": [{\"quad\": [[0,%.9g,0], [0.5,%.9g,0], [0.5,%.9g,0.5], "
+                  "[0,%.9g,0.5]], \"emission\": [3, 2, 1], \"two_sided\": true}]}",
+             (double)top, (double)top, (double)top, (double)top);
+    pf_sequence s;
+    parse_ok(&s, json);
+    assert_int_equal(pf_sequence_apply_emitters(&s, &sc, &err), PF_OK);
+    assert_int_equal(sc.light_count, 0);
+    assert_int_equal(sc.tri_count, tris + 2);
+    assert_int_equal(sc.material_count, mats + 1);
+    assert_true(sc.materials[mats].emission[0] == 3.0f && sc.materials[mats].double_sided);
+    assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+    assert_true(sc.bounds_max.y == top);
+    pf_sequence_free(&s);
+
+    /* without "lights" the scene's lights stay */
+    pf_scene_free(&sc);
+    if (pf_gltf_load(&sc, path, &go, &err) != PF_OK) fail_msg("%s", err.message);
+    const uint32_t lights = sc.light_count;
+    parse_ok(&s, HEAD "\"emitters\": [{\"quad\": [[0,2,0], [1,2,0], [1,2,1], [0,2,1]], \"emission\": [1, 1, 1]}]}");
+    assert_int_equal(pf_sequence_apply_emitters(&s, &sc, &err), PF_OK);
+    assert_int_equal(sc.light_count, lights);
+    pf_sequence_free(&s);
+    pf_scene_free(&sc);
+}
+
+/* The area-light table sees the quad as softgi's other emitters: two
+ * triangles of total area A and power faces x pi A Le; and its estimator
+ * gives the irradiance of the analytic form factor of a square on a point
+ * below its centre (e.g. Howell's catalogue, C-11 per corner rectangle):
+ *   E = 4 Le X / sqrt(1 + X^2) atan(X / sqrt(1 + X^2)),  X = a / (2 h). */
+static void test_emitter_area_light(void **state)
+{
+    (void)state;
+    pf_error err;
+    for (int two = 0; two <= 1; two++) {
+        pf_scene sc;
+        tiny_scene(&sc);
+        const float a = 2.0f, h = 1.5f, le = 3.0f;
+        const pf_vec3 q[4] = {pf_v3(-1, h, -1), pf_v3(1, h, -1), pf_v3(1, h, 1), pf_v3(-1, h, 1)};
+        assert_int_equal(pf_scene_add_emitter_quad(&sc, q, pf_v3(le, le, le), two, &err), PF_OK);
+        assert_int_equal(pf_scene_validate(&sc, &err), PF_OK);
+        gi_area_lights al;
+        assert_int_equal(gi_area_lights_build(&al, &sc, &err), PF_OK);
+        assert_int_equal(al.count, 2);
+        float area = 0.0f;
+        for (uint32_t i = 0; i < al.count; i++) {
+            area += al.tri[i].area;
+            assert_true(al.tri[i].normal.y < -0.9999f);
+            assert_int_equal(al.tri[i].two_sided, (uint32_t)two);
+            assert_true(al.tri[i].radiance.x == le);
+        }
+        assert_float_equal(area, a * a, 1e-5f);
+        const double power = (two ? 2.0 : 1.0) * PF_PI * (double)(a * a) * le;
+        if (fabs(al.total_power - power) > 1e-4 * power) fail_msg("power %g, expected %g", al.total_power, power);
+        assert_float_equal(al.power_rgb.x, (float)power, 1e-3f * (float)power);
+        /* irradiance at the floor point under the centre, facing up: a
+         * stratified estimate (deterministic) against the form factor */
+        const uint32_t n = 256;
+        double sum = 0.0;
+        for (uint32_t i = 0; i < n * n; i++) {
+            double u0 = fmod(0.5 + (double)i * 0.6180339887498949, 1.0); /* golden-ratio sequence */
+            float u1 = ((float)(i % n) + 0.5f) / (float)n, u2 = ((float)(i / n) + 0.5f) / (float)n;
+            gi_area_sample smp;
+            gi_area_sample_point(&al, u0, u1, u2, &smp);
+            pf_vec3 e, wi;
+            float dist;
+            if (gi_area_sample_irradiance(&smp, pf_v3(0, 0, 0), pf_v3(0, 1, 0), &e, &wi, &dist)) sum += e.x;
+        }
+        const double x = a / (2.0 * h), r = x / sqrt(1.0 + x * x);
+        const double expect = 4.0 * le * r * atan(r);
+        const double got = sum / (double)(n * n);
+        if (fabs(got - expect) > 0.01 * expect) fail_msg("two_sided %d: irradiance %g, form factor gives %g", two, got, expect);
+        gi_area_lights_free(&al);
+        pf_scene_free(&sc);
+    }
 }
 
 /* ---------------------------------------------------------------- interpolation */
@@ -604,6 +941,47 @@ static void test_end_to_end(void **state)
         fail_msg("softgi %s: exit %d\n%s", args, st, out);
 }
 
+/* A sequence lit by its emitter alone ("lights": [] and "emitters"): the
+ * scene's point light is gone, the emitter lights the frame, and the output
+ * is the same with 1 and 2 threads. (Needs the app_scene_load_sequence
+ * hook.) */
+static void test_emitter_end_to_end(void **state)
+{
+    (void)state;
+    static const char *const k_area =
+        "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"size\": [40, 30],"
+        " \"camera\": [{\"frame\": 0, \"eye\": [0.278, 0.273, -0.8], \"target\": [0.278, 0.273, 0.28], \"fovy_deg\": 39},"
+        "              {\"frame\": 2, \"eye\": [0.3, 0.28, -0.8], \"target\": [0.278, 0.273, 0.28], \"fovy_deg\": 39}],"
+        " \"lights\": [],"
+        " \"emitters\": [{\"quad\": [[0.2, 0.54, 0.2], [0.35, 0.54, 0.2], [0.35, 0.54, 0.35], [0.2, 0.54, 0.35]],"
+        "                 \"emission\": [20, 20, 20]}]}";
+    char seq[512], d1[512], d2[512], args[2048], out[32768], path[1024];
+    snprintf(seq, sizeof seq, "%s/area.seq.json", g_tmp);
+    write_file(seq, k_area);
+    snprintf(d1, sizeof d1, "%s/area1", g_tmp);
+    snprintf(d2, sizeof d2, "%s/area2", g_tmp);
+    char h1[17], h2[17];
+    for (int run = 0; run < 2; run++) {
+        snprintf(args, sizeof args, "sequence '%s' -o '%s' " FAST " --hash --threads %d", seq, run ? d2 : d1, run + 1);
+        int st = tu_softgi_run(args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+        if (!strstr(out, " triangles, 0 lights,")) fail_msg("want no punctual light (the emitter alone):\n%s", out);
+        const char *h = strstr(out, "hash ");
+        if (!h || sscanf(h, "hash %16s", run ? h2 : h1) != 1) fail_msg("no hash in:\n%s", out);
+    }
+    assert_string_equal(h1, h2);
+    /* lit: the frame's mean is well above black */
+    snprintf(path, sizeof path, "%s/frame_0000.pfm", d1);
+    float *rgb = NULL;
+    uint32_t w = 0, h = 0;
+    pf_error err;
+    if (pf_imageio_read_pfm(path, &rgb, &w, &h, &err) != PF_OK) fail_msg("%s", err.message);
+    double sum = 0.0;
+    for (size_t i = 0; i < (size_t)w * h * 3; i++) sum += rgb[i];
+    free(rgb);
+    if (!(sum / ((double)w * h * 3) > 0.05)) fail_msg("frame 0 mean %g: the emitter does not light the box", sum / ((double)w * h * 3));
+}
+
 static void test_cli_errors(void **state)
 {
     (void)state;
@@ -615,6 +993,10 @@ static void test_cli_errors(void **state)
     write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3,");
     snprintf(args, sizeof args, "sequence '%s'", seq);
     tu_softgi_expect(args, 1, "bad.seq.json: JSON ends too early");
+    /* a bad emitter: one line naming the file and the place, exit 1 */
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 3, \"emitters\": [{\"quad\": "
+                    "[[0,1,0], [1,1,0], [1,1,1], [0,1.1,1]], \"emission\": [1,1,1]}]}");
+    tu_softgi_expect(args, 1, "bad.seq.json: emitters[0].quad: not planar: corner");
 
     write_file(seq, "{\"scene\": \"missing.gltf\", \"frames\": 3}");
     tu_softgi_expect(args, 1, "missing.gltf");
@@ -807,7 +1189,9 @@ int main(void)
         cmocka_unit_test(test_shipped_files), cmocka_unit_test(test_parse_fields),
         cmocka_unit_test(test_bad_inputs),    cmocka_unit_test(test_interpolation),
         cmocka_unit_test(test_end_to_end),    cmocka_unit_test(test_cli_errors),
-        cmocka_unit_test(test_reference_and_evaluate),
+        cmocka_unit_test(test_reference_and_evaluate), cmocka_unit_test(test_emitters_parse),
+        cmocka_unit_test(test_emitter_geometry),       cmocka_unit_test(test_emitter_apply),
+        cmocka_unit_test(test_emitter_area_light),     cmocka_unit_test(test_emitter_end_to_end),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -17,6 +17,13 @@ int app_fail(const pf_error *err);
  * failure the scene is freed. */
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
+struct pf_sequence;
+/* app_scene_load for `softgi sequence` (and so `softgi evaluate`): the
+ * sequence file's emitters, and its "lights": [], are applied
+ * (pf_sequence_apply_emitters) right after the scene is read, before
+ * --light, validation and the automatic camera and light. seq may be NULL. */
+pf_result app_scene_load_sequence(const pf_options *o, const struct pf_sequence *seq, pf_scene *scene,
+                                  pf_camera *camera, char *stem, size_t stem_size, pf_error *err);
 
 /* The PNG's exposure in stops: --exposure STOPS, or for --exposure auto
  * the stops pf_defaults_exposure picks from the linear image (said in one

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "pf_sequence.h"
 #include "app.h"
 #include "pf_defaults.h"
 #include "gi_frame.h"
@@ -135,6 +136,12 @@ static pf_result app__default_light(const pf_options *o, pf_scene *scene, const 
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err)
 {
+    return app_scene_load_sequence(o, NULL, scene, camera, stem, stem_size, err);
+}
+
+pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_camera *camera,
+                                  char *stem, size_t stem_size, pf_error *err)
+{
     pf_result r;
     pf_gltf_options go = {.max_memory = o->max_memory};
     if (o->scene_path) {
@@ -146,6 +153,11 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
         snprintf(stem, stem_size, "cornell-box");
     }
     if (r != PF_OK) return r;
+    /* a sequence file's emitters are part of the scene from here on */
+    if (seq && (r = pf_sequence_apply_emitters(seq, scene, err)) != PF_OK) {
+        pf_scene_free(scene);
+        return r;
+    }
     if (scene->warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", scene->warnings);
     if (o->has_camera) {
         r = pf_camera_look_at(camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), err);

@@ -331,7 +331,7 @@ int app_sequence(const pf_options *o)
     }
     pf_camera camera;
     char stem[256];
-    if (r == PF_OK) r = app_scene_load(&so, &s.scene, &camera, stem, sizeof stem, &err);
+    if (r == PF_OK) r = app_scene_load_sequence(&so, seq, &s.scene, &camera, stem, sizeof stem, &err);
     if (r != PF_OK) return app__fail_run(&s, &err);
     s.scene_loaded = 1;
     t_load = pf_time_now() - t_load;

@@ -412,7 +412,10 @@ static pf_result pf__lights(const pf__sq *c, pf_sequence *s, const cJSON *arr)
     if (!cJSON_IsArray(arr))
         return pf__sq_fail(c, PF_ERR_PARSE, "lights", "expected an array, got %s", pf__type_name(arr));
     int n = cJSON_GetArraySize(arr);
-    if (n == 0) return pf__sq_fail(c, PF_ERR_PARSE, "lights", "is empty (leave it out to keep the scene's lights)");
+    if (n == 0) { /* no punctual light: the file's emitters light the scene (checked in pf__top) */
+        s->lights_replace = 1;
+        return PF_OK;
+    }
     if ((uint32_t)n > PF_SEQUENCE_MAX_LIGHTS)
         return pf__sq_fail(c, PF_ERR_PARSE, "lights", "%d lights (at most %u)", n, PF_SEQUENCE_MAX_LIGHTS);
     s->lights = calloc((size_t)n, sizeof *s->lights);
@@ -530,6 +533,83 @@ int pf_sequence_camera_at(const pf_sequence *seq, uint32_t frame, pf_vec3 *eye, 
     return 1;
 }
 
+/* ---------------------------------------------------------------- emitters */
+
+/* "emitters": static emissive quads (pf_sequence.h). The quad's shape and
+ * emission are checked by the scene's own rule (pf_scene_emitter_quad_check),
+ * so a file the parser accepts is one pf_sequence_apply_emitters adds. */
+static pf_result pf__emitters(const pf__sq *c, pf_sequence *s, const cJSON *arr)
+{
+    if (!cJSON_IsArray(arr))
+        return pf__sq_fail(c, PF_ERR_PARSE, "emitters", "expected an array, got %s", pf__type_name(arr));
+    int n = cJSON_GetArraySize(arr);
+    if (n == 0) return pf__sq_fail(c, PF_ERR_PARSE, "emitters", "is empty (leave it out for no emitters)");
+    if ((uint32_t)n > PF_SEQUENCE_MAX_EMITTERS)
+        return pf__sq_fail(c, PF_ERR_PARSE, "emitters", "%d emitters (at most %u)", n, PF_SEQUENCE_MAX_EMITTERS);
+    static const char *const keys[] = {"quad", "emission", "two_sided"};
+    pf_result r;
+    int i = 0;
+    for (const cJSON *e = arr->child; e; e = e->next, i++) {
+        char w[64], f[320];
+        snprintf(w, sizeof w, "emitters[%d]", i);
+        pf_sequence_emitter *em = &s->emitters[i];
+        if (!cJSON_IsObject(e)) return pf__sq_fail(c, PF_ERR_PARSE, w, "expected an object, got %s", pf__type_name(e));
+        if ((r = pf__check_keys(c, e, w, keys, 3)) != PF_OK) return r;
+        const cJSON *q = pf__get(e, "quad");
+        if (!q) return pf__missing(c, w, "quad");
+        pf__join(f, sizeof f, w, "quad");
+        if (!cJSON_IsArray(q) || cJSON_GetArraySize(q) != 4)
+            return pf__sq_fail(c, PF_ERR_PARSE, f, "expected 4 corners [[x,y,z], ...], got %s",
+                               cJSON_IsArray(q) ? "another number of elements" : pf__type_name(q));
+        int k = 0;
+        for (const cJSON *p = q->child; p; p = p->next, k++) {
+            char f2[340];
+            float v[3];
+            snprintf(f2, sizeof f2, "%s[%d]", f, k);
+            if ((r = pf__floats(c, p, f2, 3, PF_SCENE_MAX_COORD, v)) != PF_OK) return r;
+            em->quad[k] = pf_v3(v[0], v[1], v[2]);
+        }
+        const cJSON *j = pf__get(e, "emission");
+        if (!j) return pf__missing(c, w, "emission");
+        pf__join(f, sizeof f, w, "emission");
+        float v[3];
+        if ((r = pf__floats(c, j, f, 3, PF_SEQUENCE_MAX_EMISSION, v)) != PF_OK) return r;
+        if (v[0] < 0.0f || v[1] < 0.0f || v[2] < 0.0f)
+            return pf__sq_fail(c, PF_ERR_PARSE, f, "emission must be >= 0");
+        if (v[0] == 0.0f && v[1] == 0.0f && v[2] == 0.0f)
+            return pf__sq_fail(c, PF_ERR_PARSE, f, "emission is zero (an emitter must emit)");
+        em->emission = pf_v3(v[0], v[1], v[2]);
+        if ((j = pf__get(e, "two_sided"))) {
+            pf__join(f, sizeof f, w, "two_sided");
+            if (!cJSON_IsBool(j))
+                return pf__sq_fail(c, PF_ERR_PARSE, f, "expected true or false, got %s", pf__type_name(j));
+            em->two_sided = cJSON_IsTrue(j);
+        }
+        pf_error e2;
+        pf__join(f, sizeof f, w, "quad");
+        if ((r = pf_scene_emitter_quad_check(em->quad, em->emission, NULL, &e2)) != PF_OK)
+            return pf__sq_fail(c, r, f, "%s", e2.message); /* f: "emitters[i].quad" */
+        s->emitter_count = (uint32_t)i + 1;
+    }
+    return PF_OK;
+}
+
+pf_result pf_sequence_apply_emitters(const pf_sequence *seq, pf_scene *scene, pf_error *err)
+{
+    /* "lights": [] replaces the scene's punctual lights with none */
+    if (seq->lights_replace && seq->light_count == 0) scene->light_count = 0;
+    for (uint32_t i = 0; i < seq->emitter_count; i++) {
+        const pf_sequence_emitter *em = &seq->emitters[i];
+        pf_result r = pf_scene_add_emitter_quad(scene, em->quad, em->emission, em->two_sided, err);
+        if (r != PF_OK) {
+            char m[sizeof err->message];
+            snprintf(m, sizeof m, "%s", err->message);
+            return pf_error_set(err, r, "%s: emitters[%u]: %s", seq->file, i, m);
+        }
+    }
+    return PF_OK;
+}
+
 /* ---------------------------------------------------------------- top level */
 
 /* Folder of `file` with a trailing slash ("" for a bare name). */
@@ -590,8 +670,9 @@ static pf_result pf__output(const pf__sq *c, const cJSON *v, char *dst, size_t s
 static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
 {
     if (!cJSON_IsObject(root)) return pf__sq_fail(c, PF_ERR_PARSE, NULL, "expected a JSON object at the top, got %s", pf__type_name(root));
-    static const char *const keys[] = {"name", "scene", "frames", "size", "output", "camera", "lights", "track"};
-    pf_result r = pf__check_keys(c, root, "", keys, 8);
+    static const char *const keys[] = {"name",   "scene",  "frames",   "size", "output",
+                                       "camera", "lights", "emitters", "track"};
+    pf_result r = pf__check_keys(c, root, "", keys, 9);
     if (r != PF_OK) return r;
 
     const cJSON *v = pf__get(root, "name");
@@ -629,6 +710,11 @@ static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
     if ((v = pf__get(root, "output")) && (r = pf__output(c, v, s->output, sizeof s->output)) != PF_OK) return r;
     if ((v = pf__get(root, "camera")) && (r = pf__camera(c, s, v)) != PF_OK) return r;
     if ((v = pf__get(root, "lights")) && (r = pf__lights(c, s, v)) != PF_OK) return r;
+    if ((v = pf__get(root, "emitters")) && (r = pf__emitters(c, s, v)) != PF_OK) return r;
+    if (s->lights_replace && s->light_count == 0 && s->emitter_count == 0)
+        return pf__sq_fail(c, PF_ERR_PARSE, "lights",
+                           "is empty, which means no punctual light: give \"emitters\" to light the scene, or leave "
+                           "\"lights\" out to keep the scene's lights");
 
     if ((v = pf__get(root, "track"))) {
         if (!cJSON_IsArray(v)) return pf__sq_fail(c, PF_ERR_PARSE, "track", "expected an array of [x, y], got %s", pf__type_name(v));

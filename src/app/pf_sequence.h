@@ -32,12 +32,34 @@
  *        "keys": [...]}                        color (default [1,1,1]),
  *     ],                                       intensity (W/sr; W/m^2 for
  *                                              directional), cones in degrees
+ *     "emitters": [                          optional static emissive quads added
+ *       {"quad": [[x,y,z], [x,y,z],          to the scene (area lights, gi_area.h):
+ *                 [x,y,z], [x,y,z]],         corners in order, counter-clockwise
+ *        "emission": [r, g, b],              seen from the emitting side; emission
+ *        "two_sided": false}                 is radiance W/(sr m^2); two_sided
+ *     ],                                     (default false): emits from both faces
  *     "track": [[x, y], ...]                 optional pixels for `softgi compare
  *   }                                        --track` (at most PF_SEQUENCE_MAX_TRACK)
  *
  * Either every entry of "lights" names a scene light ("light": index) or
  * every entry is a full light; full lights replace the scene's lights, in
- * order (as --light does). A light key holds "frame" and any of position,
+ * order (as --light does). "lights": [] replaces them with none: the scene
+ * is lit by emitters alone (its own emissive triangles and the file's
+ * "emitters", which it then requires).
+ *
+ * Emitters (Hedman 2017 Sec. 5 lights Sibenik and the conference room with
+ * an emissive quad; the shared scenes have none and may not be edited or
+ * copied): each becomes two triangles with a material of its own
+ * (pf_scene_add_emitter_quad: emission, baseColor 0.78 grey, double-sided
+ * when two_sided), added by pf_sequence_apply_emitters right after the
+ * scene is read and before it is validated, so the emitter is in the
+ * bounds, in Embree's and the rasterizer's geometry, and counts as a light
+ * (no automatic light is added). They do not move (no keys). Each quad must
+ * be convex with its corners in order, planar within 1e-3 of its longer
+ * diagonal, of area >= 1e-12 units^2, within +-PF_SCENE_MAX_COORD
+ * (pf_scene_emitter_quad_check gives the exact rule); each emission channel
+ * in [0, PF_SEQUENCE_MAX_EMISSION], not all zero; at most
+ * PF_SEQUENCE_MAX_EMITTERS. A light key holds "frame" and any of position,
  * direction, color, intensity, inner_cone_deg, outer_cone_deg; each field is
  * its own track over the keys that name it, and a field no key names keeps
  * the light's own value.
@@ -89,6 +111,7 @@
 #define PF_SEQUENCE_MAX_FRAMES 10000u
 #define PF_SEQUENCE_MAX_LIGHTS 64u
 #define PF_SEQUENCE_MAX_TRACK 64u
+#define PF_SEQUENCE_MAX_EMITTERS 16u /* quads; the papers use one */
 #define PF_SEQUENCE_MAX_SIZE 16384u
 #define PF_SEQUENCE_MAX_FILE (16u << 20) /* bytes */
 /* intensity x colour per channel, W/sr (W/m^2 directional): the renderer's
@@ -124,6 +147,13 @@ typedef struct pf_sequence_light {
     pf_sequence_track field[PF_SEQUENCE_FIELD_COUNT];
 } pf_sequence_light;
 
+/* A static emissive quad ("emitters"), checked by pf_scene_emitter_quad_check. */
+typedef struct pf_sequence_emitter {
+    pf_vec3 quad[4];   /* corners, counter-clockwise seen from the emitting side */
+    pf_vec3 emission;  /* radiance, W/(sr m^2) */
+    int two_sided;
+} pf_sequence_emitter;
+
 /* Owns everything; freed by pf_sequence_free. */
 typedef struct pf_sequence {
     char file[4096];       /* the sequence file as given (for messages) */
@@ -137,7 +167,9 @@ typedef struct pf_sequence {
     pf_sequence_track camera; /* dim 7: eye xyz, target xyz, fovy_deg; count 0: no camera keys */
     uint32_t light_count;
     pf_sequence_light *lights;
-    int lights_replace;     /* the entries are full lights that replace the scene's */
+    int lights_replace;     /* the entries are full lights that replace the scene's ("lights": []: with none) */
+    uint32_t emitter_count;
+    pf_sequence_emitter emitters[PF_SEQUENCE_MAX_EMITTERS];
     uint32_t track_count;
     uint32_t track[PF_SEQUENCE_MAX_TRACK][2]; /* x, y */
 } pf_sequence;
@@ -174,6 +206,15 @@ pf_result pf_sequence_load(pf_sequence *seq, const char *path, pf_error *err);
  * relative paths (its folder); it is not opened. */
 pf_result pf_sequence_parse(pf_sequence *seq, const char *json, size_t size, const char *file, pf_error *err);
 void pf_sequence_free(pf_sequence *seq);
+
+/* Adds the file's emitters to `scene` (pf_scene_add_emitter_quad), and for
+ * "lights": [] removes the scene's punctual lights. Call it right after the
+ * scene is read and before pf_scene_validate, Embree and the rasterizer
+ * (app_scene_load_sequence, for `softgi sequence` and through it
+ * `softgi evaluate`), so that the emitters also keep app_scene_load from
+ * adding its automatic light.
+ * Errors name the file: "FILE: emitters[i]: what". */
+pf_result pf_sequence_apply_emitters(const pf_sequence *seq, pf_scene *scene, pf_error *err);
 
 /* Track value at `frame` (dim floats into out); a track without keys
  * leaves out untouched. */

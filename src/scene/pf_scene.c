@@ -1,9 +1,12 @@
 /* pf_scene: scene ownership, validation and camera/light helpers (pf_scene.h). */
 #include "pf_scene.h"
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "pf_budget.h"
 
 void pf_scene_free(pf_scene *scene)
 {
@@ -113,6 +116,157 @@ pf_result pf_scene_add_light(pf_scene *s, const pf_light *light, pf_error *err)
     if (!grown) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory adding a light");
     s->lights = grown;
     s->lights[s->light_count++] = *light;
+    return PF_OK;
+}
+
+/* ---------------------------------------------------------------- emissive quads */
+
+/* The quad's tests in double: the corners are floats, so their differences
+ * and cross products are exact to about 1e-16 relative, far below the
+ * tolerances (1e-6 d^2 for a turn, 1e-3 d for planarity). */
+typedef struct pf__d3 {
+    double x, y, z;
+} pf__d3;
+static pf__d3 pf__d3_of(pf_vec3 v) { return (pf__d3){v.x, v.y, v.z}; }
+static pf__d3 pf__d3_sub(pf__d3 a, pf__d3 b) { return (pf__d3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static double pf__d3_dot(pf__d3 a, pf__d3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static pf__d3 pf__d3_cross(pf__d3 a, pf__d3 b)
+{
+    return (pf__d3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+pf_result pf_scene_emitter_quad_check(const pf_vec3 corners[4], pf_vec3 emission, pf_vec3 *normal, pf_error *err)
+{
+    for (int i = 0; i < 4; i++) {
+        pf_vec3 c = corners[i];
+        if (!pf_v3_is_finite(c)) return pf_error_set(err, PF_ERR_NONFINITE, "corner %d is not finite", i);
+        if (!pf_scene_coord_ok(c))
+            return pf_error_set(err, PF_ERR_NONFINITE, "corner %d (%g, %g, %g) lies beyond |x| <= %g", i, (double)c.x,
+                                (double)c.y, (double)c.z, (double)PF_SCENE_MAX_COORD);
+    }
+    const float e[3] = {emission.x, emission.y, emission.z};
+    for (int k = 0; k < 3; k++) {
+        if (!isfinite(e[k])) return pf_error_set(err, PF_ERR_NONFINITE, "emission is not finite");
+        if (e[k] < 0.0f) return pf_error_set(err, PF_ERR_PARSE, "emission must be >= 0 (got %g)", (double)e[k]);
+        if (e[k] > PF_MAX_RADIANCE)
+            return pf_error_set(err, PF_ERR_NONFINITE, "emission %g exceeds softgi's limit %g W/(sr m^2)",
+                                (double)e[k], (double)PF_MAX_RADIANCE);
+    }
+    if (e[0] == 0.0f && e[1] == 0.0f && e[2] == 0.0f)
+        return pf_error_set(err, PF_ERR_PARSE, "emission is zero (an emitter must emit)");
+
+    pf__d3 p[4];
+    for (int i = 0; i < 4; i++) p[i] = pf__d3_of(corners[i]);
+    /* The vector area of a planar quad is half the cross product of its
+     * diagonals, whatever its shape; n points to the side from which the
+     * corners run counter-clockwise. */
+    pf__d3 d1 = pf__d3_sub(p[2], p[0]), d2 = pf__d3_sub(p[3], p[1]);
+    double diag = sqrt(fmax(pf__d3_dot(d1, d1), pf__d3_dot(d2, d2)));
+    pf__d3 n = pf__d3_cross(d1, d2);
+    double nl = sqrt(pf__d3_dot(n, n));
+    if (!(diag > 0.0)) return pf_error_set(err, PF_ERR_PARSE, "the four corners coincide");
+    if (!(nl > 1e-6 * diag * diag))
+        return pf_error_set(err, PF_ERR_PARSE,
+                            "the quad has no area (corners repeated or collinear, or out of order as a bow-tie)");
+    pf__d3 nh = {n.x / nl, n.y / nl, n.z / nl};
+    /* planar: every corner near the plane through their mean */
+    pf__d3 m = {0.25 * (p[0].x + p[1].x + p[2].x + p[3].x), 0.25 * (p[0].y + p[1].y + p[2].y + p[3].y),
+                0.25 * (p[0].z + p[1].z + p[2].z + p[3].z)};
+    for (int i = 0; i < 4; i++) {
+        double dist = fabs(pf__d3_dot(pf__d3_sub(p[i], m), nh));
+        if (dist > PF_SCENE_EMITTER_PLANARITY * diag)
+            return pf_error_set(err, PF_ERR_PARSE,
+                                "not planar: corner %d is %g from the quad's plane (at most %g x the diagonal %g)", i,
+                                dist, PF_SCENE_EMITTER_PLANARITY, diag);
+    }
+    /* convex, corners in order: every corner turns the same way as n */
+    for (int i = 0; i < 4; i++) {
+        pf__d3 a = pf__d3_sub(p[i], p[(i + 3) % 4]), b = pf__d3_sub(p[(i + 1) % 4], p[i]);
+        if (!(pf__d3_dot(pf__d3_cross(a, b), nh) > 1e-6 * diag * diag))
+            return pf_error_set(err, PF_ERR_PARSE,
+                                "corner %d: the quad is not convex with its corners in order (corners %d, %d, %d are "
+                                "collinear or turn the other way)",
+                                i, (i + 3) % 4, i, (i + 1) % 4);
+    }
+    if (!(0.5 * nl >= PF_SCENE_EMITTER_MIN_AREA))
+        return pf_error_set(err, PF_ERR_PARSE, "the quad's area %g is below %g (units^2)", 0.5 * nl,
+                            PF_SCENE_EMITTER_MIN_AREA);
+    /* What the renderer computes in float (pf_scene_face_normal, gi_area):
+     * both triangles' normals must agree with n. */
+    static const int tri[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    for (int t = 0; t < 2; t++) {
+        pf_vec3 a = corners[tri[t][0]];
+        pf_vec3 fn = pf_v3_cross(pf_v3_sub(corners[tri[t][1]], a), pf_v3_sub(corners[tri[t][2]], a));
+        float len = pf_v3_length(fn);
+        if (!(isfinite(len) && len > 0.0f) ||
+            !((double)fn.x * nh.x + (double)fn.y * nh.y + (double)fn.z * nh.z > 0.999 * (double)len))
+            return pf_error_set(err, PF_ERR_PARSE, "triangle %d of the quad has no reliable normal in single precision",
+                                t);
+    }
+    if (normal) *normal = pf_v3((float)nh.x, (float)nh.y, (float)nh.z);
+    return PF_OK;
+}
+
+/* realloc of count elements, refusing a byte count size_t cannot hold */
+static int pf__grow(void **ptr, size_t count, size_t size)
+{
+    if (count > SIZE_MAX / size) return 0;
+    void *p = realloc(*ptr, count * size);
+    if (!p) return 0;
+    *ptr = p;
+    return 1;
+}
+
+pf_result pf_scene_add_emitter_quad(pf_scene *s, const pf_vec3 corners[4], pf_vec3 emission, int two_sided,
+                                    pf_error *err)
+{
+    pf_vec3 n;
+    pf_result r = pf_scene_emitter_quad_check(corners, emission, &n, err);
+    if (r != PF_OK) return r;
+    /* 4 more vertices (+ 1 padding position), 2 triangles, 1 material */
+    if (s->vertex_count > UINT32_MAX - 5 || s->tri_count > UINT32_MAX / 3 - 2 || s->material_count > UINT32_MAX - 1)
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "the scene is too large to add an emitter");
+    const size_t nv = (size_t)s->vertex_count + 4, nt = (size_t)s->tri_count + 2;
+    const size_t nm = (size_t)s->material_count + 1;
+    /* Each array grows before any count changes: a failure leaves a valid
+     * scene whose arrays are merely larger than needed. */
+    if (!pf__grow((void **)&s->positions, nv + 1, sizeof *s->positions) ||
+        !pf__grow((void **)&s->normals, nv, sizeof *s->normals) || !pf__grow((void **)&s->uvs, nv, sizeof *s->uvs) ||
+        !pf__grow((void **)&s->indices, 3 * nt, sizeof *s->indices) ||
+        !pf__grow((void **)&s->tri_material, nt, sizeof *s->tri_material) ||
+        !pf__grow((void **)&s->materials, nm, sizeof *s->materials))
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory adding an emitter");
+
+    pf_material *mat = &s->materials[s->material_count];
+    memset(mat, 0, sizeof *mat);
+    snprintf(mat->name, sizeof mat->name, "emitter-quad-%u", s->material_count);
+    for (int k = 0; k < 3; k++) mat->base_color[k] = 0.78f;
+    mat->base_color[3] = 1.0f;
+    mat->base_color_texture = -1;
+    mat->emission[0] = emission.x;
+    mat->emission[1] = emission.y;
+    mat->emission[2] = emission.z;
+    mat->alpha_mode = PF_ALPHA_OPAQUE;
+    mat->alpha_cutoff = 0.5f;
+    mat->double_sided = two_sided != 0;
+
+    static const pf_vec2 uv[4] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {1.0f, 1.0f}, {0.0f, 1.0f}};
+    const uint32_t v0 = s->vertex_count;
+    for (uint32_t i = 0; i < 4; i++) {
+        s->positions[v0 + i] = corners[i];
+        s->normals[v0 + i] = n;
+        s->uvs[v0 + i] = uv[i];
+    }
+    s->positions[v0 + 4] = corners[3]; /* padding: Embree may read 16 bytes at the last vertex */
+    static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    for (int k = 0; k < 6; k++) s->indices[3 * (size_t)s->tri_count + k] = v0 + idx[k];
+    s->tri_material[s->tri_count] = s->material_count;
+    s->tri_material[s->tri_count + 1] = s->material_count;
+    s->vertex_count += 4;
+    s->tri_count += 2;
+    s->material_count += 1;
+    /* a loaded scene's estimate (pf_budget.h); 0 stays 0 for scenes built in memory */
+    if (s->memory_bytes) s->memory_bytes += pf_budget_mul(2, PF_BUDGET_BYTES_PER_TRIANGLE);
     return PF_OK;
 }
 

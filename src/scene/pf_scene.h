@@ -166,6 +166,41 @@ pf_result pf_scene_validate(pf_scene *scene, pf_error *err);
 /* Appends a light (used by --light overrides). */
 pf_result pf_scene_add_light(pf_scene *scene, const pf_light *light, pf_error *err);
 
+/* Emissive quads added by code (sequence files' "emitters", pf_sequence.h):
+ * an area light like a glTF emissive quad, for the shared scenes that have
+ * none (Hedman 2017 Sec. 5 lights Sibenik and the conference room with one).
+ *
+ * corners[0..3] in order, counter-clockwise seen from the emitting side (the
+ * glTF front-face rule: the face normal is (c1 - c0) x (c2 - c0)). Accepted
+ * when (tolerances relative to d, the longer diagonal, in double precision):
+ * - every corner lies within +-PF_SCENE_MAX_COORD;
+ * - convex with corners in order: at every corner the turn to the next edge,
+ *   (c[i] - c[i-1]) x (c[i+1] - c[i]) . n, is above 1e-6 d^2 (no repeated or
+ *   collinear corners, no bow-tie, no reflex corner), and the area is at
+ *   least PF_SCENE_EMITTER_MIN_AREA (units^2, so the float cross products the
+ *   renderer takes neither underflow nor lose their direction);
+ * - planar: every corner within PF_SCENE_EMITTER_PLANARITY x d of the plane
+ *   through the corners' mean with normal n = (c2 - c0) x (c3 - c1);
+ * - emission finite, each channel in [0, PF_MAX_RADIANCE], not all zero.
+ * *normal (may be NULL) gets the unit face normal n. PF_ERR_NONFINITE for a
+ * non-finite or huge value, PF_ERR_PARSE for a bad shape or emission, with a
+ * message without a file name (callers prefix theirs). */
+#define PF_SCENE_EMITTER_PLANARITY 1e-3
+#define PF_SCENE_EMITTER_MIN_AREA 1e-12
+pf_result pf_scene_emitter_quad_check(const pf_vec3 corners[4], pf_vec3 emission, pf_vec3 *normal, pf_error *err);
+
+/* Appends an emissive quad (checked as above): 4 vertices with the face
+ * normal and uvs (0,0) (1,0) (1,1) (0,1), triangles (0,1,2) and (0,2,3),
+ * and a material of its own: `emission` (W/(sr m^2)), double-sided when
+ * two_sided (then it emits from both faces, gi_area.h), baseColor 0.78 grey
+ * (McGuire's CornellBox-Original light material: an emitter's diffuser
+ * reflects too, and all three area-lit sequences then treat their emitter
+ * alike). Keeps every array's invariant (positions padded by one); on
+ * failure the scene is unchanged (some arrays may have grown). The caller
+ * runs pf_scene_validate afterwards (it recomputes the bounds). */
+pf_result pf_scene_add_emitter_quad(pf_scene *scene, const pf_vec3 corners[4], pf_vec3 emission, int two_sided,
+                                    pf_error *err);
+
 /* A camera looking from eye to target with a +Y-up roll, fovy in radians. */
 pf_result pf_camera_look_at(pf_camera *cam, pf_vec3 eye, pf_vec3 target, float yfov, pf_error *err);
 

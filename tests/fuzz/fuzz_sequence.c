@@ -18,11 +18,16 @@
  *     intensity x colour in [0, PF_SEQUENCE_MAX_EMISSION], directions unit,
  *     spot cones ordered within 90 degrees;
  *   - pf_sequence_track_eval (a binary search) equals a linear walk over the
- *     keys, bit for bit.
+ *     keys, bit for bit;
+ *   - "emitters": at most PF_SEQUENCE_MAX_EMITTERS, each accepted again by
+ *     pf_scene_emitter_quad_check, and pf_sequence_apply_emitters adds them
+ *     all to a one-triangle scene that pf_scene_validate then accepts, with
+ *     finite unit face normals on every added triangle, the bounds holding
+ *     every corner, and no punctual light left after "lights": [].
  * Seeds: tests/fuzz/seeds/sequence. Build (by hand, or tests/fuzz/CMakeLists.txt):
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Isrc/platform tests/fuzz/fuzz_sequence.c \
  *     src/app/pf_sequence.c src/platform/pf_imageio.c src/scene/pf_scene.c \
- *     src/base/pf_result.c src/scene/pf_texture.c $(pkg-config --cflags --libs libcjson stb) -lm -o fuzz_sequence */
+ *     src/base/pf_result.c src/base/pf_budget.c src/scene/pf_texture.c $(pkg-config --cflags --libs libcjson stb) -lm -o fuzz_sequence */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -124,6 +129,59 @@ static void check_frame(const pf_sequence *s, uint32_t f, const pf_light *bases,
     }
 }
 
+/* The emitters go into a scene exactly as softgi sequence adds them. */
+static void check_emitters(const pf_sequence *s)
+{
+    pf_error e;
+    for (uint32_t i = 0; i < s->emitter_count; i++) {
+        pf_vec3 n;
+        CHECK(pf_scene_emitter_quad_check(s->emitters[i].quad, s->emitters[i].emission, &n, &e) == PF_OK);
+        CHECK(pf_v3_is_finite(n) && fabsf(pf_v3_length(n) - 1.0f) < 1e-4f);
+    }
+    /* one triangle, one material, one point light */
+    pf_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.vertex_count = 3;
+    sc.tri_count = 1;
+    sc.material_count = 1;
+    sc.light_count = 1;
+    sc.positions = calloc(4, sizeof *sc.positions);
+    sc.normals = calloc(3, sizeof *sc.normals);
+    sc.uvs = calloc(3, sizeof *sc.uvs);
+    sc.indices = calloc(3, sizeof *sc.indices);
+    sc.tri_material = calloc(1, sizeof *sc.tri_material);
+    sc.materials = calloc(1, sizeof *sc.materials);
+    sc.lights = calloc(1, sizeof *sc.lights);
+    CHECK(sc.positions && sc.normals && sc.uvs && sc.indices && sc.tri_material && sc.materials && sc.lights);
+    sc.positions[1] = pf_v3(1.0f, 0.0f, 0.0f);
+    sc.positions[2] = pf_v3(0.0f, 0.0f, 1.0f);
+    for (int k = 0; k < 3; k++) {
+        sc.indices[k] = (uint32_t)k;
+        sc.normals[k] = pf_v3(0.0f, 1.0f, 0.0f);
+    }
+    sc.materials[0].base_color_texture = -1;
+    sc.lights[0].type = PF_LIGHT_POINT;
+    sc.lights[0].color = pf_v3(1.0f, 1.0f, 1.0f);
+    CHECK(pf_sequence_apply_emitters(s, &sc, &e) == PF_OK);
+    CHECK(sc.vertex_count == 3 + 4 * s->emitter_count && sc.tri_count == 1 + 2 * s->emitter_count);
+    CHECK(sc.material_count == 1 + s->emitter_count);
+    CHECK(sc.light_count == (s->lights_replace && s->light_count == 0 ? 0u : 1u));
+    CHECK(pf_scene_validate(&sc, &e) == PF_OK);
+    for (uint32_t t = 1; t < sc.tri_count; t++) {
+        pf_vec3 n = pf_scene_face_normal(&sc, t);
+        CHECK(pf_v3_is_finite(n) && fabsf(pf_v3_length(n) - 1.0f) < 1e-3f);
+        const pf_material *m = &sc.materials[sc.tri_material[t]];
+        CHECK(m->emission[0] + m->emission[1] + m->emission[2] > 0.0f);
+    }
+    for (uint32_t i = 0; i < s->emitter_count; i++)
+        for (int k = 0; k < 4; k++) {
+            pf_vec3 c = s->emitters[i].quad[k];
+            CHECK(c.x >= sc.bounds_min.x && c.y >= sc.bounds_min.y && c.z >= sc.bounds_min.z);
+            CHECK(c.x <= sc.bounds_max.x && c.y <= sc.bounds_max.y && c.z <= sc.bounds_max.z);
+        }
+    pf_scene_free(&sc);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pf_sequence s;
@@ -151,6 +209,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     CHECK(s.light_count <= PF_SEQUENCE_MAX_LIGHTS && s.track_count <= PF_SEQUENCE_MAX_TRACK);
+    CHECK(s.emitter_count <= PF_SEQUENCE_MAX_EMITTERS);
+    if (s.lights_replace && s.light_count == 0) CHECK(s.emitter_count > 0);
+    if (s.emitter_count) check_emitters(&s);
     for (uint32_t i = 0; i < s.track_count && s.width; i++) CHECK(s.track[i][0] < s.width && s.track[i][1] < s.height);
 
     /* scene lights of each type to animate */

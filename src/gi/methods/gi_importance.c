@@ -187,3 +187,54 @@ pf_result gi_vpl_mark_moved(gi_vpl_set *cur, gi_vpl_set *prev, pf_error *err)
     prev->count = cur->count;
     return PF_OK;
 }
+
+/* ------------------------------------------------------------------ views */
+
+int gi_importance_canvas_draw(gi_importance_canvas *cv, const gi_rsm_set *R, const gi_importance *im,
+                              const gi_vpl_view_ctx *c, uint8_t *rgb)
+{
+    memset(cv, 0, sizeof *cv);
+    if (!R->count || R->count > 64 || !R->texel_count || !im->f || im->domain.total != R->texel_count) return 0;
+    for (uint32_t m = 0; m < R->count; m++) cv->face0[m] = cv->faces, cv->faces += R->maps[m].face_count;
+    cv->across = 1;
+    for (uint32_t a = 1; a <= cv->faces; a++) { /* the most cells across whose square cells are largest */
+        uint32_t down = (cv->faces + a - 1) / a;
+        uint32_t side = c->width / a < c->height / down ? c->width / a : c->height / down;
+        if (side > cv->cell) cv->cell = side, cv->across = a;
+    }
+    if (cv->cell < 4) return 0;
+    uint32_t down = (cv->faces + cv->across - 1) / cv->across;
+    cv->ox = (c->width - cv->across * cv->cell) / 2, cv->oy = (c->height - down * cv->cell) / 2;
+    float lo = INFINITY, hi = -INFINITY;
+    for (uint32_t t = 0; t < R->texel_count; t++)
+        if (R->valid[t]) lo = fminf(lo, im->f[t]), hi = fmaxf(hi, im->f[t]);
+    if (!(lo <= hi)) lo = hi = 0.0f;
+    cv->lo = lo, cv->hi = hi;
+    /* the cells, pixel by pixel: the texel under each pixel */
+    for (uint32_t m = 0; m < R->count; m++) {
+        const gi_rsm_map *M = &R->maps[m];
+        for (uint32_t fc = 0; fc < M->face_count; fc++) {
+            uint32_t k = cv->face0[m] + fc, x0 = cv->ox + k % cv->across * cv->cell;
+            uint32_t y0 = cv->oy + k / cv->across * cv->cell;
+            for (uint32_t y = 0; y < cv->cell; y++)
+                for (uint32_t x = 0; x < cv->cell; x++) {
+                    uint32_t row = (uint32_t)((uint64_t)y * M->size / cv->cell);
+                    uint32_t col = (uint32_t)((uint64_t)x * M->size / cv->cell);
+                    uint32_t t = M->first + (fc * M->size + row) * M->size + col;
+                    uint8_t *o = rgb + 3 * ((size_t)(y0 + y) * c->width + x0 + x);
+                    if (!R->valid[t]) o[0] = o[1] = o[2] = 0;
+                    else c->heat(hi > lo ? sqrtf((im->f[t] - lo) / (hi - lo)) : 1.0f, o);
+                }
+        }
+    }
+    return 1;
+}
+
+void gi_importance_canvas_texel_xy(const gi_importance_canvas *cv, const gi_rsm_set *R, uint32_t t, float *x,
+                                   float *y)
+{
+    uint32_t m = gi_rsm_map_of(R, t), size = R->maps[m].size, local = t - R->maps[m].first;
+    uint32_t face = cv->face0[m] + local / (size * size), row = local % (size * size) / size, col = local % size;
+    *x = (float)(cv->ox + face % cv->across * cv->cell) + ((float)col + 0.5f) * (float)cv->cell / (float)size;
+    *y = (float)(cv->oy + face / cv->across * cv->cell) + ((float)row + 0.5f) * (float)cv->cell / (float)size;
+}

@@ -118,6 +118,25 @@ uint32_t gi_imh_index(uint32_t j, uint32_t k, uint32_t N, uint32_t M);
 uint32_t gi_imh_chain(const gi_sample_domain *d, const float *f, uint32_t j, uint32_t N, uint32_t M, double *w,
                       float *fv, double *g0);
 
+/* ------------------------------------------------------------------ views */
+
+/* The learner's view of an importance map (InvTM's and TCAS's own view,
+ * gi_vpl_method.view): every RSM face as a square cell in a grid fitted to
+ * the picture, each pixel the heat of f at the texel under it (black where
+ * the RSM saw nothing). gi_importance_canvas_draw lays out and draws it and
+ * fills lo..hi, the range of f the legend names; returns 0 when there is
+ * nothing to draw or the picture is too small. */
+typedef struct gi_importance_canvas {
+    uint32_t across, cell, ox, oy, faces;
+    uint32_t face0[64]; /* per map: the index of its first face among all faces */
+    float lo, hi;
+} gi_importance_canvas;
+int gi_importance_canvas_draw(gi_importance_canvas *cv, const gi_rsm_set *R, const gi_importance *im,
+                              const gi_vpl_view_ctx *c, uint8_t *rgb);
+/* The picture point at the centre of texel t. */
+void gi_importance_canvas_texel_xy(const gi_importance_canvas *cv, const gi_rsm_set *R, uint32_t t, float *x,
+                                   float *y);
+
 /* ------------------------------------------------------------------ VPLs */
 
 /* The VPL of texel t (valid) with intensity flux_t * scale / pi, the

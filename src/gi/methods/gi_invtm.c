@@ -242,53 +242,23 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
 static int gi__invtm_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
 {
     const gi__invtm_state *s = state;
-    if (!s) return 0;
+    if (!s || !(s->cdf.total > 0.0)) return 0;
     const gi_rsm_set *R = &s->rsm;
     const gi_importance *im = &s->imp;
-    if (!R->count || R->count > 64 || !R->texel_count || !im->f || im->domain.total != R->texel_count ||
-        !(s->cdf.total > 0.0))
-        return 0;
-    uint32_t face0[64], faces = 0, across = 1, cell = 0;
-    for (uint32_t m = 0; m < R->count; m++) face0[m] = faces, faces += R->maps[m].face_count;
-    for (uint32_t a = 1; a <= faces; a++) {
-        uint32_t down = (faces + a - 1) / a, side = c->width / a < c->height / down ? c->width / a : c->height / down;
-        if (side > cell) cell = side, across = a;
-    }
-    if (cell < 4) return 0;
-    uint32_t ox = (c->width - across * cell) / 2, oy = (c->height - (faces + across - 1) / across * cell) / 2;
-    float lo = INFINITY, hi = -INFINITY;
-    for (uint32_t t = 0; t < R->texel_count; t++)
-        if (R->valid[t]) lo = fminf(lo, im->f[t]), hi = fmaxf(hi, im->f[t]);
-    if (!(lo <= hi)) lo = hi = 0.0f;
-    for (uint32_t m = 0; m < R->count; m++) {
-        const gi_rsm_map *M = &R->maps[m];
-        for (uint32_t fc = 0; fc < M->face_count; fc++) {
-            uint32_t k = face0[m] + fc, x0 = ox + k % across * cell, y0 = oy + k / across * cell;
-            for (uint32_t y = 0; y < cell; y++)
-                for (uint32_t x = 0; x < cell; x++) {
-                    uint32_t row = (uint32_t)((uint64_t)y * M->size / cell);
-                    uint32_t col = (uint32_t)((uint64_t)x * M->size / cell);
-                    uint32_t t = M->first + (fc * M->size + row) * M->size + col;
-                    uint8_t *o = rgb + 3 * ((size_t)(y0 + y) * c->width + x0 + x);
-                    if (!R->valid[t]) o[0] = o[1] = o[2] = 0;
-                    else c->heat(hi > lo ? sqrtf((im->f[t] - lo) / (hi - lo)) : 1.0f, o);
-                }
-        }
-    }
+    gi_importance_canvas cv;
+    if (!gi_importance_canvas_draw(&cv, R, im, c, rgb)) return 0;
     static const uint8_t white[3] = {255, 255, 255};
     for (uint32_t i = 0; i < c->vpls->count; i++) {
         double xi1 = gi_halton(i + 1, 2), xi2 = gi_halton(i + 1, 3), xi3 = gi_halton(i + 1, 5);
-        uint32_t t = gi_invtm_sample(&s->cdf, &im->domain, (int)s->dims, xi1, xi2, xi3);
-        uint32_t m = gi_rsm_map_of(R, t), size = R->maps[m].size, local = t - R->maps[m].first;
-        uint32_t face = face0[m] + local / (size * size), row = local % (size * size) / size, col = local % size;
-        float x = (float)(ox + face % across * cell) + ((float)col + 0.5f) * (float)cell / (float)size;
-        float y = (float)(oy + face / across * cell) + ((float)row + 0.5f) * (float)cell / (float)size;
+        float x, y;
+        gi_importance_canvas_texel_xy(&cv, R, gi_invtm_sample(&s->cdf, &im->domain, (int)s->dims, xi1, xi2, xi3),
+                                      &x, &y);
         c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, white);
     }
     char text[96];
-    snprintf(text, sizeof text, "%u RSM faces; white: the texel of each of %u VPLs", faces, c->vpls->count);
+    snprintf(text, sizeof text, "%u RSM faces; white: the texel of each of %u VPLs", cv.faces, c->vpls->count);
     c->text(c, rgb, 4, 2, text, white);
-    c->legend(c, rgb, "importance f (Eq. 1-2)", lo, hi, 1);
+    c->legend(c, rgb, "importance f (Eq. 1-2)", cv.lo, cv.hi, 1);
     return 1;
 }
 

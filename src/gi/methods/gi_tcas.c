@@ -276,71 +276,19 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
 
 /* Where RSM texel t is drawn: every face of every map is one square cell of
  * a grid (cells across, cell pixels a side, from (ox, oy)). */
-typedef struct gi__tcas_canvas {
-    uint32_t across, cell, ox, oy;
-    const uint32_t *face0; /* per map: the index of its first face among all faces */
-} gi__tcas_canvas;
-
-static void gi__tcas_texel_xy(const gi_rsm_set *R, const gi__tcas_canvas *cv, uint32_t t, float *x, float *y)
-{
-    uint32_t m = gi_rsm_map_of(R, t), size = R->maps[m].size, local = t - R->maps[m].first;
-    uint32_t face = cv->face0[m] + local / (size * size), row = local % (size * size) / size, col = local % size;
-    *x = (float)(cv->ox + face % cv->across * cv->cell) + ((float)col + 0.5f) * (float)cv->cell / (float)size;
-    *y = (float)(cv->oy + face / cv->across * cv->cell) + ((float)row + 0.5f) * (float)cv->cell / (float)size;
-}
-
-/* The importance map f (Barak 2013 Eq. 1-2) over the RSM texels, one cell
- * per map face, in heat colours (black: an invalid texel); every chain's
- * final sample, the texel its VPL sits on (white); and the chosen VPL's
- * chain (Algorithm 1): its M proposals (cyan) and the path of the samples
- * it accepted (yellow), the same Halton numbers as gi_imh_chain. */
 static int gi__tcas_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
 {
     const gi__tcas_state *s = state;
     if (!s) return 0;
     const gi_rsm_set *R = &s->rsm;
     const gi_importance *im = &s->imp;
-    if (!R->count || !R->texel_count || !im->f || im->domain.total != R->texel_count) return 0;
-    uint32_t face0[64], faces = 0;
-    if (R->count > 64) return 0;
-    for (uint32_t m = 0; m < R->count; m++) face0[m] = faces, faces += R->maps[m].face_count;
-    gi__tcas_canvas cv = {1, 0, 0, 0, face0};
-    for (uint32_t a = 1; a <= faces; a++) { /* the most cells across whose square cells are largest */
-        uint32_t down = (faces + a - 1) / a, side = c->width / a < c->height / down ? c->width / a : c->height / down;
-        if (side > cv.cell) cv.cell = side, cv.across = a;
-    }
-    if (cv.cell < 4) return 0;
-    uint32_t down = (faces + cv.across - 1) / cv.across;
-    cv.ox = (c->width - cv.across * cv.cell) / 2, cv.oy = (c->height - down * cv.cell) / 2;
-    float lo = INFINITY, hi = -INFINITY;
-    for (uint32_t t = 0; t < R->texel_count; t++)
-        if (R->valid[t]) lo = fminf(lo, im->f[t]), hi = fmaxf(hi, im->f[t]);
-    if (!(lo <= hi)) lo = hi = 0.0f;
-    /* the cells, pixel by pixel: the texel under each pixel */
-    for (uint32_t m = 0; m < R->count; m++) {
-        const gi_rsm_map *M = &R->maps[m];
-        for (uint32_t fc = 0; fc < M->face_count; fc++) {
-            uint32_t cell = face0[m] + fc;
-            uint32_t x0 = cv.ox + cell % cv.across * cv.cell, y0 = cv.oy + cell / cv.across * cv.cell;
-            for (uint32_t y = 0; y < cv.cell; y++)
-                for (uint32_t x = 0; x < cv.cell; x++) {
-                    uint32_t row = (uint32_t)((uint64_t)y * M->size / cv.cell);
-                    uint32_t col = (uint32_t)((uint64_t)x * M->size / cv.cell);
-                    uint32_t t = M->first + (fc * M->size + row) * M->size + col;
-                    uint8_t *o = rgb + 3 * ((size_t)(y0 + y) * c->width + x0 + x);
-                    if (!R->valid[t]) {
-                        o[0] = o[1] = o[2] = 0;
-                        continue;
-                    }
-                    c->heat(hi > lo ? sqrtf((im->f[t] - lo) / (hi - lo)) : 1.0f, o);
-                }
-        }
-    }
+    gi_importance_canvas cv;
+    if (!gi_importance_canvas_draw(&cv, R, im, c, rgb)) return 0;
     static const uint8_t white[3] = {255, 255, 255}, cyan[3] = {40, 220, 230}, yellow[3] = {255, 230, 0};
     uint32_t N = c->vpls->count < s->cap ? c->vpls->count : s->cap;
     float x, y;
     for (uint32_t j = 0; j < N; j++) {
-        gi__tcas_texel_xy(R, &cv, s->texel[j], &x, &y);
+        gi_importance_canvas_texel_xy(&cv, R, s->texel[j], &x, &y);
         c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, white);
     }
     if (N) { /* the chosen chain, replayed */
@@ -352,22 +300,22 @@ static int gi__tcas_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *r
             uint32_t h = gi_imh_index(j, k, N, s->M);
             uint32_t vn = gi_domain_texel(&im->domain, gi_halton(h, 2), gi_halton(h, 3), gi_halton(h, 5), &q);
             double gn = (double)im->f[vn] / q;
-            gi__tcas_texel_xy(R, &cv, vn, &x, &y);
+            gi_importance_canvas_texel_xy(&cv, R, vn, &x, &y);
             c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, cyan);
             if (k == 0 || gv == 0.0 || gn >= gi_halton(h, 7) * gv) { /* accepted (k = 0: the start) */
                 if (k > 0) c->line(c, rgb, (int)floorf(px), (int)floorf(py), (int)floorf(x), (int)floorf(y), yellow);
                 v = vn, gv = gn, px = x, py = y;
             }
         }
-        gi__tcas_texel_xy(R, &cv, v, &x, &y);
+        gi_importance_canvas_texel_xy(&cv, R, v, &x, &y);
         c->line(c, rgb, (int)floorf(x) - 5, (int)floorf(y) - 5, (int)floorf(x) + 5, (int)floorf(y) + 5, yellow);
         c->line(c, rgb, (int)floorf(x) - 5, (int)floorf(y) + 5, (int)floorf(x) + 5, (int)floorf(y) - 5, yellow);
         char text[120];
         snprintf(text, sizeof text, "%u RSM faces, %u chains of M = %u; chain %u: proposals cyan, accepted yellow",
-                 faces, N, s->M, j);
+                 cv.faces, N, s->M, j);
         c->text(c, rgb, 4, 2, text, white);
     }
-    c->legend(c, rgb, "importance f (Eq. 1-2)", lo, hi, 1);
+    c->legend(c, rgb, "importance f (Eq. 1-2)", cv.lo, cv.hi, 1);
     return 1;
 }
 

@@ -79,9 +79,11 @@ void rs_resolve_table_destroy(rs_resolve_tri *table);
 
 /* The same as rs_gbuffer_resolve, bit for bit (tests/test_raster.c
  * test_gbuffer_simd_resolve), with the table when `table` is not NULL and,
- * where simd is nonzero, 8 pixels at a time with AVX2: each group of 8
- * pixels on up to 4 untextured triangles is resolved once per triangle for
- * all lanes and blended; other groups take the scalar code. */
+ * where simd is an rs_simd other than RS_SIMD_SCALAR (0), SIMD_W pixels at a
+ * time (1 = RS_SIMD_AVX2: 8 pixels; 2 = RS_SIMD_AVX512: 16): each group on
+ * up to SIMD_W / 2 untextured triangles is resolved once per triangle for
+ * all lanes and blended (rs_gbuffer_kernels.c, written once over the SIMD
+ * vocabulary); other groups take the scalar code pixel by pixel. */
 void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const rs_resolve_tri *table, const pf_camera *cam,
                              pf_jobs *jobs, int simd);
 

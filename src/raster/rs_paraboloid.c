@@ -10,15 +10,15 @@
  *                          distance key), so near occluders come first;
  *   3. rs__draw_cluster    unless rs__occluded (every 8x8 tile its disc
  *                          touches is nearer than the cluster): the front end
- *                          rs__front_scalar / _avx2 / _avx512 (8 or 16
- *                          triangles at a time: local coordinates, hemisphere
+ *                          rs__front (a kernel: 8 or 16 triangles at
+ *                          a time: local coordinates, hemisphere
  *                          cull, conservative (u, v) bound, texel rectangle),
  *                          then per survivor the same occlusion test with the
  *                          triangle's nearest possible distance,
  *                          rs__setup_triangle (edge normals, filter bounds,
- *                          orientation, tighter bound) and rs__scan_scalar /
- *                          _avx2 / _avx512 (8 or 16 texels of a row at a
- *                          time): the exact per-texel test, nearest distance;
+ *                          orientation, tighter bound) and rs__scan (a
+ *                          kernel: 8 or 16 texels of a row at a time): the
+ *                          exact per-texel test, nearest distance;
  *   4. quantise            float distances -> 16-bit codes.
  *
  * The exact test. All rays start at the VPL o, so a triangle with local
@@ -106,12 +106,14 @@
  * order: the minimum of floats is order-free. They are the same in every
  * path, so the bytes do not depend on the path either way.
  *
- * SIMD. rs__front_avx512 and rs__scan_avx512 compute, lane by lane, the same
- * IEEE operations in the same order as the scalar functions (no FMA: softgi
- * builds with -ffp-contract=off and the intrinsics used are plain mul/add/
- * div/sqrt/min/max/round), and undecided lanes go through the same scalar
- * rs__resolve, so every path gives the same bits and the same statistics
- * (tested). rs__front_avx2 and rs__scan_avx2 are the same at 8 lanes. */
+ * SIMD. rs__front and rs__scan are written once over the SIMD vocabulary
+ * (rs_para_kernels.c, compiled per instruction set: 8 plain-C lanes for the
+ * scalar path, 8 on AVX2, 16 on AVX-512). Every compile makes, lane by
+ * lane, the same IEEE operations in the same order (no FMA: softgi builds
+ * with -ffp-contract=off and the vocabulary has only plain mul/add/div/
+ * sqrt/min/max/round), and undecided lanes go through the same scalar
+ * rs__para_resolve, so every path gives the same bits and the same
+ * statistics (tested). */
 #include "rs_paraboloid.h"
 
 #include <assert.h>
@@ -120,86 +122,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define RS__HAVE_X86 1
-#endif
-
-#define RS__UV_EPS 4e-6f      /* uv margin of every bound (float error of projections is ~5e-7) */
-#define RS__TILE 8            /* tile side (texels) of the occlusion-culling depth maxima */
-#define RS__LANES 16          /* triangles per front-end batch; cluster sizes are multiples of it */
-#define RS__FILTER 0x1p-17f   /* float filter: |g| > RS__FILTER |A||B| fixes the sign */
-
-/* ------------------------------------------------------------------ types */
-
-typedef struct rs__cluster {
-    float cx, cy, cz, r; /* bounding sphere */
-    uint32_t first, count;
-} rs__cluster;
-
-typedef struct rs__rect {
-    int32_t i0, i1, j0, j1; /* inclusive texel range; empty when i0 > i1 or j0 > j1 */
-} rs__rect;
-
-/* The front end's survivors in one cluster, structure of arrays (the SIMD
- * front end compress-stores into it). */
-typedef struct rs__batch {
-    uint32_t n;
-    uint32_t *tri;
-    float *l[9];          /* local coordinates x0 y0 z0 x1 y1 z1 x2 y2 z2 */
-    float *len[3];        /* |A|, |B|, |C| */
-    float *pu[3], *pv[3]; /* projected vertices (when not crossing) */
-    float *c2max;         /* largest squared chord (when not crossing) */
-    int32_t *rect[4];     /* i0 i1 j0 j1 (when not crossing) */
-    int32_t *crossing;    /* 1: crosses the tangent plane (bound made by rs__setup_triangle) */
-} rs__batch;
-
-/* A triangle after setup: what the texel loop needs. */
-typedef struct rs__setup {
-    float e[3][3];  /* oriented edge normals e'_k, float */
-    float bound[3]; /* float filter bounds */
-    float nf[3];    /* oriented plane normal N', float */
-    float det;      /* det' (float) */
-    float sgn;      /* s */
-    /* the double path, made on first use */
-    int have_d;
-    double ed[3][3];
-    const struct rs_para_context *ctx;
-    const rs_para_frame *f;
-    uint32_t tri;
-} rs__setup;
-
-/* One worker's scratch, in its own cache lines (the statistics are written
- * per triangle: two workers sharing a line would slow each other down). */
-typedef struct rs__scratch {
-    _Alignas(64) float *depth; /* R*R: nearest distance so far (INFINITY: nothing) */
-    float *tile_max;     /* tiles*tiles: maximum depth over a tile's inside texels */
-    uint8_t *tile_dirty; /* tiles*tiles: tile_max is stale (too large) */
-    rs__rect *crect;     /* per cluster: texel rectangle of its image */
-    float *cnear;        /* per cluster: nearest possible hit distance */
-    uint16_t *key;       /* sort keys */
-    uint32_t *order, *order_tmp;
-    void *batch_block;
-    rs__batch batch;
-    rs_para_stats stats;
-} rs__scratch;
-
-struct rs_para_context {
-    uint32_t res, tiles;
-    uint32_t tri_count, tri_padded;
-    uint32_t cluster_size, cluster_count;
-    float *soa[13]; /* x0 y0 z0 x1 y1 z1 x2 y2 z2 nx ny nz emax, tri_padded each (zero padding) */
-    float *soa_block;
-    rs__cluster *clusters;
-    /* texel tables */
-    float *u;                 /* R: u_i = (2i+1-R)/R (also v_j) */
-    float *d2;                /* R: 2 u_i (D.x of column i, D.y of row j) */
-    float *dz, *w;            /* R*R: 1 - (u^2 + v^2), 1 + (u^2 + v^2) */
-    int32_t *row_lo, *row_hi; /* inside columns of row j */
-    rs_simd simd;
-    uint32_t scratch_count;
-    rs__scratch **scratch; /* per worker, each 64-byte aligned */
-};
+#include "rs_para_kernels.h"
+#include "simd.h" /* SIMD_X86 */
 
 /* ------------------------------------------------------------------ mapping */
 
@@ -319,12 +243,13 @@ float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_
     return w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES;
 }
 
-int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
-                       float cos_receiver)
+int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f,
+                           pf_vec3 p, float cos_receiver, float bias_scale)
 {
     /* rs_para_bias + rs_para_visible in one pass: the local direction, its
      * length and its (u, v) are computed once (the many-light accumulation
-     * makes this call per VPL per pixel) */
+     * makes this call per VPL per pixel). rs_para_visible_lanes
+     * (rs_para_lookup.h) is the same lookup over the SIMD vocabulary. */
     pf_vec3 d = rs_para_to_local(f, p);
     if (!(d.z > 0.0f)) return 0; /* behind the VPL: it emits nothing there */
     float dist = pf_v3_length(d), den = dist + d.z;
@@ -334,7 +259,13 @@ int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, co
     float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
     uint16_t code = map[rs__texel_of_uv(resolution, u, v)];
     if (code > RS_PARA_MAX_CODE) return 1;
-    return dist <= rs_para_decode(code, range) + (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
+    return dist <= rs_para_decode(code, range) + bias_scale * (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
+}
+
+int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
+                       float cos_receiver)
+{
+    return rs_para_visible_scaled(map, resolution, range, f, p, cos_receiver, 1.0f); /* x 1 is exact */
 }
 
 int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
@@ -435,7 +366,7 @@ static int rs__scratch_reserve(rs_para_context *ctx, uint32_t count)
 
 static rs_simd rs__simd_supported(rs_simd want)
 {
-#if RS__HAVE_X86
+#if SIMD_X86
     pf_isa isa = pf_isa_detect();
     if (want == RS_SIMD_AVX512 && isa >= PF_ISA_AVX512) return RS_SIMD_AVX512;
     if (want >= RS_SIMD_AVX2 && isa >= PF_ISA_AVX2) return RS_SIMD_AVX2;
@@ -703,283 +634,18 @@ static rs__rect rs__crossing_rect(const rs_para_context *ctx, const double a[3][
 
 /* ------------------------------------------------------------------ front end */
 
-/* Front end of triangle t (scalar reference; rs__front_avx512 computes the
- * same bits 16 at a time): appends survivors to the batch. */
-static void rs__front_one(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f, uint32_t t)
+/* The front end is a kernel (rs_para_kernels.c, one table per instruction
+ * set): rs__front, SIMD_W triangles at a time. */
+
+const rs_para_kernels *rs_para_kernels_for(rs_simd simd)
 {
-    /* rs__local_f, z first: most rejected triangles need nothing else */
-    float a[3][3], p[3][3];
-    for (int v = 0; v < 3; v++) {
-        p[v][0] = ctx->soa[3 * v][t] - f->o.x;
-        p[v][1] = ctx->soa[3 * v + 1][t] - f->o.y;
-        p[v][2] = ctx->soa[3 * v + 2][t] - f->o.z;
-        a[v][2] = (p[v][0] * f->n.x + p[v][1] * f->n.y) + p[v][2] * f->n.z;
-    }
-    int above = (a[0][2] > 0.0f) + (a[1][2] > 0.0f) + (a[2][2] > 0.0f);
-    if (above == 0) {
-        sc->stats.triangles_behind++;
-        return;
-    }
-    float len[3], pu[3], pv[3];
-    for (int v = 0; v < 3; v++) {
-        a[v][0] = (p[v][0] * f->t.x + p[v][1] * f->t.y) + p[v][2] * f->t.z;
-        a[v][1] = (p[v][0] * f->b.x + p[v][1] * f->b.y) + p[v][2] * f->b.z;
-        len[v] = sqrtf((a[v][0] * a[v][0] + a[v][1] * a[v][1]) + a[v][2] * a[v][2]);
-        /* one division per vertex (the SIMD paths do the same): 1 ulp more
-         * error than two divisions, far inside RS__UV_EPS */
-        float inv = 1.0f / (len[v] + a[v][2]);
-        pu[v] = a[v][0] * inv;
-        pv[v] = a[v][1] * inv;
-    }
-    rs__batch *b = &sc->batch;
-    uint32_t n = b->n;
-    if (above == 3) {
-        float c2max = 0.0f;
-        for (int k = 0; k < 3; k++) {
-            int l = k == 2 ? 0 : k + 1;
-            float du = pu[l] - pu[k], dv = pv[l] - pv[k];
-            c2max = rs__maxf(c2max, du * du + dv * dv);
-        }
-        float m = c2max * 0.25f + RS__UV_EPS;
-        float umin = rs__minf(rs__minf(pu[0], pu[1]), pu[2]) - m, umax = rs__maxf(rs__maxf(pu[0], pu[1]), pu[2]) + m;
-        float vmin = rs__minf(rs__minf(pv[0], pv[1]), pv[2]) - m, vmax = rs__maxf(rs__maxf(pv[0], pv[1]), pv[2]) + m;
-        rs__rect r = rs__uv_rect(umin, umax, vmin, vmax, ctx->res);
-        if (rs__rect_empty(r)) {
-            sc->stats.triangles_between_texels++;
-            return;
-        }
-        b->rect[0][n] = r.i0;
-        b->rect[1][n] = r.i1;
-        b->rect[2][n] = r.j0;
-        b->rect[3][n] = r.j1;
-        b->c2max[n] = c2max;
-        b->crossing[n] = 0;
-    } else {
-        b->crossing[n] = 1;
-    }
-    b->tri[n] = t;
-    for (int v = 0; v < 3; v++) {
-        for (int c = 0; c < 3; c++) b->l[3 * v + c][n] = a[v][c];
-        b->len[v][n] = len[v];
-        b->pu[v][n] = pu[v];
-        b->pv[v][n] = pv[v];
-    }
-    b->n = n + 1;
-}
-
-static void rs__front_scalar(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
-                             const rs__cluster *cl)
-{
-    for (uint32_t t = cl->first; t < cl->first + cl->count; t++) rs__front_one(ctx, sc, f, t);
-}
-
-#if RS__HAVE_X86
-#define RS__AVX512 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl")))
-
-/* Texel range of 16 uv intervals, as rs__uv_to_texels. Returns the mask of
- * non-empty ranges. */
-RS__AVX512 static inline __mmask16 rs__uv_to_texels16(__m512 lo, __m512 hi, uint32_t res, __m512i *a, __m512i *b)
-{
-    const __m512 h = _mm512_set1_ps(0.5f * (float)res), top = _mm512_set1_ps((float)res - 1.0f);
-    const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f);
-    __m512 fa = _mm512_roundscale_ps(_mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(lo, one), h), half),
-                                     _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-    __m512 fb = _mm512_roundscale_ps(_mm512_sub_ps(_mm512_mul_ps(_mm512_add_ps(hi, one), h), half),
-                                     _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-    /* rs__maxf(fa, 0) = fa > 0 ? fa : 0, which _mm512_max_ps(fa, 0) is for
-     * every non-NaN fa (NaN lanes fail the fa <= fb test below either way) */
-    fa = _mm512_max_ps(fa, _mm512_setzero_ps());
-    fb = _mm512_min_ps(fb, top);
-    __mmask16 ok = _mm512_cmp_ps_mask(fa, fb, _CMP_LE_OQ);
-    *a = _mm512_cvttps_epi32(fa);
-    *b = _mm512_cvttps_epi32(fb);
-    return ok;
-}
-
-/* The front end, 16 triangles at a time: the same float operations as
- * rs__front_one lane by lane, survivors compress-stored in triangle order. */
-RS__AVX512 static void rs__front_avx512(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
-                                        const rs__cluster *cl)
-{
-    const __m512 ox = _mm512_set1_ps(f->o.x), oy = _mm512_set1_ps(f->o.y), oz = _mm512_set1_ps(f->o.z);
-    const __m512 tx = _mm512_set1_ps(f->t.x), ty = _mm512_set1_ps(f->t.y), tz = _mm512_set1_ps(f->t.z);
-    const __m512 bx = _mm512_set1_ps(f->b.x), by = _mm512_set1_ps(f->b.y), bz = _mm512_set1_ps(f->b.z);
-    const __m512 nx = _mm512_set1_ps(f->n.x), ny = _mm512_set1_ps(f->n.y), nz = _mm512_set1_ps(f->n.z);
-    const __m512 zero = _mm512_setzero_ps(), quarter = _mm512_set1_ps(0.25f), eps = _mm512_set1_ps(RS__UV_EPS);
-    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    rs__batch *b = &sc->batch;
-    for (uint32_t base = cl->first; base < cl->first + cl->count; base += 16) {
-        uint32_t left = cl->first + cl->count - base;
-        __mmask16 valid = left >= 16 ? (__mmask16)0xFFFF : (__mmask16)((1u << left) - 1u);
-        __m512 l[3][3], len[3], pu[3], pv[3];
-        __mmask16 above[3];
-        for (int v = 0; v < 3; v++) {
-            __m512 px = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v] + base), ox);
-            __m512 py = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v + 1] + base), oy);
-            __m512 pz = _mm512_sub_ps(_mm512_load_ps(ctx->soa[3 * v + 2] + base), oz);
-            l[v][0] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, tx), _mm512_mul_ps(py, ty)), _mm512_mul_ps(pz, tz));
-            l[v][1] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, bx), _mm512_mul_ps(py, by)), _mm512_mul_ps(pz, bz));
-            l[v][2] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(px, nx), _mm512_mul_ps(py, ny)), _mm512_mul_ps(pz, nz));
-            above[v] = _mm512_cmp_ps_mask(l[v][2], zero, _CMP_GT_OQ);
-        }
-        __mmask16 any = valid & (above[0] | above[1] | above[2]);
-        __mmask16 all = valid & above[0] & above[1] & above[2];
-        sc->stats.triangles_behind += (uint64_t)__builtin_popcount(valid & ~any);
-        if (!any) continue;
-        for (int v = 0; v < 3; v++) {
-            len[v] = _mm512_sqrt_ps(_mm512_add_ps(
-                _mm512_add_ps(_mm512_mul_ps(l[v][0], l[v][0]), _mm512_mul_ps(l[v][1], l[v][1])),
-                _mm512_mul_ps(l[v][2], l[v][2])));
-            __m512 inv = _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_add_ps(len[v], l[v][2]));
-            pu[v] = _mm512_mul_ps(l[v][0], inv);
-            pv[v] = _mm512_mul_ps(l[v][1], inv);
-        }
-        __m512 c2max = zero;
-        for (int k = 0; k < 3; k++) {
-            int m = k == 2 ? 0 : k + 1;
-            __m512 du = _mm512_sub_ps(pu[m], pu[k]), dv = _mm512_sub_ps(pv[m], pv[k]);
-            /* rs__maxf(c2max, c2) = c2max > c2 ? c2max : c2: vmaxps(c2max, c2) returns its second operand
-             * unless the first is greater, the same for non-NaN values */
-            c2max = _mm512_max_ps(c2max, _mm512_add_ps(_mm512_mul_ps(du, du), _mm512_mul_ps(dv, dv)));
-        }
-        __m512 mg = _mm512_add_ps(_mm512_mul_ps(c2max, quarter), eps);
-        __m512 umin = _mm512_sub_ps(_mm512_min_ps(_mm512_min_ps(pu[0], pu[1]), pu[2]), mg);
-        __m512 umax = _mm512_add_ps(_mm512_max_ps(_mm512_max_ps(pu[0], pu[1]), pu[2]), mg);
-        __m512 vmin = _mm512_sub_ps(_mm512_min_ps(_mm512_min_ps(pv[0], pv[1]), pv[2]), mg);
-        __m512 vmax = _mm512_add_ps(_mm512_max_ps(_mm512_max_ps(pv[0], pv[1]), pv[2]), mg);
-        __m512i i0, i1, j0, j1;
-        __mmask16 okx = rs__uv_to_texels16(umin, umax, ctx->res, &i0, &i1);
-        __mmask16 oky = rs__uv_to_texels16(vmin, vmax, ctx->res, &j0, &j1);
-        __mmask16 drawn = all & okx & oky;
-        __mmask16 crossing = any & ~all;
-        sc->stats.triangles_between_texels += (uint64_t)__builtin_popcount(all & ~drawn);
-        __mmask16 keep = drawn | crossing;
-        if (!keep) continue;
-        uint32_t n = b->n;
-        _mm512_mask_compressstoreu_epi32(b->tri + n, keep, _mm512_add_epi32(_mm512_set1_epi32((int)base), lane));
-        for (int v = 0; v < 3; v++) {
-            for (int c = 0; c < 3; c++) _mm512_mask_compressstoreu_ps(b->l[3 * v + c] + n, keep, l[v][c]);
-            _mm512_mask_compressstoreu_ps(b->len[v] + n, keep, len[v]);
-            _mm512_mask_compressstoreu_ps(b->pu[v] + n, keep, pu[v]);
-            _mm512_mask_compressstoreu_ps(b->pv[v] + n, keep, pv[v]);
-        }
-        _mm512_mask_compressstoreu_ps(b->c2max + n, keep, c2max);
-        _mm512_mask_compressstoreu_epi32(b->rect[0] + n, keep, i0);
-        _mm512_mask_compressstoreu_epi32(b->rect[1] + n, keep, i1);
-        _mm512_mask_compressstoreu_epi32(b->rect[2] + n, keep, j0);
-        _mm512_mask_compressstoreu_epi32(b->rect[3] + n, keep, j1);
-        _mm512_mask_compressstoreu_epi32(b->crossing + n, keep,
-                                         _mm512_maskz_mov_epi32(crossing, _mm512_set1_epi32(1)));
-        b->n = n + (uint32_t)__builtin_popcount(keep);
-    }
-}
-
-#define RS__AVX2 __attribute__((target("avx2")))
-
-/* rs__uv_to_texels for 8 intervals; returns the bit mask of non-empty ones. */
-RS__AVX2 static inline int rs__uv_to_texels8(__m256 lo, __m256 hi, uint32_t res, __m256i *a, __m256i *b)
-{
-    const __m256 h = _mm256_set1_ps(0.5f * (float)res), top = _mm256_set1_ps((float)res - 1.0f);
-    const __m256 one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
-    __m256 fa = _mm256_round_ps(_mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(lo, one), h), half),
-                                _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-    __m256 fb = _mm256_round_ps(_mm256_sub_ps(_mm256_mul_ps(_mm256_add_ps(hi, one), h), half),
-                                _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-    fa = _mm256_max_ps(fa, _mm256_setzero_ps());
-    fb = _mm256_min_ps(fb, top);
-    int ok = _mm256_movemask_ps(_mm256_cmp_ps(fa, fb, _CMP_LE_OQ));
-    *a = _mm256_cvttps_epi32(fa);
-    *b = _mm256_cvttps_epi32(fb);
-    return ok;
-}
-
-/* The front end 8 triangles at a time (AVX2): rs__front_avx512 at half the
- * width; survivors are copied out lane by lane (AVX2 has no compress). */
-RS__AVX2 static void rs__front_avx2(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
-                                    const rs__cluster *cl)
-{
-    const __m256 ox = _mm256_set1_ps(f->o.x), oy = _mm256_set1_ps(f->o.y), oz = _mm256_set1_ps(f->o.z);
-    const __m256 tx = _mm256_set1_ps(f->t.x), ty = _mm256_set1_ps(f->t.y), tz = _mm256_set1_ps(f->t.z);
-    const __m256 bx = _mm256_set1_ps(f->b.x), by = _mm256_set1_ps(f->b.y), bz = _mm256_set1_ps(f->b.z);
-    const __m256 nx = _mm256_set1_ps(f->n.x), ny = _mm256_set1_ps(f->n.y), nz = _mm256_set1_ps(f->n.z);
-    const __m256 zero = _mm256_setzero_ps(), quarter = _mm256_set1_ps(0.25f), eps = _mm256_set1_ps(RS__UV_EPS);
-    rs__batch *b = &sc->batch;
-    for (uint32_t base = cl->first; base < cl->first + cl->count; base += 8) {
-        uint32_t left = cl->first + cl->count - base;
-        int valid = left >= 8 ? 0xFF : (int)((1u << left) - 1u);
-        __m256 l[3][3], len[3], pu[3], pv[3];
-        int above[3];
-        for (int v = 0; v < 3; v++) {
-            __m256 px = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v] + base), ox);
-            __m256 py = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v + 1] + base), oy);
-            __m256 pz = _mm256_sub_ps(_mm256_load_ps(ctx->soa[3 * v + 2] + base), oz);
-            l[v][0] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, tx), _mm256_mul_ps(py, ty)), _mm256_mul_ps(pz, tz));
-            l[v][1] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, bx), _mm256_mul_ps(py, by)), _mm256_mul_ps(pz, bz));
-            l[v][2] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, nx), _mm256_mul_ps(py, ny)), _mm256_mul_ps(pz, nz));
-            above[v] = _mm256_movemask_ps(_mm256_cmp_ps(l[v][2], zero, _CMP_GT_OQ));
-        }
-        int any = valid & (above[0] | above[1] | above[2]);
-        int all = valid & above[0] & above[1] & above[2];
-        sc->stats.triangles_behind += (uint64_t)__builtin_popcount(valid & ~any);
-        if (!any) continue;
-        for (int v = 0; v < 3; v++) {
-            len[v] = _mm256_sqrt_ps(_mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(l[v][0], l[v][0]), _mm256_mul_ps(l[v][1], l[v][1])),
-                _mm256_mul_ps(l[v][2], l[v][2])));
-            __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_add_ps(len[v], l[v][2]));
-            pu[v] = _mm256_mul_ps(l[v][0], inv);
-            pv[v] = _mm256_mul_ps(l[v][1], inv);
-        }
-        __m256 c2max = zero;
-        for (int k = 0; k < 3; k++) {
-            int m = k == 2 ? 0 : k + 1;
-            __m256 du = _mm256_sub_ps(pu[m], pu[k]), dv = _mm256_sub_ps(pv[m], pv[k]);
-            c2max = _mm256_max_ps(c2max, _mm256_add_ps(_mm256_mul_ps(du, du), _mm256_mul_ps(dv, dv)));
-        }
-        __m256 mg = _mm256_add_ps(_mm256_mul_ps(c2max, quarter), eps);
-        __m256 umin = _mm256_sub_ps(_mm256_min_ps(_mm256_min_ps(pu[0], pu[1]), pu[2]), mg);
-        __m256 umax = _mm256_add_ps(_mm256_max_ps(_mm256_max_ps(pu[0], pu[1]), pu[2]), mg);
-        __m256 vmin = _mm256_sub_ps(_mm256_min_ps(_mm256_min_ps(pv[0], pv[1]), pv[2]), mg);
-        __m256 vmax = _mm256_add_ps(_mm256_max_ps(_mm256_max_ps(pv[0], pv[1]), pv[2]), mg);
-        __m256i i0, i1, j0, j1;
-        int okx = rs__uv_to_texels8(umin, umax, ctx->res, &i0, &i1);
-        int oky = rs__uv_to_texels8(vmin, vmax, ctx->res, &j0, &j1);
-        int drawn = all & okx & oky;
-        int crossing = any & ~all;
-        sc->stats.triangles_between_texels += (uint64_t)__builtin_popcount(all & ~drawn);
-        int keep = drawn | crossing;
-        if (!keep) continue;
-        float lv[3][3][8], lenv[3][8], puv[3][8], pvv[3][8], c2v[8];
-        int32_t rv[4][8];
-        for (int v = 0; v < 3; v++) {
-            for (int c = 0; c < 3; c++) _mm256_storeu_ps(lv[v][c], l[v][c]);
-            _mm256_storeu_ps(lenv[v], len[v]);
-            _mm256_storeu_ps(puv[v], pu[v]);
-            _mm256_storeu_ps(pvv[v], pv[v]);
-        }
-        _mm256_storeu_ps(c2v, c2max);
-        _mm256_storeu_si256((__m256i *)rv[0], i0);
-        _mm256_storeu_si256((__m256i *)rv[1], i1);
-        _mm256_storeu_si256((__m256i *)rv[2], j0);
-        _mm256_storeu_si256((__m256i *)rv[3], j1);
-        uint32_t n = b->n;
-        for (int m = keep; m; m &= m - 1, n++) {
-            int q = __builtin_ctz((unsigned)m);
-            b->tri[n] = base + (uint32_t)q;
-            for (int v = 0; v < 3; v++) {
-                for (int c = 0; c < 3; c++) b->l[3 * v + c][n] = lv[v][c][q];
-                b->len[v][n] = lenv[v][q];
-                b->pu[v][n] = puv[v][q];
-                b->pv[v][n] = pvv[v][q];
-            }
-            b->c2max[n] = c2v[q];
-            for (int c = 0; c < 4; c++) b->rect[c][n] = rv[c][q];
-            b->crossing[n] = (crossing >> q) & 1;
-        }
-        b->n = n;
-    }
-}
+#if SIMD_X86
+    if (simd == RS_SIMD_AVX512) return &rs_para_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) return &rs_para_kernels_avx2;
 #endif
+    (void)simd;
+    return &rs_para_kernels_scalar;
+}
 
 /* ------------------------------------------------------------------ setup */
 
@@ -1086,9 +752,9 @@ static int rs__setup_triangle(const rs_para_context *ctx, const rs_para_frame *f
 /* ------------------------------------------------------------------ texel test */
 
 /* Texel with direction (dx, dy, dz) given its three float edge values: 1 if
- * covered. Shared by every path (the SIMD scan calls it for the lanes the
+ * covered. Shared by every path (the scan kernels call it for the lanes the
  * filter left undecided). */
-static int rs__resolve(rs__setup *s, const float g[3], float dx, float dy, float dz, uint64_t *fallbacks)
+int rs__para_resolve(rs__setup *s, const float g[3], float dx, float dy, float dz, uint64_t *fallbacks)
 {
     for (int k = 0; k < 3; k++)
         if (g[k] < -s->bound[k]) return 0;
@@ -1105,164 +771,7 @@ static int rs__resolve(rs__setup *s, const float g[3], float dx, float dy, float
     return 1;
 }
 
-/* Scalar texel loop over rect (the reference). Returns texels tested. */
-static uint64_t rs__scan_scalar(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
-{
-    const uint32_t R = ctx->res;
-    uint64_t tested = 0;
-    for (int32_t j = r.j0; j <= r.j1; j++) {
-        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
-        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
-        float dy = ctx->d2[j];
-        float ry[3] = {dy * s->e[0][1], dy * s->e[1][1], dy * s->e[2][1]};
-        float ny = dy * s->nf[1];
-        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
-        float *depth = sc->depth + (size_t)j * R;
-        for (int32_t i = lo; i <= hi; i++) {
-            float dx = ctx->d2[i], dz = dzr[i];
-            float g[3];
-            for (int k = 0; k < 3; k++) g[k] = (dx * s->e[k][0] + ry[k]) + dz * s->e[k][2];
-            tested++;
-            if (g[0] < -s->bound[0] || g[1] < -s->bound[1] || g[2] < -s->bound[2]) continue; /* certainly out */
-            int in = g[0] > s->bound[0] && g[1] > s->bound[1] && g[2] > s->bound[2];
-            if (!in && !rs__resolve(s, g, dx, dy, dz, &sc->stats.texels_exact_fallback)) continue;
-            float dn = (dx * s->nf[0] + ny) + dz * s->nf[2];
-            float t = (s->det * wr[i]) / dn;
-            if (t > 0.0f && t < depth[i]) depth[i] = t;
-        }
-    }
-    return tested;
-}
-
-#if RS__HAVE_X86
-/* The texel loop 16 texels at a time: the same float expressions lane by
- * lane; lanes the filter leaves undecided go through rs__resolve. */
-RS__AVX512 static uint64_t rs__scan_avx512(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
-{
-    const uint32_t R = ctx->res;
-    uint64_t tested = 0;
-    __m512 ex[3], ez[3], bp[3], bn[3];
-    for (int k = 0; k < 3; k++) {
-        ex[k] = _mm512_set1_ps(s->e[k][0]);
-        ez[k] = _mm512_set1_ps(s->e[k][2]);
-        bp[k] = _mm512_set1_ps(s->bound[k]);
-        bn[k] = _mm512_set1_ps(-s->bound[k]);
-    }
-    const __m512 nx = _mm512_set1_ps(s->nf[0]), nz = _mm512_set1_ps(s->nf[2]), det = _mm512_set1_ps(s->det);
-    const __m512 zero = _mm512_setzero_ps();
-    for (int32_t j = r.j0; j <= r.j1; j++) {
-        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
-        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
-        if (lo > hi) continue;
-        float dy = ctx->d2[j];
-        __m512 ry[3];
-        for (int k = 0; k < 3; k++) ry[k] = _mm512_set1_ps(dy * s->e[k][1]);
-        const __m512 ny = _mm512_set1_ps(dy * s->nf[1]);
-        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
-        float *depth = sc->depth + (size_t)j * R;
-        for (int32_t i = lo; i <= hi; i += 16) {
-            int32_t cnt = hi - i + 1;
-            __mmask16 valid = cnt >= 16 ? (__mmask16)0xFFFF : (__mmask16)((1u << cnt) - 1u);
-            tested += (uint64_t)__builtin_popcount(valid);
-            __m512 dx = _mm512_maskz_loadu_ps(valid, ctx->d2 + i), dz = _mm512_maskz_loadu_ps(valid, dzr + i);
-            __m512 g[3];
-            __mmask16 in = valid, out = 0;
-            for (int k = 0; k < 3; k++) {
-                g[k] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, ex[k]), ry[k]), _mm512_mul_ps(dz, ez[k]));
-                in &= _mm512_cmp_ps_mask(g[k], bp[k], _CMP_GT_OQ);
-                out |= _mm512_cmp_ps_mask(g[k], bn[k], _CMP_LT_OQ);
-            }
-            __mmask16 unsure = valid & ~in & ~out;
-            if (unsure) {
-                float gl[3][16], dxl[16], dzl[16];
-                for (int k = 0; k < 3; k++) _mm512_storeu_ps(gl[k], g[k]);
-                _mm512_storeu_ps(dxl, dx);
-                _mm512_storeu_ps(dzl, dz);
-                for (uint32_t m = unsure; m; m &= m - 1) {
-                    int q = __builtin_ctz(m);
-                    float gq[3] = {gl[0][q], gl[1][q], gl[2][q]};
-                    if (rs__resolve(s, gq, dxl[q], dy, dzl[q], &sc->stats.texels_exact_fallback))
-                        in |= (__mmask16)(1u << q);
-                }
-            }
-            if (!in) continue;
-            __m512 w = _mm512_maskz_loadu_ps(in, wr + i);
-            __m512 dn = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, nx), ny), _mm512_mul_ps(dz, nz));
-            __m512 t = _mm512_div_ps(_mm512_mul_ps(det, w), dn);
-            __m512 old = _mm512_maskz_loadu_ps(in, depth + i);
-            __mmask16 upd = in & _mm512_cmp_ps_mask(t, zero, _CMP_GT_OQ) & _mm512_cmp_ps_mask(t, old, _CMP_LT_OQ);
-            _mm512_mask_storeu_ps(depth + i, upd, t);
-        }
-    }
-    return tested;
-}
-
-/* The texel loop 8 texels at a time (AVX2), as rs__scan_avx512. */
-RS__AVX2 static uint64_t rs__scan_avx2(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r)
-{
-    const uint32_t R = ctx->res;
-    uint64_t tested = 0;
-    __m256 ex[3], ez[3], bp[3], bn[3];
-    for (int k = 0; k < 3; k++) {
-        ex[k] = _mm256_set1_ps(s->e[k][0]);
-        ez[k] = _mm256_set1_ps(s->e[k][2]);
-        bp[k] = _mm256_set1_ps(s->bound[k]);
-        bn[k] = _mm256_set1_ps(-s->bound[k]);
-    }
-    const __m256 nx = _mm256_set1_ps(s->nf[0]), nz = _mm256_set1_ps(s->nf[2]), det = _mm256_set1_ps(s->det);
-    const __m256 zero = _mm256_setzero_ps();
-    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    for (int32_t j = r.j0; j <= r.j1; j++) {
-        int32_t lo = r.i0 > ctx->row_lo[j] ? r.i0 : ctx->row_lo[j];
-        int32_t hi = r.i1 < ctx->row_hi[j] ? r.i1 : ctx->row_hi[j];
-        if (lo > hi) continue;
-        float dy = ctx->d2[j];
-        __m256 ry[3];
-        for (int k = 0; k < 3; k++) ry[k] = _mm256_set1_ps(dy * s->e[k][1]);
-        const __m256 ny = _mm256_set1_ps(dy * s->nf[1]);
-        const float *dzr = ctx->dz + (size_t)j * R, *wr = ctx->w + (size_t)j * R;
-        float *depth = sc->depth + (size_t)j * R;
-        for (int32_t i = lo; i <= hi; i += 8) {
-            int32_t cnt = hi - i + 1;
-            __m256i vmask = _mm256_cmpgt_epi32(_mm256_set1_epi32(cnt), lane);
-            int valid = _mm256_movemask_ps(_mm256_castsi256_ps(vmask));
-            tested += (uint64_t)__builtin_popcount(valid);
-            __m256 dx = _mm256_maskload_ps(ctx->d2 + i, vmask), dz = _mm256_maskload_ps(dzr + i, vmask);
-            __m256 g[3];
-            int in = valid, out = 0;
-            for (int k = 0; k < 3; k++) {
-                g[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, ex[k]), ry[k]), _mm256_mul_ps(dz, ez[k]));
-                in &= _mm256_movemask_ps(_mm256_cmp_ps(g[k], bp[k], _CMP_GT_OQ));
-                out |= _mm256_movemask_ps(_mm256_cmp_ps(g[k], bn[k], _CMP_LT_OQ));
-            }
-            int unsure = valid & ~in & ~out;
-            if (unsure) {
-                float gl[3][8], dxl[8], dzl[8];
-                for (int k = 0; k < 3; k++) _mm256_storeu_ps(gl[k], g[k]);
-                _mm256_storeu_ps(dxl, dx);
-                _mm256_storeu_ps(dzl, dz);
-                for (int m = unsure; m; m &= m - 1) {
-                    int q = __builtin_ctz((unsigned)m);
-                    float gq[3] = {gl[0][q], gl[1][q], gl[2][q]};
-                    if (rs__resolve(s, gq, dxl[q], dy, dzl[q], &sc->stats.texels_exact_fallback)) in |= 1 << q;
-                }
-            }
-            if (!in) continue;
-            __m256 w = _mm256_maskload_ps(wr + i, vmask);
-            __m256 dn = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, nx), ny), _mm256_mul_ps(dz, nz));
-            __m256 t = _mm256_div_ps(_mm256_mul_ps(det, w), dn);
-            __m256 old = _mm256_maskload_ps(depth + i, vmask);
-            int upd = in & _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ),
-                                                             _mm256_cmp_ps(t, old, _CMP_LT_OQ)));
-            __m256i umask = _mm256_cmpgt_epi32(
-                _mm256_and_si256(_mm256_set1_epi32(upd), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-                _mm256_setzero_si256());
-            _mm256_maskstore_ps(depth + i, umask, t);
-        }
-    }
-    return tested;
-}
-#endif
+/* The texel loop is a kernel (rs_para_kernels.c): rs__scan. */
 
 /* ------------------------------------------------------------------ per map */
 
@@ -1370,14 +879,8 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
     rs__rect dirty = {(int32_t)ctx->res, -1, (int32_t)ctx->res, -1};
     rs__batch *b = &sc->batch;
     b->n = 0;
-#if RS__HAVE_X86
-    if (ctx->simd == RS_SIMD_AVX512)
-        rs__front_avx512(ctx, sc, f, cl);
-    else if (ctx->simd == RS_SIMD_AVX2)
-        rs__front_avx2(ctx, sc, f, cl);
-    else
-#endif
-        rs__front_scalar(ctx, sc, f, cl);
+    const rs_para_kernels *kern = rs_para_kernels_for(ctx->simd);
+    kern->front(ctx, sc, f, cl);
     for (uint32_t k = 0; k < b->n; k++) {
         rs__setup s;
         rs__rect rect;
@@ -1402,14 +905,7 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
         }
         if (!rs__setup_triangle(ctx, f, b, k, &s, &rect) || rs__rect_empty(rect)) continue;
         sc->stats.triangles_drawn++;
-#if RS__HAVE_X86
-        if (ctx->simd == RS_SIMD_AVX512)
-            sc->stats.texels_tested += rs__scan_avx512(ctx, sc, &s, rect);
-        else if (ctx->simd == RS_SIMD_AVX2)
-            sc->stats.texels_tested += rs__scan_avx2(ctx, sc, &s, rect);
-        else
-#endif
-            sc->stats.texels_tested += rs__scan_scalar(ctx, sc, &s, rect);
+        sc->stats.texels_tested += kern->scan(ctx, sc, &s, rect);
         dirty = (rs__rect){rect.i0 < dirty.i0 ? rect.i0 : dirty.i0, rect.i1 > dirty.i1 ? rect.i1 : dirty.i1,
                            rect.j0 < dirty.j0 ? rect.j0 : dirty.j0, rect.j1 > dirty.j1 ? rect.j1 : dirty.j1};
     }

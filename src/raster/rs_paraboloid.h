@@ -63,8 +63,9 @@
  *
  * Determinism: every map is written by one job item from read-only inputs;
  * the depth kept per texel is the minimum over triangles (order-free); the
- * SIMD paths (AVX-512: 16 lanes, AVX2: 8) evaluate the same float
- * expressions as the scalar path (no FMA, IEEE sqrt and division), so the
+ * SIMD paths (rs_para_kernels.c, written once over the SIMD vocabulary:
+ * AVX-512 16 lanes, AVX2 8) evaluate the same float expressions as the
+ * scalar compile of the same kernels (no FMA, IEEE sqrt and division), so the
  * bytes are the same for any thread count and SIMD path (tested). Release
  * and Debug builds give the same bytes too (the golden hash test runs in
  * both).
@@ -74,7 +75,10 @@
  * packets): Sibenik 1.14 ms (AVX-512) / 1.26 ms (AVX2) / 2.8 ms (scalar)
  * vs Embree 2.3 ms (AVX-512) / 2.45 ms (AVX2); conference room 0.81 / 0.92 /
  * 2.4 ms vs 2.0 / 2.3 ms. The SIMD paths are 2-2.5x faster than Embree at
- * the same ISA; the scalar reference is 1.2x slower than Embree. That
+ * the same ISA; the scalar reference is 1.2x slower than Embree (measured
+ * when each path was written out by hand; the kernels written once over the
+ * vocabulary time the same within the loaded machine's noise, `softgi bench
+ * raster --isa sse2|avx2|avx512`). That
  * Embree side goes through pf_rt (8-wide packets and softgi's exact
  * double-precision hits); against Embree used directly (16-wide coherent
  * packets, `softgi bench raster`, docs/perf.md) these maps are 2.4-2.9x
@@ -228,6 +232,13 @@ float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_
  * cosine between the receiver's normal and the direction to the VPL. */
 int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
                        float cos_receiver);
+/* The one paraboloid lookup: rs_para_visible_at with the bias (texel
+ * footprint and quantisation terms) multiplied by bias_scale; 1 gives
+ * rs_para_visible_at's bits, imperfect shadow maps pass their own scale
+ * (gi_ism.h). rs_para_visible_lanes (rs_para_lookup.h) is this function
+ * over the SIMD vocabulary, SIMD_W points at a time, with the same bits. */
+int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f,
+                           pf_vec3 p, float cos_receiver, float bias_scale);
 int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
                     float bias);
 

@@ -19,42 +19,19 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define RS_HAVE_X86 1
-#endif
+#include "rs_raster_kernels.h"
+#include "simd.h" /* the baseline vocabulary (SSE2 on x86-64): tile bookkeeping outside the kernels */
 
 #define RS_CLUSTER 256     /* triangles per culling cluster */
 #define RS_CHUNK 2048      /* triangles per setup/binning job item */
 #define RS_BLOCK 8         /* hierarchical-Z block size (pixels) */
 #define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
 #define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
-#define RS_SUB 256         /* 1 << RS_SUBPIXEL_BITS */
 #define RS_PREFETCH 4      /* triangles (tile raster) fetched ahead of use */
 
 /* ------------------------------------------------------------------ types */
 
-/* A triangle after setup: what a tile needs to rasterize it, in 128 bytes
- * (two cache lines: the tile raster reads these records scattered over the
- * chunks, so their size is memory traffic). */
-typedef struct rs__tri {
-    /* E_k(px, py) = a px + b py + c (fixed point, fill rule folded into c);
-     * |a|, |b| < 2^25 (snapped coordinates < 2^24), c up to 2^50 */
-    int32_t a[3], b[3];
-    int64_t c[3];
-    /* depth plane, kept in double relative to vertex 0 so that clipped
-     * vertices far out in the guard band do not cost precision through
-     * cancellation: zs(x, y) = zv + dzdx (x + .5 - xv) + dzdy (y + .5 - yv) */
-    double zv, xv, yv, dzdx_d, dzdy_d;
-    float dzdx;                /* lane step within a row */
-    float zmin, zmax;          /* clamp range (vertex zs), zmax also feeds hierarchical Z */
-    int32_t x0, y0, x1, y1;    /* pixel bounding box, inclusive */
-    uint32_t prim;
-    uint32_t masked; /* alphaMode MASK: index into the chunk's rs__tri_masked (per-pixel alpha test,
-                        scalar, all paths), RS__NOT_MASKED otherwise */
-    uint32_t small;  /* edge functions vary by < 2^29 over an 8x8 block: 32-bit lanes are exact */
-} rs__tri;
-_Static_assert(sizeof(rs__tri) == 128, "rs__tri: two cache lines");
+/* rs__tri, the set-up triangle, is in rs_raster_kernels.h (the kernels read it). */
 #define RS__NOT_MASKED 0xffffffffu
 
 /* The alpha test's extra planes for a masked triangle: 1/w, b1/w, b2/w
@@ -77,6 +54,7 @@ typedef struct rs__chunk {
     uint32_t *sorted;     /* tri indices grouped by tile, triangle order kept */
     uint32_t *tile_start; /* tile_count + 1 */
     uint32_t sorted_cap, tile_cap;
+    uint32_t failed; /* an allocation failed in this pass: the chunk is skipped */
     rs_stats stats;
 } rs__chunk;
 
@@ -102,6 +80,10 @@ struct rs_scratch {
     rs__chunk *chunks; /* chunk_count */
     rs_stats *tile_stats; /* rs_render: one per tile, grown with the largest target */
     uint32_t tile_stats_cap;
+    /* allocation failures since rs_scratch_status last read them: failed
+     * chunks and passes counted after each pass, tiles by the job items
+     * (relaxed atomics) */
+    uint32_t failed_chunks, failed_tiles, failed_pass;
 };
 
 struct rs_context {
@@ -566,7 +548,10 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         U[k] = c->u * iw;
         V[k] = c->v * iw;
     }
-    if (!rs__grow_aligned((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri), ch->tri_count)) abort();
+    if (!rs__grow_aligned((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri), ch->tri_count)) {
+        ch->failed = 1; /* out of memory: the chunk is dropped (rs_scratch_status) */
+        return;
+    }
     rs__tri *r = &ch->tris[ch->tri_count];
     for (int k = 0; k < 3; k++) {
         int a = k, b = (k + 1) % 3;
@@ -612,7 +597,10 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
     }
     r->masked = RS__NOT_MASKED;
     if (st->ctx->scene->materials[st->ctx->scene->tri_material[prim]].alpha_mode == PF_ALPHA_MASK) {
-        if (!rs__grow((void **)&ch->masked, &ch->masked_cap, ch->masked_count + 1, sizeof(rs__tri_masked))) abort();
+        if (!rs__grow((void **)&ch->masked, &ch->masked_cap, ch->masked_count + 1, sizeof(rs__tri_masked))) {
+            ch->failed = 1;
+            return;
+        }
         rs__tri_masked *m = &ch->masked[ch->masked_count];
         r->masked = ch->masked_count++;
         RS__PLANE(IW, m->iw0, m->diwdx, m->diwdy);
@@ -629,7 +617,10 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
     uint32_t tx0 = (uint32_t)px0 / RS_TILE, tx1 = (uint32_t)px1 / RS_TILE;
     uint32_t ty0 = (uint32_t)py0 / RS_TILE, ty1 = (uint32_t)py1 / RS_TILE;
     uint32_t need = ch->entry_count + (tx1 - tx0 + 1) * (ty1 - ty0 + 1);
-    if (!rs__grow((void **)&ch->entries, &ch->entry_cap, need, sizeof(uint64_t))) abort();
+    if (!rs__grow((void **)&ch->entries, &ch->entry_cap, need, sizeof(uint64_t))) {
+        ch->failed = 1;
+        return;
+    }
     for (uint32_t ty = ty0; ty <= ty1; ty++)
         for (uint32_t tx = tx0; tx <= tx1; tx++)
             ch->entries[ch->entry_count++] = (uint64_t)(ty * st->tiles_x + tx) << 32 | ti;
@@ -659,10 +650,11 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     ch->tri_count = 0;
     ch->masked_count = 0;
     ch->entry_count = 0;
+    ch->failed = 0;
     memset(&ch->stats, 0, sizeof ch->stats);
     uint32_t t0 = chunk * RS_CHUNK, t1 = t0 + RS_CHUNK < sc->tri_count ? t0 + RS_CHUNK : sc->tri_count;
     const rs__vtx *vtx = st->s->vtx;
-    for (uint32_t t = t0; t < t1; t++) {
+    for (uint32_t t = t0; t < t1 && !ch->failed; t++) {
         if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
         ch->stats.triangles_in++;
         const uint32_t *idx = &st->ctx->weld_idx[3 * t];
@@ -703,9 +695,11 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     /* counting sort of the bin entries by tile; stable, so triangle order is
      * kept within every tile */
     uint32_t tiles = st->tiles_x * st->tiles_y;
-    if (!rs__grow((void **)&ch->tile_start, &ch->tile_cap, tiles + 1, sizeof(uint32_t)) ||
-        !rs__grow((void **)&ch->sorted, &ch->sorted_cap, ch->entry_count ? ch->entry_count : 1, sizeof(uint32_t)))
-        abort();
+    if (ch->failed || !rs__grow((void **)&ch->tile_start, &ch->tile_cap, tiles + 1, sizeof(uint32_t)) ||
+        !rs__grow((void **)&ch->sorted, &ch->sorted_cap, ch->entry_count ? ch->entry_count : 1, sizeof(uint32_t))) {
+        ch->failed = 1; /* the tile raster skips the chunk */
+        return;
+    }
     memset(ch->tile_start, 0, sizeof(uint32_t) * (tiles + 1));
     for (uint32_t e = 0; e < ch->entry_count; e++) ch->tile_start[(ch->entries[e] >> 32) + 1]++;
     for (uint32_t k = 0; k < tiles; k++) ch->tile_start[k + 1] += ch->tile_start[k];
@@ -720,22 +714,12 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
 
 /* ------------------------------------------------------- 4. tile raster */
 
-/* One row of up to 8 pixels starting at (x, y): coverage of pixel centres
- * by the three edge functions, depth test (greater wins), write. `lanes`
- * masks pixels past the tile, image or bounding box. Returns 1 if any pixel
- * was written. e[k] = edge k at pixel (x, y); step[k] = edge k's increase
- * per pixel in x; zrow = depth at pixel (x, y) (from the double plane).
- * Every path computes
- *   covered = e0 + i*step0 >= 0 && ... (exact int64)
+/* The row and block kernels (rs_raster_kernels.c, one table per
+ * instruction set) compute, for pixel i of a row,
+ *   covered = e0 + i*step0 >= 0 && ... (exact integers)
  *   z = zrow + dzdx * (float)i, clamped to the vertices' range
- * so all paths give identical bits. */
-typedef int (*rs__row_fn)(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3],
-                          const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim);
-
-static float rs__zrow(const rs__tri *t, int32_t x, int32_t y)
-{
-    return (float)(t->zv + t->dzdx_d * ((double)x + 0.5 - t->xv) + t->dzdy_d * ((double)y + 0.5 - t->yv));
-}
+ * so all paths give identical bits. Masked triangles and coverage counting
+ * take the scalar functions below on every path. */
 
 /* Coverage counting (rs_target.coverage): the scalar coverage test only. */
 static void rs__row_count(const rs__tri *t, const int64_t e[3], const int64_t step[3], unsigned lanes, uint32_t *count)
@@ -748,27 +732,7 @@ static void rs__row_count(const rs__tri *t, const int64_t e[3], const int64_t st
     }
 }
 
-static int rs__row_scalar(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3],
-                          const int64_t step[3], unsigned lanes, float *depth, uint32_t *prim)
-{
-    (void)x, (void)y;
-    int wrote = 0;
-    for (int i = 0; i < 8; i++) {
-        if (!(lanes >> i & 1)) continue;
-        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
-        if ((e0 | e1 | e2) < 0) continue;
-        float z = zrow + t->dzdx * (float)i;
-        z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
-        if (z > depth[i]) {
-            depth[i] = z;
-            if (prim) prim[i] = t->prim;
-            wrote = 1;
-        }
-    }
-    return wrote;
-}
-
-/* Alpha-masked triangles (alphaMode MASK): coverage as rs__row_scalar, then
+/* Alpha-masked triangles (alphaMode MASK): coverage as the row kernel, then
  * the perspective-correct barycentrics give the texture coordinate and the
  * texel alpha at mip level 0 decides (alpha < cutoff is a hole) — the same
  * test Embree's filter function makes, so raster and ray agree. Every SIMD
@@ -805,203 +769,14 @@ static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, const rs__
     return wrote;
 }
 
-#ifdef RS_HAVE_X86
-__attribute__((target("avx2"))) static int rs__row_avx2(const rs__tri *t, int32_t x, int32_t y, float zrow,
-                                                        const int64_t e[3], const int64_t step[3], unsigned lanes,
-                                                        float *depth, uint32_t *prim)
+const rs_raster_kernels *rs_raster_kernels_for(rs_simd simd)
 {
-    (void)x, (void)y;
-    /* coverage: 2 x 4 int64 lanes per edge */
-    __m256i acc_lo = _mm256_setzero_si256(), acc_hi = _mm256_setzero_si256();
-    for (int k = 0; k < 3; k++) {
-        __m256i s = _mm256_set1_epi64x(step[k]);
-        __m256i lo = _mm256_add_epi64(_mm256_set1_epi64x(e[k]),
-                                      _mm256_set_epi64x(3 * step[k], 2 * step[k], step[k], 0));
-        __m256i hi = _mm256_add_epi64(lo, _mm256_slli_epi64(s, 2));
-        acc_lo = _mm256_or_si256(acc_lo, lo);
-        acc_hi = _mm256_or_si256(acc_hi, hi);
-    }
-    unsigned neg = (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(acc_lo)) |
-                   (unsigned)_mm256_movemask_pd(_mm256_castsi256_pd(acc_hi)) << 4;
-    unsigned cov = ~neg & lanes & 0xffu;
-    if (!cov) return 0;
-    __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-    __m256 z = _mm256_add_ps(_mm256_set1_ps(zrow), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
-    z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
-    __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    __m256i lane_mask = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)cov), bits), bits);
-    __m256 old = _mm256_maskload_ps(depth, lane_mask);
-    unsigned pass = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(z, old, _CMP_GT_OQ)) & cov;
-    if (!pass) return 0;
-    __m256i wm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)pass), bits), bits);
-    _mm256_maskstore_ps(depth, wm, z);
-    if (prim) _mm256_maskstore_epi32((int *)prim, wm, _mm256_set1_epi32((int)t->prim));
-    return 1;
-}
-
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) static int
-rs__row_avx512(const rs__tri *t, int32_t x, int32_t y, float zrow, const int64_t e[3], const int64_t step[3],
-               unsigned lanes, float *depth, uint32_t *prim)
-{
-    (void)x, (void)y;
-    const __m512i lane = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
-    __m512i acc = _mm512_setzero_si512();
-    for (int k = 0; k < 3; k++) /* e + i * step, exact 64-bit (AVX512DQ vpmullq) */
-        acc = _mm512_or_si512(acc, _mm512_add_epi64(_mm512_set1_epi64(e[k]),
-                                                    _mm512_mullo_epi64(lane, _mm512_set1_epi64(step[k]))));
-    __mmask8 cov = (__mmask8)(_mm512_cmpge_epi64_mask(acc, _mm512_setzero_si512()) & lanes);
-    if (!cov) return 0;
-    __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-    __m256 z = _mm256_add_ps(_mm256_set1_ps(zrow), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
-    z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
-    __m256 old = _mm256_mask_loadu_ps(_mm256_setzero_ps(), cov, depth);
-    __mmask8 pass = _mm256_mask_cmp_ps_mask(cov, z, old, _CMP_GT_OQ);
-    if (!pass) return 0;
-    _mm256_mask_storeu_ps(depth, pass, z);
-    if (prim) _mm256_mask_storeu_epi32(prim, pass, _mm256_set1_epi32((int)t->prim));
-    return 1;
-}
-#endif
-
-/* ------------------------------------------------------- block kernels
- * One 8-pixel-wide block, rows y0..y1, of one triangle. For "small"
- * triangles (edge functions vary by less than 2^29 over a block) the SIMD
- * paths use 32-bit lanes, 16 wide on AVX-512 (two rows at once) and 8 wide
- * on AVX2: the int64 value at the block's first pixel is clamped to 2^30
- * (an edge that positive stays positive over the whole block; a value below
- * -2^30 cannot occur, such a block was rejected before), so every lane holds
- * the exact sign. Depth per pixel is zrow(y) + dzdx * i in every path, so
- * the bits equal the scalar path's. */
-typedef int (*rs__block_fn)(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
-                            unsigned lanes, float *depth, uint32_t *prim, size_t stride);
-
-/* A block row by row with a row kernel (64-bit lanes): the scalar path, and
- * the SIMD paths' fallback for triangles too large for 32-bit lanes. */
-static int rs__block_rows(rs__row_fn row, const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
-                          unsigned lanes, float *depth, uint32_t *prim, size_t stride)
-{
-    int64_t e[3] = {e_in[0], e_in[1], e_in[2]}, step[3];
-    for (int k = 0; k < 3; k++) step[k] = (int64_t)t->a[k] * RS_SUB;
-    int wrote = 0;
-    for (int32_t y = y0; y <= y1; y++) {
-        size_t o = (size_t)(y - y0) * stride;
-        wrote |= row(t, x, y, rs__zrow(t, x, y), e, step, lanes, depth + o, prim ? prim + o : NULL);
-        for (int k = 0; k < 3; k++) e[k] += (int64_t)t->b[k] * RS_SUB;
-    }
-    return wrote;
-}
-
-static int rs__block_scalar(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3],
-                            unsigned lanes, float *depth, uint32_t *prim, size_t stride)
-{
-    return rs__block_rows(rs__row_scalar, t, x, y0, y1, e_in, lanes, depth, prim, stride);
-}
-
-#ifdef RS_HAVE_X86
-static int32_t rs__clamp32(int64_t v) { return v > ((int64_t)1 << 30) ? (int32_t)1 << 30 : (int32_t)v; }
-
-__attribute__((target("avx2"))) static int rs__block_avx2(const rs__tri *t, int32_t x, int32_t y0, int32_t y1,
-                                                          const int64_t e_in[3], unsigned lanes, float *depth,
-                                                          uint32_t *prim, size_t stride)
-{
-    if (!t->small) return rs__block_rows(rs__row_avx2, t, x, y0, y1, e_in, lanes, depth, prim, stride);
-    int wrote = 0;
-    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    __m256i ev[3], sy[3];
-    for (int k = 0; k < 3; k++) {
-        ev[k] = _mm256_add_epi32(_mm256_set1_epi32(rs__clamp32(e_in[k])),
-                                 _mm256_mullo_epi32(lane, _mm256_set1_epi32((int32_t)((int64_t)t->a[k] * RS_SUB))));
-        sy[k] = _mm256_set1_epi32((int32_t)((int64_t)t->b[k] * RS_SUB));
-    }
-    const __m256 lanef = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-    const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    for (int32_t y = y0; y <= y1; y++) {
-        __m256i any = _mm256_or_si256(_mm256_or_si256(ev[0], ev[1]), ev[2]);
-        unsigned cov = ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(any)) & lanes;
-        for (int k = 0; k < 3; k++) ev[k] = _mm256_add_epi32(ev[k], sy[k]);
-        if (!cov) continue;
-        float *d = depth + (size_t)(y - y0) * stride;
-        __m256 z = _mm256_add_ps(_mm256_set1_ps(rs__zrow(t, x, y)), _mm256_mul_ps(_mm256_set1_ps(t->dzdx), lanef));
-        z = _mm256_max_ps(_mm256_min_ps(z, _mm256_set1_ps(t->zmax)), _mm256_set1_ps(t->zmin));
-        __m256i cm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)cov), bits), bits);
-        __m256 old = _mm256_maskload_ps(d, cm);
-        unsigned pass = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(z, old, _CMP_GT_OQ)) & cov;
-        if (!pass) continue;
-        __m256i wm = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)pass), bits), bits);
-        _mm256_maskstore_ps(d, wm, z);
-        if (prim) _mm256_maskstore_epi32((int *)(prim + (size_t)(y - y0) * stride), wm, _mm256_set1_epi32((int)t->prim));
-        wrote = 1;
-    }
-    return wrote;
-}
-
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) static int
-rs__block_avx512(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3], unsigned lanes,
-                 float *depth, uint32_t *prim, size_t stride)
-{
-    if (!t->small) return rs__block_rows(rs__row_avx512, t, x, y0, y1, e_in, lanes, depth, prim, stride);
-    int wrote = 0;
-    /* 16 lanes = 2 rows of 8: lane l is column l & 7 of row l >> 3 */
-    const __m512i col = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
-    const __m512i row = _mm512_setr_epi32(0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1);
-    const __m512 colf = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7);
-    __m512i ev[3], sy2[3];
-    for (int k = 0; k < 3; k++) {
-        int32_t sx = (int32_t)((int64_t)t->a[k] * RS_SUB), syk = (int32_t)((int64_t)t->b[k] * RS_SUB);
-        ev[k] = _mm512_add_epi32(_mm512_set1_epi32(rs__clamp32(e_in[k])),
-                                 _mm512_add_epi32(_mm512_mullo_epi32(col, _mm512_set1_epi32(sx)),
-                                                  _mm512_mullo_epi32(row, _mm512_set1_epi32(syk))));
-        sy2[k] = _mm512_set1_epi32(2 * syk);
-    }
-    const __mmask16 lanes16 = (__mmask16)(lanes | lanes << 8);
-    for (int32_t y = y0; y <= y1; y += 2) {
-        __mmask16 valid = y + 1 <= y1 ? lanes16 : (__mmask16)lanes;
-        __m512i any = _mm512_or_si512(_mm512_or_si512(ev[0], ev[1]), ev[2]);
-        __mmask16 cov = _mm512_mask_cmpge_epi32_mask(valid, any, _mm512_setzero_si512());
-        for (int k = 0; k < 3; k++) ev[k] = _mm512_add_epi32(ev[k], sy2[k]);
-        if (!cov) continue;
-        float *d0 = depth + (size_t)(y - y0) * stride, *d1 = d0 + stride;
-        float zr0 = rs__zrow(t, x, y), zr1 = y + 1 <= y1 ? rs__zrow(t, x, y + 1) : zr0;
-        __m512 zb = _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_set1_ps(zr0)), _mm256_set1_ps(zr1), 1);
-        __m512 z = _mm512_add_ps(zb, _mm512_mul_ps(_mm512_set1_ps(t->dzdx), colf));
-        z = _mm512_max_ps(_mm512_min_ps(z, _mm512_set1_ps(t->zmax)), _mm512_set1_ps(t->zmin));
-        __m256 o0 = _mm256_maskz_loadu_ps((__mmask8)cov, d0);
-        __m256 o1 = _mm256_maskz_loadu_ps((__mmask8)(cov >> 8), d1);
-        __m512 old = _mm512_insertf32x8(_mm512_castps256_ps512(o0), o1, 1);
-        __mmask16 pass = _mm512_mask_cmp_ps_mask(cov, z, old, _CMP_GT_OQ);
-        if (!pass) continue;
-        _mm256_mask_storeu_ps(d0, (__mmask8)pass, _mm512_castps512_ps256(z));
-        _mm256_mask_storeu_ps(d1, (__mmask8)(pass >> 8), _mm512_extractf32x8_ps(z, 1));
-        if (prim) {
-            uint32_t *p0 = prim + (size_t)(y - y0) * stride;
-            __m256i pv = _mm256_set1_epi32((int)t->prim);
-            _mm256_mask_storeu_epi32(p0, (__mmask8)pass, pv);
-            _mm256_mask_storeu_epi32(p0 + stride, (__mmask8)(pass >> 8), pv);
-        }
-        wrote = 1;
-    }
-    return wrote;
-}
-#endif
-
-static rs__block_fn rs__block_for(rs_simd simd)
-{
-#ifdef RS_HAVE_X86
-    if (simd == RS_SIMD_AVX512) return rs__block_avx512;
-    if (simd == RS_SIMD_AVX2) return rs__block_avx2;
+#if SIMD_X86
+    if (simd == RS_SIMD_AVX512) return &rs_raster_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) return &rs_raster_kernels_avx2;
 #endif
     (void)simd;
-    return rs__block_scalar;
-}
-
-static rs__row_fn rs__row_for(rs_simd simd)
-{
-#ifdef RS_HAVE_X86
-    if (simd == RS_SIMD_AVX512) return rs__row_avx512;
-    if (simd == RS_SIMD_AVX2) return rs__row_avx2;
-#endif
-    (void)simd;
-    return rs__row_scalar;
+    return &rs_raster_kernels_scalar;
 }
 
 /* A tile's planes while it is rasterized: RS_TILE x RS_TILE, row stride
@@ -1023,37 +798,24 @@ static size_t rs__tile_at(const rs__tile_buf *tb, int32_t x, int32_t y)
 }
 
 /* The farthest (smallest) depth in block [x, x1] x [y, y1] of the tile. A
- * full 8x8 block keeps 8 independent minima (one per column), two SSE
- * registers, instead of one long dependency chain; the ternary, not fminf
- * (a libm call), elsewhere. */
+ * full 8x8 block keeps 8 independent minima (one per column, 8 / SIMD_W
+ * vectors) instead of one long dependency chain; simd_min_f is the
+ * ternary below, and depths are never NaN, so the order of the minima does
+ * not matter. */
+_Static_assert(8 % SIMD_W == 0 || SIMD_W % 8 == 0, "rs__block_min: a row of 8 in whole vectors");
 static float rs__block_min(const rs__tile_buf *tb, int32_t x, int32_t y, int32_t x1, int32_t y1)
 {
-    if (x1 - x == RS_BLOCK - 1) {
+    if (x1 - x == RS_BLOCK - 1 && SIMD_W <= RS_BLOCK) {
+        enum { N = SIMD_W <= RS_BLOCK ? RS_BLOCK / SIMD_W : 1 };
         const float *d = tb->depth + rs__tile_at(tb, x, y);
-#if defined(__SSE2__)
-        /* minps(a, b) is a < b ? a : b, the ternary below: depths are never
-         * NaN, so the order of the minima does not matter */
-        __m128 lo = _mm_loadu_ps(d), hi = _mm_loadu_ps(d + 4);
+        simd_f acc[N];
+        for (int k = 0; k < N; k++) acc[k] = simd_loadu_f(d + k * SIMD_W);
         for (int32_t yy = y + 1; yy <= y1; yy++) {
             d += RS_TILE;
-            lo = _mm_min_ps(_mm_loadu_ps(d), lo);
-            hi = _mm_min_ps(_mm_loadu_ps(d + 4), hi);
+            for (int k = 0; k < N; k++) acc[k] = simd_min_f(simd_loadu_f(d + k * SIMD_W), acc[k]);
         }
-        lo = _mm_min_ps(lo, hi);
-        lo = _mm_min_ps(lo, _mm_movehl_ps(lo, lo));
-        lo = _mm_min_ss(lo, _mm_shuffle_ps(lo, lo, 1));
-        return _mm_cvtss_f32(lo);
-#else
-        float acc[RS_BLOCK];
-        for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i];
-        for (int32_t yy = y + 1; yy <= y1; yy++) {
-            d += RS_TILE;
-            for (int i = 0; i < RS_BLOCK; i++) acc[i] = d[i] < acc[i] ? d[i] : acc[i];
-        }
-        float m = acc[0];
-        for (int i = 1; i < RS_BLOCK; i++) m = acc[i] < m ? acc[i] : m;
-        return m;
-#endif
+        for (int k = 1; k < N; k++) acc[0] = simd_min_f(acc[0], acc[k]);
+        return simd_hmin_f(acc[0]);
     }
     float m = INFINITY;
     for (int32_t yy = y; yy <= y1; yy++) {
@@ -1141,22 +903,21 @@ static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_f
 }
 
 /* Copies n 32-bit values of a finished tile row to the target. Rows that
- * are 16-byte aligned with n a multiple of 4 (every full tile of a target
- * whose width is a multiple of 4) go with non-temporal stores: the target's
+ * are aligned to a vector with n a multiple of SIMD_W (16 bytes and 4 with
+ * SSE2: every full tile of a target whose width is a multiple of 4) go with
+ * non-temporal stores: the target's
  * lines are not read for ownership first and the tile does not evict the
  * cache. Measured with the scratch A/B harness (docs/perf.md): the cube
  * shadow maps 5-9% faster with 1 and 2 threads, the G-buffer's visibility
  * followed by its resolve 0-3% faster. */
 static void rs__copy_out(void *dst, const void *src, size_t n)
 {
-#if defined(__SSE2__)
-    if (n % 4 == 0 && ((uintptr_t)dst & 15) == 0) {
-        __m128i *d = dst;
-        const __m128i *s = src; /* tile rows: 64-byte aligned */
-        for (size_t i = 0; i < n / 4; i++) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+    if (n % SIMD_W == 0 && ((uintptr_t)dst & (SIMD_W * 4 - 1)) == 0) {
+        int32_t *d = dst;
+        const int32_t *s = src; /* tile rows: 64-byte aligned */
+        for (size_t i = 0; i < n; i += SIMD_W) simd_stream_i(d + i, simd_load_i(s + i));
         return;
     }
-#endif
     memcpy(dst, src, n * 4);
 }
 
@@ -1172,7 +933,8 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
     _Alignas(64) float depth[RS_TILE * RS_TILE];
     _Alignas(64) uint32_t prim[RS_TILE * RS_TILE];
     uint32_t *coverage = NULL;
-    if (tg->coverage && !(coverage = calloc(RS_TILE * RS_TILE, sizeof(uint32_t)))) abort(); /* tests only */
+    if (tg->coverage && !(coverage = calloc(RS_TILE * RS_TILE, sizeof(uint32_t)))) /* tests only */
+        __atomic_fetch_add(&st->s->failed_tiles, 1u, __ATOMIC_RELAXED);        /* that tile's counts are missing */
     rs__tile_buf tb = {depth, tg->prim ? prim : NULL, coverage, tx0, ty0};
     memset(depth, 0, sizeof depth);
     if (tg->prim)
@@ -1180,11 +942,12 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
     float block_far[64];
     uint8_t block_writes[64];
     for (int b = 0; b < 64; b++) block_far[b] = 0.0f, block_writes[b] = 0;
-    rs__row_fn row = rs__row_for(st->simd);
-    rs__block_fn block = rs__block_for(st->simd);
+    const rs_raster_kernels *kern = rs_raster_kernels_for(st->simd);
+    rs__row_fn row = kern->row;
+    rs__block_fn block = kern->block;
     for (uint32_t c = 0; c < st->s->chunk_count; c++) {
         const rs__chunk *ch = &st->s->chunks[c];
-        if (ch->tri_count == 0) continue;
+        if (ch->tri_count == 0 || ch->failed) continue;
         uint32_t e0 = ch->tile_start[tile], e1 = ch->tile_start[tile + 1];
         for (uint32_t e = e0; e < e1; e++) {
             /* the tile's triangles are scattered over the chunk: fetch the
@@ -1206,9 +969,7 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_sta
         if (tg->prim) rs__copy_out(tg->prim + o, prim + l, w);
         if (coverage) memcpy(tg->coverage + o, coverage + l, sizeof(uint32_t) * w);
     }
-#if defined(__SSE2__)
-    _mm_sfence(); /* the streamed rows are visible before the job reports the tile done */
-#endif
+    simd_stream_fence(); /* the streamed rows are visible before the job reports the tile done */
     free(coverage);
     out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }
@@ -1258,6 +1019,36 @@ static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, c
     return 1;
 }
 
+/* After a pass: the chunks whose allocations failed (the only failures a
+ * pass can have besides the tile buffers' coverage counts), added to what
+ * the scratch holds until rs_scratch_status reads it. */
+static void rs__finish_status(const rs__pass_state *st)
+{
+    for (uint32_t c = 0; c < st->s->chunk_count; c++) st->s->failed_chunks += st->s->chunks[c].failed != 0;
+}
+
+pf_result rs_scratch_status(rs_scratch *s, pf_error *err)
+{
+    pf_result r = PF_OK;
+    if (s->failed_pass)
+        r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
+                         "rasterizer: out of memory for the per-tile statistics of %u passes; they drew nothing",
+                         s->failed_pass);
+    else if (s->failed_chunks)
+        r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
+                         "rasterizer: out of memory growing the triangle records or bins of %u setup chunks (of %u per "
+                         "pass); those passes lack the chunks' triangles",
+                         s->failed_chunks, s->chunk_count);
+    else if (s->failed_tiles)
+        r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
+                         "rasterizer: out of memory for the coverage counts of %u tiles; they were not counted",
+                         s->failed_tiles);
+    s->failed_chunks = s->failed_tiles = s->failed_pass = 0;
+    return r;
+}
+
+pf_result rs_context_status(rs_context *ctx, pf_error *err) { return rs_scratch_status(ctx->scratch, err); }
+
 static void rs__finish_stats(const rs__pass_state *st, const rs_stats *tile_stats, rs_stats *out)
 {
     if (!out) return;
@@ -1280,7 +1071,10 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
     uint32_t tiles = st.tiles_x * st.tiles_y;
     rs_scratch *sc = ctx->scratch;
-    if (!rs__grow((void **)&sc->tile_stats, &sc->tile_stats_cap, tiles, sizeof(rs_stats))) abort();
+    if (!rs__grow((void **)&sc->tile_stats, &sc->tile_stats_cap, tiles, sizeof(rs_stats))) {
+        sc->failed_pass++; /* nothing drawn (rs_context_status) */
+        return;
+    }
     rs_stats *tile_stats = sc->tile_stats;
     memset(tile_stats, 0, sizeof(rs_stats) * tiles);
     rs__tile_ctx tc = {&st, tile_stats};
@@ -1292,6 +1086,7 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, &st, ctx->chunk_count, 1, deps, 2);
     pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &tc, tiles, 1, &sj, 1);
     pf_jobs_wait(jobs, tj);
+    rs__finish_status(&st);
     rs__finish_stats(&st, tile_stats, stats);
 }
 
@@ -1306,6 +1101,7 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
     memset(&ts, 0, sizeof ts);
     uint32_t tiles = st.tiles_x * st.tiles_y;
     for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, k, &ts);
+    rs__finish_status(&st);
     rs__finish_stats(&st, NULL, stats);
     if (stats) stats->blocks_early_z_rejected = ts.blocks_early_z_rejected;
 }

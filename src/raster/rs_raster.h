@@ -15,8 +15,9 @@
  *   3. rs__raster_tiles    every tile is rasterized by one job item, walking
  *                          its bins in triangle order: hierarchical early-Z
  *                          per 8x8 block, then exact coverage + depth test per
- *                          pixel centre with SIMD (AVX-512: 8 int64 lanes,
- *                          AVX2: 4 lanes, or scalar).
+ *                          pixel centre with the row and block kernels
+ *                          (rs_raster_kernels.c: written once over the SIMD
+ *                          vocabulary, compiled scalar, AVX2 and AVX-512).
  *
  * Exactness: vertex positions are snapped to 1/256 pixel and edge functions
  * are evaluated in 64-bit integers, so coverage is exact: a closed mesh
@@ -124,5 +125,16 @@ rs_scratch *rs_scratch_create(const rs_context *ctx);
 void rs_scratch_destroy(rs_scratch *s);
 void rs_render_serial(const rs_context *ctx, rs_scratch *scratch, const rs_pass *pass, rs_target *target,
                       rs_stats *stats);
+/* Whether the passes since the last call, with this scratch
+ * (rs_render_serial) or with the context's own (rs_render), ran out of
+ * memory; the call clears what it reports. No pass aborts: the setup's
+ * growing arrays report a failure here instead, and the pass then lacks the
+ * triangles of the setup chunks that failed (or, when even the per-tile
+ * statistics could not be allocated, draws nothing). Returns PF_OK, or
+ * PF_ERR_OUT_OF_MEMORY with a message saying what was lost; the caller
+ * turns it into its error (a stage checks after its passes: one call covers
+ * every face of a shadow-map set). */
+pf_result rs_scratch_status(rs_scratch *scratch, pf_error *err);
+pf_result rs_context_status(rs_context *ctx, pf_error *err);
 
 #endif

@@ -8,6 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "rs_shadow_kernels.h"
+#include "rs_shadow_lookup.h" /* rs_shadow_lookup_eligible */
+#include "simd.h"
+
 /* ------------------------------------------------------------- projections */
 
 /* Cube faces in the standard order with the standard ups (rs_shadow.h). */
@@ -381,232 +385,41 @@ float rs_shadow_visibility(const rs_shadow_map *m, pf_vec3 p, pf_vec3 ng)
     return rs__pcf(plane, m->size, (int)floorf(fx - 1.5f), (int)floorf(fy - 1.5f), 4, fx, fy, zs_p, gx, gy, zs_bias);
 }
 
-/* ------------------------------------------------------------ 8-wide lookup */
+/* ------------------------------------------------------------ SIMD lookup */
 
-/* rs_shadow_visibility for 8 points at once (AVX2): lane by lane the very
- * IEEE operations of the scalar lookup above, in the same order and
- * association (no FMA, no approximate reciprocals), so the bits agree. Each
- * early return of the scalar code becomes a lane mask applied at the end,
- * latest check first so that the earliest one wins as it does there; a cube
- * map's per-face constants are gathered by each lane's face; the PCF taps
- * are gathers from the face planes at the same clamped texel indices. The
- * normal offset (step 3, off by default) is not vectorised:
- * rs_shadow_visibility8 sends such maps to the scalar lookup. */
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-
-__attribute__((target("avx2"))) static inline __m256 rs__dot8(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by,
-                                                             __m256 bz)
+/* rs_shadow_visibility_lanes (rs_shadow_lookup.h) is the lookup above
+ * written once over the SIMD vocabulary; rs_shadow_kernels.c compiles it
+ * per instruction set. */
+const rs_shadow_kernels *rs_shadow_kernels_for(rs_simd simd)
 {
-    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz));
-}
-
-/* Element k of a per-face array (stride floats per face) for each lane's
- * face: gathered (base: face 0) or, when every lane has the same face,
- * broadcast (base: that face). */
-__attribute__((target("avx2"))) static inline __m256 rs__face_val8(const float *base, int gather, __m256i face_off,
-                                                                  int k)
-{
-    if (!gather) return _mm256_set1_ps(base[k]);
-    return _mm256_i32gather_ps(base, _mm256_add_epi32(face_off, _mm256_set1_epi32(k)), 4);
-}
-
-__attribute__((target("avx2"))) static void rs__visibility8_avx2(const rs_shadow_map *m, const float *px,
-                                                                 const float *py, const float *pz, const float *ngx,
-                                                                 const float *ngy, const float *ngz, unsigned active,
-                                                                 float *out)
-{
-    const int pcf = m->desc.filter != RS_SHADOW_PCF1;
-    const int ortho = m->kind == RS_SHADOW_ORTHO, cube = m->kind == RS_SHADOW_CUBE, spot = m->kind == RS_SHADOW_SPOT;
-    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign = _mm256_set1_ps(-0.0f);
-    const __m256 p_x = _mm256_loadu_ps(px), p_y = _mm256_loadu_ps(py), p_z = _mm256_loadu_ps(pz);
-    const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    const __m256 lane_on =
-        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(bits, _mm256_set1_epi32((int)active)), bits));
-
-    /* rs__face: v = p - eye; the cube face of the major axis of v (ties to
-     * x, then y, then z; a NaN falls through to z like the scalar code),
-     * and the depth along the face's axis. */
-    __m256 v_x = _mm256_sub_ps(p_x, _mm256_set1_ps(m->eye.x));
-    __m256 v_y = _mm256_sub_ps(p_y, _mm256_set1_ps(m->eye.y));
-    __m256 v_z = _mm256_sub_ps(p_z, _mm256_set1_ps(m->eye.z));
-    __m256i face = _mm256_setzero_si256();
-    if (cube) {
-        __m256 ax = _mm256_andnot_ps(sign, v_x), ay = _mm256_andnot_ps(sign, v_y), az = _mm256_andnot_ps(sign, v_z);
-        __m256 is_x = _mm256_and_ps(_mm256_cmp_ps(ax, ay, _CMP_GE_OQ), _mm256_cmp_ps(ax, az, _CMP_GE_OQ));
-        __m256 is_y = _mm256_cmp_ps(ay, az, _CMP_GE_OQ);
-        /* v >= 0 ? 2a : 2a + 1 (a compare's true is -1) */
-        __m256i f_x = _mm256_add_epi32(_mm256_set1_epi32(1), _mm256_castps_si256(_mm256_cmp_ps(v_x, zero, _CMP_GE_OQ)));
-        __m256i f_y = _mm256_add_epi32(_mm256_set1_epi32(3), _mm256_castps_si256(_mm256_cmp_ps(v_y, zero, _CMP_GE_OQ)));
-        __m256i f_z = _mm256_add_epi32(_mm256_set1_epi32(5), _mm256_castps_si256(_mm256_cmp_ps(v_z, zero, _CMP_GE_OQ)));
-        __m256 fyz = _mm256_blendv_ps(_mm256_castsi256_ps(f_z), _mm256_castsi256_ps(f_y), is_y);
-        face = _mm256_castps_si256(_mm256_blendv_ps(fyz, _mm256_castsi256_ps(f_x), is_x));
-    }
-    /* the face's constants: broadcast when the 8 points share a face (the
-     * usual case), gathered per lane otherwise */
-    const int f0 = _mm256_cvtsi256_si32(face);
-    const int one_face = _mm256_movemask_epi8(_mm256_cmpeq_epi32(face, _mm256_set1_epi32(f0))) == -1;
-    const int gather = cube && !one_face;
-    const int fb = gather ? 0 : f0;
-    const __m256i off3 = _mm256_mullo_epi32(face, _mm256_set1_epi32(3));
-    const __m256i off16 = _mm256_slli_epi32(face, 4);
-    const float *fwd = &m->forward[fb].x, *rgt = &m->right[fb].x, *upv = &m->up[fb].x, *vp = m->view_proj[fb].m;
-    __m256 f_x = rs__face_val8(fwd, gather, off3, 0), f_y = rs__face_val8(fwd, gather, off3, 1);
-    __m256 f_z = rs__face_val8(fwd, gather, off3, 2);
-    __m256 depth = rs__dot8(v_x, v_y, v_z, f_x, f_y, f_z);
-
-    /* l (unit, towards the light) and texel (world size of a texel at p) */
-    __m256 l_x, l_y, l_z, texel, behind = zero;
-    if (ortho) {
-        pf_vec3 l = pf_v3_scale(m->forward[0], -1.0f);
-        l_x = _mm256_set1_ps(l.x);
-        l_y = _mm256_set1_ps(l.y);
-        l_z = _mm256_set1_ps(l.z);
-        texel = _mm256_set1_ps(2.0f * fmaxf(m->half_w, m->half_h) / (float)m->size);
-    } else {
-        behind = _mm256_cmp_ps(depth, zero, _CMP_NGT_UQ); /* !(depth > 0) */
-        __m256 d_x = _mm256_sub_ps(_mm256_set1_ps(m->eye.x), p_x);
-        __m256 d_y = _mm256_sub_ps(_mm256_set1_ps(m->eye.y), p_y);
-        __m256 d_z = _mm256_sub_ps(_mm256_set1_ps(m->eye.z), p_z);
-        __m256 len = _mm256_sqrt_ps(rs__dot8(d_x, d_y, d_z, d_x, d_y, d_z));
-        __m256 inv = _mm256_div_ps(one, len), ok = _mm256_cmp_ps(len, zero, _CMP_GT_OQ);
-        l_x = _mm256_and_ps(ok, _mm256_mul_ps(d_x, inv));
-        l_y = _mm256_and_ps(ok, _mm256_mul_ps(d_y, inv));
-        l_z = _mm256_and_ps(ok, _mm256_mul_ps(d_z, inv));
-        /* a power-of-two size divides exactly as a multiplication by its
-         * reciprocal (also exact), which is cheaper */
-        __m256 t2d = _mm256_mul_ps(_mm256_set1_ps(2.0f * m->tan_half), depth);
-        texel = (m->size & (m->size - 1)) == 0 ? _mm256_mul_ps(t2d, _mm256_set1_ps(1.0f / (float)m->size))
-                                               : _mm256_div_ps(t2d, _mm256_set1_ps((float)m->size));
-    }
-
-    /* n: unit geometric normal (l where it has none); the slope and bias */
-    const __m256 g_x = _mm256_loadu_ps(ngx), g_y = _mm256_loadu_ps(ngy), g_z = _mm256_loadu_ps(ngz);
-    __m256 nlen = _mm256_sqrt_ps(rs__dot8(g_x, g_y, g_z, g_x, g_y, g_z));
-    __m256 ninv = _mm256_div_ps(one, nlen), has_n = _mm256_cmp_ps(nlen, zero, _CMP_GT_OQ);
-    __m256 n_x = _mm256_blendv_ps(l_x, _mm256_mul_ps(g_x, ninv), has_n);
-    __m256 n_y = _mm256_blendv_ps(l_y, _mm256_mul_ps(g_y, ninv), has_n);
-    __m256 n_z = _mm256_blendv_ps(l_z, _mm256_mul_ps(g_z, ninv), has_n);
-    __m256 cos_t = _mm256_andnot_ps(sign, rs__dot8(n_x, n_y, n_z, l_x, l_y, l_z));
-    /* fmaxf(0, v): max_ps returns its second operand for a NaN, like fmaxf */
-    __m256 sin_t = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(cos_t, cos_t)), zero));
-    const float tan_max_s = m->desc.tan_max > 0.0f ? m->desc.tan_max : RS_SHADOW_TAN_MAX;
-    const __m256 tan_max = _mm256_set1_ps(tan_max_s);
-    __m256 tmax_cos = _mm256_mul_ps(tan_max, cos_t);
-    __m256 capped = _mm256_cmp_ps(sin_t, tmax_cos, _CMP_NLT_UQ); /* !(sin_t < tan_max cos_t) */
-    __m256 tan_t = _mm256_blendv_ps(_mm256_div_ps(sin_t, cos_t), tan_max, capped);
-    float b_const = m->desc.bias_const > 0.0f ? m->desc.bias_const : RS_SHADOW_BIAS_CONST;
-    float b_slope = m->desc.bias_slope > 0.0f ? m->desc.bias_slope : RS_SHADOW_BIAS_SLOPE;
-    __m256 bias =
-        _mm256_mul_ps(texel, _mm256_add_ps(_mm256_set1_ps(b_const), _mm256_mul_ps(_mm256_set1_ps(b_slope), tan_t)));
-
-    /* project with the face's matrix: c[r] = m[r] x + m[4+r] y + m[8+r] z + m[12+r] */
-    __m256 c[4];
-    for (int r = 0; r < 4; r++) {
-        __m256 acc = _mm256_mul_ps(rs__face_val8(vp, gather, off16, r), p_x);
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, gather, off16, 4 + r), p_y));
-        acc = _mm256_add_ps(acc, _mm256_mul_ps(rs__face_val8(vp, gather, off16, 8 + r), p_z));
-        c[r] = _mm256_add_ps(acc, rs__face_val8(vp, gather, off16, 12 + r));
-    }
-    const float s_s = (float)m->size;
-    const __m256 s = _mm256_set1_ps(s_s);
-    __m256 nr = rs__dot8(n_x, n_y, n_z, rs__face_val8(rgt, gather, off3, 0), rs__face_val8(rgt, gather, off3, 1),
-                         rs__face_val8(rgt, gather, off3, 2));
-    __m256 nu = rs__dot8(n_x, n_y, n_z, rs__face_val8(upv, gather, off3, 0), rs__face_val8(upv, gather, off3, 1),
-                         rs__face_val8(upv, gather, off3, 2));
-    __m256 cap = _mm256_blendv_ps(one, _mm256_div_ps(tmax_cos, sin_t),
-                                  _mm256_and_ps(capped, _mm256_cmp_ps(sin_t, zero, _CMP_GT_OQ)));
-    __m256 x, y, zs_p, zs_bias, k, lit_early = zero, unlit_early = zero;
-    if (ortho) {
-        x = c[0];
-        y = c[1];
-        zs_p = c[2];
-        __m256 inside = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, x), one, _CMP_LE_OQ),
-                                      _mm256_cmp_ps(_mm256_andnot_ps(sign, y), one, _CMP_LE_OQ));
-        inside = _mm256_and_ps(inside, _mm256_and_ps(_mm256_cmp_ps(zs_p, zero, _CMP_GE_OQ),
-                                                     _mm256_cmp_ps(zs_p, one, _CMP_LE_OQ)));
-        lit_early = _mm256_andnot_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
-        float inv_range = 1.0f / (m->zfar - m->znear);
-        zs_bias = _mm256_mul_ps(bias, _mm256_set1_ps(inv_range));
-        __m256 nf = rs__dot8(n_x, n_y, n_z, f_x, f_y, f_z);
-        k = _mm256_mul_ps(_mm256_div_ps(_mm256_set1_ps(2.0f * inv_range), _mm256_mul_ps(s, nf)), cap);
-        k = _mm256_and_ps(_mm256_cmp_ps(nf, zero, _CMP_NEQ_UQ), k);
-        nr = _mm256_mul_ps(nr, _mm256_set1_ps(m->half_w));
-        nu = _mm256_mul_ps(nu, _mm256_set1_ps(m->half_h));
-    } else {
-        x = _mm256_div_ps(c[0], c[3]);
-        y = _mm256_div_ps(c[1], c[3]);
-        zs_p = _mm256_div_ps(c[2], c[3]);
-        __m256 wb = _mm256_sub_ps(c[3], bias);
-        lit_early = _mm256_cmp_ps(wb, c[2], _CMP_NGT_UQ); /* !(wb > c2): nearer than znear */
-        if (spot) {
-            __m256 inside = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, x), one, _CMP_LE_OQ),
-                                          _mm256_cmp_ps(_mm256_andnot_ps(sign, y), one, _CMP_LE_OQ));
-            unlit_early = _mm256_andnot_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
-        }
-        zs_bias = _mm256_sub_ps(_mm256_div_ps(c[2], wb), zs_p);
-        __m256 d = rs__dot8(n_x, n_y, n_z, v_x, v_y, v_z);
-        k = _mm256_mul_ps(_mm256_div_ps(_mm256_set1_ps(2.0f * m->znear * m->tan_half), _mm256_mul_ps(s, d)), cap);
-        k = _mm256_and_ps(_mm256_cmp_ps(d, zero, _CMP_NEQ_UQ), k);
-    }
-    __m256 gx = _mm256_mul_ps(k, nr), gy = _mm256_mul_ps(_mm256_xor_ps(k, sign), nu);
-
-    /* NDC to texels, clamped (max_ps drops a NaN as fmaxf does) */
-    const __m256 half = _mm256_set1_ps(0.5f), lo = _mm256_set1_ps(-8.0f), hi = _mm256_set1_ps(s_s + 8.0f);
-    __m256 fx = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(half, x), half), s), lo), hi);
-    __m256 fy = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(half, _mm256_mul_ps(half, y)), s), lo), hi);
-    const int n = pcf ? 4 : 1;
-    const __m256 start = _mm256_set1_ps(pcf ? 1.5f : 0.0f);
-    __m256i x0 = _mm256_cvttps_epi32(_mm256_floor_ps(pcf ? _mm256_sub_ps(fx, start) : fx));
-    __m256i y0 = _mm256_cvttps_epi32(_mm256_floor_ps(pcf ? _mm256_sub_ps(fy, start) : fy));
-
-    /* rs__pcf: count the taps whose stored zs is no nearer than the
-     * receiver's plane at the tap's texel centre plus the bias */
-    const __m256i last = _mm256_set1_epi32((int)m->size - 1), izero = _mm256_setzero_si256();
-    const __m256i size_i = _mm256_set1_epi32((int)m->size);
-    const __m256i plane_off = _mm256_mullo_epi32(face, _mm256_set1_epi32((int)(m->size * m->size)));
-    __m256i lit = _mm256_setzero_si256();
-    for (int j = 0; j < n; j++) {
-        __m256i yy = _mm256_add_epi32(y0, _mm256_set1_epi32(j));
-        __m256i yc = _mm256_min_epi32(_mm256_max_epi32(yy, izero), last);
-        __m256i row = _mm256_add_epi32(plane_off, _mm256_mullo_epi32(yc, size_i));
-        __m256 ty = _mm256_sub_ps(_mm256_add_ps(_mm256_cvtepi32_ps(yy), half), fy);
-        __m256 zy = _mm256_add_ps(_mm256_add_ps(zs_p, _mm256_mul_ps(gy, ty)), zs_bias);
-        for (int i = 0; i < n; i++) {
-            __m256i xx = _mm256_add_epi32(x0, _mm256_set1_epi32(i));
-            __m256i xc = _mm256_min_epi32(_mm256_max_epi32(xx, izero), last);
-            __m256 tap = _mm256_mask_i32gather_ps(zero, m->depth, _mm256_add_epi32(row, xc), lane_on, 4);
-            __m256 tx = _mm256_sub_ps(_mm256_add_ps(_mm256_cvtepi32_ps(xx), half), fx);
-            __m256 le = _mm256_cmp_ps(tap, _mm256_add_ps(zy, _mm256_mul_ps(gx, tx)), _CMP_LE_OQ);
-            lit = _mm256_sub_epi32(lit, _mm256_castps_si256(le));
-        }
-    }
-    /* lit / (n n): n n is 16 or 1, so the multiplication by 1/16 or 1 is the
-     * same exact operation */
-    __m256 vis = _mm256_mul_ps(_mm256_cvtepi32_ps(lit), _mm256_set1_ps(pcf ? 0.0625f : 1.0f));
-
-    /* the scalar code's early returns, latest first */
-    vis = _mm256_blendv_ps(vis, one, lit_early);
-    vis = _mm256_blendv_ps(vis, zero, unlit_early);
-    if (!ortho) vis = _mm256_blendv_ps(vis, spot ? zero : one, behind);
-    _mm256_storeu_ps(out, _mm256_and_ps(vis, lane_on));
-}
+#if SIMD_X86
+    if (simd == RS_SIMD_AVX512) return &rs_shadow_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) return &rs_shadow_kernels_avx2;
 #endif
+    (void)simd;
+    return &rs_shadow_kernels_scalar;
+}
 
 void rs_shadow_visibility8(const rs_shadow_map *m, rs_simd simd, const float *px, const float *py, const float *pz,
                            const float *ngx, const float *ngy, const float *ngz, unsigned active, float *out)
 {
-#if defined(__x86_64__) || defined(__i386__)
-    uint64_t texels = (uint64_t)m->face_count * m->size * m->size;
-    if (simd != RS_SIMD_SCALAR && m->depth && m->size > 0 && texels < ((uint64_t)1 << 31) &&
-        !(m->desc.normal_offset > 0.0f)) {
-        rs__visibility8_avx2(m, px, py, pz, ngx, ngy, ngz, active, out);
+    const rs_shadow_kernels *k = rs_shadow_kernels_for(simd);
+    if (!rs_shadow_lookup_eligible(m)) {
+        for (int i = 0; i < 8; i++)
+            out[i] = (active >> i) & 1u
+                         ? rs_shadow_visibility(m, pf_v3(px[i], py[i], pz[i]), pf_v3(ngx[i], ngy[i], ngz[i]))
+                         : 0.0f;
         return;
     }
-#else
-    (void)simd;
-#endif
-    for (int i = 0; i < 8; i++)
-        out[i] = (active >> i) & 1u ? rs_shadow_visibility(m, pf_v3(px[i], py[i], pz[i]), pf_v3(ngx[i], ngy[i], ngz[i]))
-                                    : 0.0f;
+    if (k->lanes == 8) {
+        k->visibility(m, px, py, pz, ngx, ngy, ngz, active & 0xffu, out);
+        return;
+    }
+    /* a wider kernel: the 8 points in its first lanes, zeros after */
+    float in[6][RS_SHADOW_MAX_LANES], o[RS_SHADOW_MAX_LANES];
+    const float *src[6] = {px, py, pz, ngx, ngy, ngz};
+    for (int c = 0; c < 6; c++)
+        for (uint32_t i = 0; i < k->lanes; i++) in[c][i] = i < 8 ? src[c][i] : 0.0f;
+    k->visibility(m, in[0], in[1], in[2], in[3], in[4], in[5], active & 0xffu, o);
+    memcpy(out, o, 8 * sizeof(float));
 }

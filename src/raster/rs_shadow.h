@@ -152,10 +152,12 @@ float rs_shadow_visibility(const rs_shadow_map *map, pf_vec3 p, pf_vec3 ng);
 
 /* rs_shadow_visibility of 8 points (SoA: px[i], py[i], pz[i] and normals
  * ngx[i], ...), lane i only where bit i of `active` is set (other lanes get
- * 0; their inputs must still be initialised). simd other than
- * RS_SIMD_SCALAR takes the AVX2 path (the AVX-512 path uses it too), which
- * gives exactly the scalar lookup's bits (tests/test_shadow.c
- * test_simd_matches_scalar); RS_SIMD_SCALAR loops rs_shadow_visibility. */
+ * 0; their inputs must still be initialised). Every simd path runs
+ * rs_shadow_visibility_lanes (rs_shadow_lookup.h, written once over the
+ * SIMD vocabulary; AVX-512 with the 8 points in the first of 16 lanes),
+ * which gives exactly the scalar lookup's bits (tests/test_shadow.c
+ * test_simd_matches_scalar); maps with a normal offset loop
+ * rs_shadow_visibility. */
 void rs_shadow_visibility8(const rs_shadow_map *map, rs_simd simd, const float *px, const float *py, const float *pz,
                            const float *ngx, const float *ngy, const float *ngz, unsigned active, float *out);
 

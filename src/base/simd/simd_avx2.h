@@ -1,0 +1,165 @@
+/* simd_avx2.h: the SIMD vocabulary on AVX2, 8 lanes (see simd.h; the
+ * meaning of every operation is the plain C of simd_scalar.h). Compiled
+ * with -mavx2 only: no FMA. A mask is a vector whose lane l is set iff its
+ * sign bit is (the other bits may be anything): every instruction that
+ * takes a mask here reads only sign bits (blendvps, vmaskmov, vgatherdps,
+ * movmskps), so compares, sign tests and bits all serve without
+ * conversion; simd_mask_from_bits is the one place the bits-to-lanes idiom
+ * is written. */
+#ifndef SIMD_AVX2_H
+#define SIMD_AVX2_H
+
+#include <immintrin.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define SIMD_NAME "avx2"
+#define SIMD_W 8  /* 32-bit lanes */
+#define SIMD_WL 4 /* 64-bit lanes */
+#define SIMD_FULL 0xffu
+
+typedef __m256 simd_f;
+typedef __m256i simd_i;
+typedef __m256i simd_l;
+typedef __m256 simd_mask; /* lane l set iff its sign bit is */
+
+/* bit l of b -> the sign bit of lane l */
+static inline simd_mask simd_mask_from_bits(uint32_t b)
+{
+    return _mm256_castsi256_ps(
+        _mm256_sllv_epi32(_mm256_set1_epi32((int)b), _mm256_setr_epi32(31, 30, 29, 28, 27, 26, 25, 24)));
+}
+
+/* ---- float lanes */
+static inline simd_f simd_set1_f(float x) { return _mm256_set1_ps(x); }
+static inline simd_f simd_zero_f(void) { return _mm256_setzero_ps(); }
+static inline simd_f simd_add_f(simd_f a, simd_f b) { return _mm256_add_ps(a, b); }
+static inline simd_f simd_sub_f(simd_f a, simd_f b) { return _mm256_sub_ps(a, b); }
+static inline simd_f simd_mul_f(simd_f a, simd_f b) { return _mm256_mul_ps(a, b); }
+static inline simd_f simd_div_f(simd_f a, simd_f b) { return _mm256_div_ps(a, b); }
+static inline simd_f simd_min_f(simd_f a, simd_f b) { return _mm256_min_ps(a, b); }
+static inline simd_f simd_max_f(simd_f a, simd_f b) { return _mm256_max_ps(a, b); }
+static inline simd_f simd_sqrt_f(simd_f a) { return _mm256_sqrt_ps(a); }
+static inline simd_f simd_floor_f(simd_f a) { return _mm256_round_ps(a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
+static inline simd_f simd_ceil_f(simd_f a) { return _mm256_round_ps(a, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC); }
+static inline simd_mask simd_gt_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+static inline simd_mask simd_ge_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
+static inline simd_mask simd_lt_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
+static inline simd_mask simd_le_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
+static inline simd_f simd_select_f(simd_mask m, simd_f a, simd_f b)
+{
+    return _mm256_blendv_ps(b, a, m);
+}
+static inline float simd_hmin_f(simd_f a)
+{
+    __m128 m = _mm_min_ps(_mm256_castps256_ps128(a), _mm256_extractf128_ps(a, 1));
+    m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+    m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
+    return _mm_cvtss_f32(m);
+}
+
+static inline simd_f simd_abs_f(simd_f a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+static inline simd_f simd_neg_f(simd_f a) { return _mm256_xor_ps(a, _mm256_set1_ps(-0.0f)); }
+static inline simd_mask simd_eq_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, b, _CMP_EQ_OQ); }
+
+/* ---- float memory */
+static inline simd_f simd_load_f(const float *p) { return _mm256_load_ps(p); }
+static inline simd_f simd_loadu_f(const float *p) { return _mm256_loadu_ps(p); }
+static inline void simd_storeu_f(float *p, simd_f a) { _mm256_storeu_ps(p, a); }
+static inline simd_f simd_maskz_loadu_f(const float *p, simd_mask m) { return _mm256_maskload_ps(p, _mm256_castps_si256(m)); }
+static inline void simd_mask_storeu_f(float *p, simd_mask m, simd_f a) { _mm256_maskstore_ps(p, _mm256_castps_si256(m), a); }
+static inline simd_f simd_maskz_loadu_rows8_f(const float *p, size_t stride, simd_mask m)
+{
+    (void)stride;
+    return simd_maskz_loadu_f(p, m);
+}
+static inline void simd_mask_storeu_rows8_f(float *p, size_t stride, simd_mask m, simd_f a)
+{
+    (void)stride;
+    simd_mask_storeu_f(p, m, a);
+}
+static inline simd_f simd_set_rows8_f(const float *r) { return _mm256_set1_ps(r[0]); }
+
+/* ---- int32 lanes */
+static inline simd_i simd_set1_i(int32_t x) { return _mm256_set1_epi32(x); }
+static inline simd_i simd_iota_i(void) { return _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7); }
+static inline simd_i simd_add_i(simd_i a, simd_i b) { return _mm256_add_epi32(a, b); }
+static inline simd_i simd_sub_i(simd_i a, simd_i b) { return _mm256_sub_epi32(a, b); }
+static inline simd_i simd_mullo_i(simd_i a, simd_i b) { return _mm256_mullo_epi32(a, b); }
+static inline simd_i simd_and_i(simd_i a, simd_i b) { return _mm256_and_si256(a, b); }
+static inline simd_i simd_or_i(simd_i a, simd_i b) { return _mm256_or_si256(a, b); }
+static inline simd_i simd_srli_i(simd_i a, int n) { return _mm256_srli_epi32(a, n); }
+static inline simd_mask simd_eq_i(simd_i a, simd_i b) { return _mm256_castsi256_ps(_mm256_cmpeq_epi32(a, b)); }
+static inline simd_mask simd_gt_i(simd_i a, simd_i b) { return _mm256_castsi256_ps(_mm256_cmpgt_epi32(a, b)); }
+static inline simd_mask simd_negative_i(simd_i a) { return _mm256_castsi256_ps(a); } /* the sign bits themselves */
+static inline simd_f simd_i2f(simd_i a) { return _mm256_cvtepi32_ps(a); }
+static inline simd_i simd_f2i_trunc(simd_f a) { return _mm256_cvttps_epi32(a); }
+static inline simd_i simd_load_i(const int32_t *p) { return _mm256_load_si256((const __m256i *)p); }
+static inline simd_i simd_loadu_i(const int32_t *p) { return _mm256_loadu_si256((const __m256i *)p); }
+static inline void simd_storeu_i(int32_t *p, simd_i a) { _mm256_storeu_si256((__m256i *)p, a); }
+static inline void simd_mask_storeu_i(int32_t *p, simd_mask m, simd_i a) { _mm256_maskstore_epi32(p, _mm256_castps_si256(m), a); }
+static inline void simd_mask_storeu_rows8_i(int32_t *p, size_t stride, simd_mask m, simd_i a)
+{
+    (void)stride;
+    simd_mask_storeu_i(p, m, a);
+}
+static inline void simd_stream_i(int32_t *p, simd_i a) { _mm256_stream_si256((__m256i *)p, a); }
+static inline void simd_stream_fence(void) { _mm_sfence(); }
+
+static inline simd_i simd_select_i(simd_mask m, simd_i a, simd_i b)
+{
+    return _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b), _mm256_castsi256_ps(a), m));
+}
+/* no compress instruction on AVX2: through memory, lane by lane */
+static inline int simd_compress_storeu_f(float *p, simd_mask m, simd_f a)
+{
+    float v[8];
+    _mm256_storeu_ps(v, a);
+    int n = 0;
+    for (unsigned b = (unsigned)_mm256_movemask_ps(m); b; b &= b - 1) p[n++] = v[__builtin_ctz(b)];
+    return n;
+}
+static inline int simd_compress_storeu_i(int32_t *p, simd_mask m, simd_i a)
+{
+    int32_t v[8];
+    _mm256_storeu_si256((__m256i *)v, a);
+    int n = 0;
+    for (unsigned b = (unsigned)_mm256_movemask_ps(m); b; b &= b - 1) p[n++] = v[__builtin_ctz(b)];
+    return n;
+}
+static inline simd_i simd_gather_u16(const uint16_t *base, simd_i idx)
+{
+    return _mm256_and_si256(_mm256_i32gather_epi32((const int *)base, idx, 2), _mm256_set1_epi32(0xffff));
+}
+
+static inline simd_i simd_min_i(simd_i a, simd_i b) { return _mm256_min_epi32(a, b); }
+static inline simd_i simd_max_i(simd_i a, simd_i b) { return _mm256_max_epi32(a, b); }
+static inline simd_i simd_slli_i(simd_i a, int n) { return _mm256_slli_epi32(a, n); }
+static inline int32_t simd_lane0_i(simd_i a) { return _mm256_cvtsi256_si32(a); }
+static inline simd_f simd_gather_f(const float *base, simd_i idx) { return _mm256_i32gather_ps(base, idx, 4); }
+static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
+{
+    return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, idx, m, 4);
+}
+
+/* ---- int64 lanes */
+static inline simd_l simd_set1_l(int64_t x) { return _mm256_set1_epi64x(x); }
+static inline simd_l simd_ramp_l(int64_t base, int64_t step)
+{
+    return _mm256_add_epi64(_mm256_set1_epi64x(base), _mm256_set_epi64x(3 * step, 2 * step, step, 0));
+}
+static inline simd_l simd_or_l(simd_l a, simd_l b) { return _mm256_or_si256(a, b); }
+static inline uint32_t simd_negative_l(simd_l a) { return (uint32_t)_mm256_movemask_pd(_mm256_castsi256_pd(a)); }
+
+static inline void simd_zeroupper(void) { _mm256_zeroupper(); }
+
+/* ---- masks */
+static inline simd_mask simd_mask_and(simd_mask a, simd_mask b) { return _mm256_and_ps(a, b); }
+static inline simd_mask simd_mask_or(simd_mask a, simd_mask b) { return _mm256_or_ps(a, b); }
+static inline simd_mask simd_mask_andnot(simd_mask a, simd_mask b) { return _mm256_andnot_ps(b, a); }
+static inline simd_mask simd_mask_not(simd_mask a) { return _mm256_xor_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(-1))); }
+static inline uint32_t simd_mask_bits(simd_mask m) { return (uint32_t)_mm256_movemask_ps(m); }
+static inline int simd_mask_any(simd_mask m) { return _mm256_movemask_ps(m) != 0; }
+static inline int simd_mask_count(simd_mask m) { return __builtin_popcount((unsigned)_mm256_movemask_ps(m)); }
+
+#endif

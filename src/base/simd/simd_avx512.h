@@ -1,0 +1,151 @@
+/* simd_avx512.h: the SIMD vocabulary on AVX-512 (F, DQ, BW, VL), 16 lanes
+ * (see simd.h; the meaning of every operation is the plain C of
+ * simd_scalar.h). Masks are the mask registers' bits. */
+#ifndef SIMD_AVX512_H
+#define SIMD_AVX512_H
+
+#include <immintrin.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define SIMD_NAME "avx512"
+#define SIMD_W 16 /* 32-bit lanes */
+#define SIMD_WL 8 /* 64-bit lanes */
+#define SIMD_FULL 0xffffu
+
+typedef __m512 simd_f;
+typedef __m512i simd_i;
+typedef __m512i simd_l;
+typedef __mmask16 simd_mask;
+
+/* ---- float lanes */
+static inline simd_f simd_set1_f(float x) { return _mm512_set1_ps(x); }
+static inline simd_f simd_zero_f(void) { return _mm512_setzero_ps(); }
+static inline simd_f simd_add_f(simd_f a, simd_f b) { return _mm512_add_ps(a, b); }
+static inline simd_f simd_sub_f(simd_f a, simd_f b) { return _mm512_sub_ps(a, b); }
+static inline simd_f simd_mul_f(simd_f a, simd_f b) { return _mm512_mul_ps(a, b); }
+static inline simd_f simd_div_f(simd_f a, simd_f b) { return _mm512_div_ps(a, b); }
+static inline simd_f simd_min_f(simd_f a, simd_f b) { return _mm512_min_ps(a, b); }
+static inline simd_f simd_max_f(simd_f a, simd_f b) { return _mm512_max_ps(a, b); }
+static inline simd_f simd_sqrt_f(simd_f a) { return _mm512_sqrt_ps(a); }
+static inline simd_f simd_floor_f(simd_f a) { return _mm512_roundscale_ps(a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
+static inline simd_f simd_ceil_f(simd_f a) { return _mm512_roundscale_ps(a, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC); }
+static inline simd_mask simd_gt_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }
+static inline simd_mask simd_ge_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mask(a, b, _CMP_GE_OQ); }
+static inline simd_mask simd_lt_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ); }
+static inline simd_mask simd_le_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
+static inline simd_f simd_select_f(simd_mask m, simd_f a, simd_f b) { return _mm512_mask_blend_ps((__mmask16)m, b, a); }
+static inline float simd_hmin_f(simd_f a)
+{
+    __m256 h = _mm256_min_ps(_mm512_castps512_ps256(a), _mm512_extractf32x8_ps(a, 1));
+    __m128 m = _mm_min_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+    m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+    m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
+    return _mm_cvtss_f32(m);
+}
+
+static inline simd_f simd_abs_f(simd_f a) { return _mm512_abs_ps(a); }
+static inline simd_f simd_neg_f(simd_f a)
+{
+    return _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), _mm512_set1_epi32((int)0x80000000u)));
+}
+static inline simd_mask simd_eq_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mask(a, b, _CMP_EQ_OQ); }
+
+/* ---- float memory */
+static inline simd_f simd_load_f(const float *p) { return _mm512_load_ps(p); }
+static inline simd_f simd_loadu_f(const float *p) { return _mm512_loadu_ps(p); }
+static inline void simd_storeu_f(float *p, simd_f a) { _mm512_storeu_ps(p, a); }
+static inline simd_f simd_maskz_loadu_f(const float *p, simd_mask m) { return _mm512_maskz_loadu_ps((__mmask16)m, p); }
+static inline void simd_mask_storeu_f(float *p, simd_mask m, simd_f a) { _mm512_mask_storeu_ps(p, (__mmask16)m, a); }
+/* two rows of 8: lanes 0-7 at p, lanes 8-15 at p + stride */
+static inline simd_f simd_maskz_loadu_rows8_f(const float *p, size_t stride, simd_mask m)
+{
+    __m256 r0 = _mm256_maskz_loadu_ps((__mmask8)m, p);
+    __m256 r1 = _mm256_maskz_loadu_ps((__mmask8)(m >> 8), p + stride);
+    return _mm512_insertf32x8(_mm512_castps256_ps512(r0), r1, 1);
+}
+static inline void simd_mask_storeu_rows8_f(float *p, size_t stride, simd_mask m, simd_f a)
+{
+    _mm256_mask_storeu_ps(p, (__mmask8)m, _mm512_castps512_ps256(a));
+    _mm256_mask_storeu_ps(p + stride, (__mmask8)(m >> 8), _mm512_extractf32x8_ps(a, 1));
+}
+static inline simd_f simd_set_rows8_f(const float *r)
+{
+    return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_set1_ps(r[0])), _mm256_set1_ps(r[1]), 1);
+}
+
+/* ---- int32 lanes */
+static inline simd_i simd_set1_i(int32_t x) { return _mm512_set1_epi32(x); }
+static inline simd_i simd_iota_i(void) { return _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15); }
+static inline simd_i simd_add_i(simd_i a, simd_i b) { return _mm512_add_epi32(a, b); }
+static inline simd_i simd_sub_i(simd_i a, simd_i b) { return _mm512_sub_epi32(a, b); }
+static inline simd_i simd_mullo_i(simd_i a, simd_i b) { return _mm512_mullo_epi32(a, b); }
+static inline simd_i simd_and_i(simd_i a, simd_i b) { return _mm512_and_si512(a, b); }
+static inline simd_i simd_or_i(simd_i a, simd_i b) { return _mm512_or_si512(a, b); }
+static inline simd_i simd_srli_i(simd_i a, int n) { return _mm512_srli_epi32(a, (unsigned)n); }
+static inline simd_mask simd_eq_i(simd_i a, simd_i b) { return _mm512_cmpeq_epi32_mask(a, b); }
+static inline simd_mask simd_gt_i(simd_i a, simd_i b) { return _mm512_cmpgt_epi32_mask(a, b); }
+static inline simd_mask simd_negative_i(simd_i a) { return _mm512_movepi32_mask(a); }
+static inline simd_f simd_i2f(simd_i a) { return _mm512_cvtepi32_ps(a); }
+static inline simd_i simd_f2i_trunc(simd_f a) { return _mm512_cvttps_epi32(a); }
+static inline simd_i simd_load_i(const int32_t *p) { return _mm512_load_si512(p); }
+static inline simd_i simd_loadu_i(const int32_t *p) { return _mm512_loadu_si512(p); }
+static inline void simd_storeu_i(int32_t *p, simd_i a) { _mm512_storeu_si512(p, a); }
+static inline void simd_mask_storeu_i(int32_t *p, simd_mask m, simd_i a) { _mm512_mask_storeu_epi32(p, (__mmask16)m, a); }
+static inline void simd_mask_storeu_rows8_i(int32_t *p, size_t stride, simd_mask m, simd_i a)
+{
+    _mm256_mask_storeu_epi32(p, (__mmask8)m, _mm512_castsi512_si256(a));
+    _mm256_mask_storeu_epi32(p + stride, (__mmask8)(m >> 8), _mm512_extracti32x8_epi32(a, 1));
+}
+static inline void simd_stream_i(int32_t *p, simd_i a) { _mm512_stream_si512((void *)p, a); }
+static inline void simd_stream_fence(void) { _mm_sfence(); }
+
+static inline simd_i simd_select_i(simd_mask m, simd_i a, simd_i b) { return _mm512_mask_blend_epi32((__mmask16)m, b, a); }
+static inline int simd_compress_storeu_f(float *p, simd_mask m, simd_f a)
+{
+    _mm512_mask_compressstoreu_ps(p, m, a);
+    return __builtin_popcount(m);
+}
+static inline int simd_compress_storeu_i(int32_t *p, simd_mask m, simd_i a)
+{
+    _mm512_mask_compressstoreu_epi32(p, m, a);
+    return __builtin_popcount(m);
+}
+static inline simd_i simd_gather_u16(const uint16_t *base, simd_i idx)
+{
+    return _mm512_and_si512(_mm512_i32gather_epi32(idx, (const void *)base, 2), _mm512_set1_epi32(0xffff));
+}
+
+static inline simd_i simd_min_i(simd_i a, simd_i b) { return _mm512_min_epi32(a, b); }
+static inline simd_i simd_max_i(simd_i a, simd_i b) { return _mm512_max_epi32(a, b); }
+static inline simd_i simd_slli_i(simd_i a, int n) { return _mm512_slli_epi32(a, (unsigned)n); }
+static inline int32_t simd_lane0_i(simd_i a) { return _mm_cvtsi128_si32(_mm512_castsi512_si128(a)); }
+static inline simd_f simd_gather_f(const float *base, simd_i idx) { return _mm512_i32gather_ps(idx, base, 4); }
+static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
+{
+    return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), (__mmask16)m, idx, base, 4);
+}
+
+/* ---- int64 lanes */
+static inline simd_l simd_set1_l(int64_t x) { return _mm512_set1_epi64(x); }
+static inline simd_l simd_ramp_l(int64_t base, int64_t step)
+{
+    return _mm512_add_epi64(_mm512_set1_epi64(base),
+                            _mm512_mullo_epi64(_mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7), _mm512_set1_epi64(step)));
+}
+static inline simd_l simd_or_l(simd_l a, simd_l b) { return _mm512_or_si512(a, b); }
+static inline uint32_t simd_negative_l(simd_l a) { return _mm512_movepi64_mask(a); }
+
+static inline void simd_zeroupper(void) { _mm256_zeroupper(); }
+
+/* ---- masks */
+static inline simd_mask simd_mask_and(simd_mask a, simd_mask b) { return (simd_mask)(a & b); }
+static inline simd_mask simd_mask_or(simd_mask a, simd_mask b) { return (simd_mask)(a | b); }
+static inline simd_mask simd_mask_andnot(simd_mask a, simd_mask b) { return (simd_mask)(a & ~b); }
+static inline simd_mask simd_mask_not(simd_mask a) { return (simd_mask)~a; }
+static inline uint32_t simd_mask_bits(simd_mask m) { return m; }
+static inline simd_mask simd_mask_from_bits(uint32_t b) { return (simd_mask)b; }
+static inline int simd_mask_any(simd_mask m) { return m != 0; }
+static inline int simd_mask_count(simd_mask m) { return __builtin_popcount(m); }
+
+#endif

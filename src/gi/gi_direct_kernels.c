@@ -1,0 +1,147 @@
+/* gi_direct_kernels: the shadow-mapped direct light of one row, SIMD_W
+ * pixels at a time, written once over the SIMD vocabulary and compiled once
+ * per instruction set (-DGI_DIRECT_KERNELS=gi_direct_kernels_<isa>; see
+ * docs/raster.md "The SIMD vocabulary"). Per light: the unshadowed
+ * irradiance of gi_light_irradiance lane-wise, then the 16-tap PCF lookup of
+ * the pixels it reaches (rs_shadow_lookup.h, inlined); pixels the light
+ * does not reach or that are fully shadowed add nothing, every pixel sums
+ * its lights in the scene's order with gi_light_irradiance's and
+ * rs_shadow_visibility's operations, so every path gives the same bits
+ * (tests/test_shadow.c test_simd_matches_scalar compares the scalar compile
+ * with the best one). The area lights' emitter points are added per pixel
+ * by the scalar gi__direct_area_irradiance. */
+#include "gi_direct_kernels.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "gi_light.h"
+#include "rs_shadow_lookup.h"
+#include "simd.h"
+
+#ifndef GI_DIRECT_KERNELS
+#error "compile with -DGI_DIRECT_KERNELS=<table name> (CMakeLists.txt)"
+#endif
+
+/* gi_light_irradiance for SIMD_W points (unit normals n): the irradiance's
+ * three components and the mask of lanes it reaches, with the scalar
+ * function's operations in its order (the spot factor's cosines are per
+ * light, the same cosf calls as gi_light_spot_factor). */
+static simd_mask gi__light_irradiance_w(const pf_light *L, simd_f px, simd_f py, simd_f pz, simd_f nx, simd_f ny,
+                                        simd_f nz, simd_f irr[3])
+{
+    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);
+    simd_f wx, wy, wz, e0 = simd_set1_f(L->intensity);
+    simd_mask ok = simd_mask_from_bits(SIMD_FULL);
+    if (L->type == PF_LIGHT_DIRECTIONAL) {
+        pf_vec3 wi = pf_v3_scale(L->direction, -1.0f);
+        wx = simd_set1_f(wi.x), wy = simd_set1_f(wi.y), wz = simd_set1_f(wi.z);
+    } else {
+        simd_f dx = simd_sub_f(simd_set1_f(L->position.x), px);
+        simd_f dy = simd_sub_f(simd_set1_f(L->position.y), py);
+        simd_f dz = simd_sub_f(simd_set1_f(L->position.z), pz);
+        simd_f r2 = rs__sdot(dx, dy, dz, dx, dy, dz);
+        ok = simd_gt_f(r2, zero);
+        simd_f inv = simd_div_f(one, simd_sqrt_f(r2));
+        wx = simd_mul_f(dx, inv), wy = simd_mul_f(dy, inv), wz = simd_mul_f(dz, inv);
+        e0 = simd_div_f(e0, r2);
+        if (L->type == PF_LIGHT_SPOT) {
+            /* gi_light_spot_factor(L, -dot(wi, direction)) */
+            float cos_outer = cosf(L->outer_cone), cos_inner = cosf(L->inner_cone);
+            float scale = 1.0f / fmaxf(0.001f, cos_inner - cos_outer);
+            simd_f ca = simd_neg_f(rs__sdot(wx, wy, wz, simd_set1_f(L->direction.x), simd_set1_f(L->direction.y),
+                                            simd_set1_f(L->direction.z)));
+            simd_f t = simd_mul_f(simd_sub_f(ca, simd_set1_f(cos_outer)), simd_set1_f(scale));
+            /* pf_clampf(t, 0, 1): t < 0 ? 0 : (t > 1 ? 1 : t) */
+            t = simd_select_f(simd_lt_f(t, zero), zero, simd_select_f(simd_gt_f(t, one), one, t));
+            e0 = simd_mul_f(e0, simd_mul_f(t, t));
+        }
+    }
+    simd_f cos_t = rs__sdot(nx, ny, nz, wx, wy, wz);
+    ok = simd_mask_and(ok, simd_mask_and(simd_gt_f(cos_t, zero), simd_gt_f(e0, zero)));
+    simd_f k = simd_mul_f(e0, cos_t);
+    irr[0] = simd_mul_f(simd_set1_f(L->color.x), k);
+    irr[1] = simd_mul_f(simd_set1_f(L->color.y), k);
+    irr[2] = simd_mul_f(simd_set1_f(L->color.z), k);
+    return ok;
+}
+
+/* One row of the direct light (stage 2b): f->direct = irradiance x PCF
+ * visibility x albedo / pi, emission added later by compose. */
+static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
+{
+    (void)worker;
+    gi_frame *f = ctx;
+    const rs_gbuffer *g = &f->gbuf;
+    const pf_scene *s = f->scene;
+    float *out = f->direct + (size_t)y * f->width * 3;
+    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    uint32_t ng_prim = RS_GBUFFER_EMPTY;
+    pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
+    for (uint32_t x0 = 0; x0 < f->width; x0 += SIMD_W) {
+        /* the pixels' G-buffer values (zeros past the row's end) */
+        float in[6][SIMD_W], ngv[3][SIMD_W], ev[3][SIMD_W];
+        uint32_t live = 0;
+        const float *planes[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
+        for (uint32_t i = 0; i < SIMD_W; i++) {
+            size_t p = (size_t)y * f->width + x0 + i;
+            int on = x0 + i < f->width && g->prim[p] != RS_GBUFFER_EMPTY;
+            for (int c = 0; c < 6; c++) in[c][i] = on ? planes[c][p] : 0.0f;
+            if (on && g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
+                ng_prim = g->prim[p];
+                ng = pf_scene_face_normal(s, ng_prim);
+            }
+            ngv[0][i] = on ? ng.x : 0.0f;
+            ngv[1][i] = on ? ng.y : 0.0f;
+            ngv[2][i] = on ? ng.z : 0.0f;
+            live |= (uint32_t)on << i;
+        }
+        if (!live) continue;
+        const simd_f px = simd_loadu_f(in[0]), py = simd_loadu_f(in[1]), pz = simd_loadu_f(in[2]);
+        const simd_f nx = simd_loadu_f(in[3]), ny = simd_loadu_f(in[4]), nz = simd_loadu_f(in[5]);
+        const simd_f gx = simd_loadu_f(ngv[0]), gy = simd_loadu_f(ngv[1]), gz = simd_loadu_f(ngv[2]);
+        const simd_mask live_lanes = simd_mask_from_bits(live);
+        simd_f e[3] = {simd_zero_f(), simd_zero_f(), simd_zero_f()};
+        for (uint32_t l = 0; l < s->light_count && l < f->shadows.count; l++) {
+            simd_f irr[3];
+            simd_mask reached =
+                simd_mask_and(gi__light_irradiance_w(&s->lights[l], px, py, pz, nx, ny, nz, irr), live_lanes);
+            if (!simd_mask_any(reached)) continue;
+            const rs_shadow_map *m = &f->shadows.maps[l];
+            simd_f v;
+            if (rs_shadow_lookup_eligible(m)) {
+                v = rs_shadow_visibility_lanes(m, px, py, pz, gx, gy, gz, reached);
+            } else { /* normal offset: the scalar lookup lane by lane */
+                float vis[SIMD_W];
+                uint32_t r = simd_mask_bits(reached);
+                for (int i = 0; i < SIMD_W; i++)
+                    vis[i] = r >> i & 1 ? rs_shadow_visibility(m, pf_v3(in[0][i], in[1][i], in[2][i]),
+                                                                     pf_v3(ngv[0][i], ngv[1][i], ngv[2][i]))
+                                              : 0.0f;
+                v = simd_loadu_f(vis);
+            }
+            /* e += irradiance * vis where reached and vis > 0 */
+            simd_mask take = simd_mask_and(reached, simd_gt_f(v, simd_zero_f()));
+            for (int c = 0; c < 3; c++) e[c] = simd_select_f(take, simd_add_f(e[c], simd_mul_f(irr[c], v)), e[c]);
+        }
+        for (int c = 0; c < 3; c++) simd_storeu_f(ev[c], e[c]);
+        for (uint32_t i = 0; i < SIMD_W; i++) {
+            if (!((live >> i) & 1u)) continue;
+            size_t p = (size_t)y * f->width + x0 + i;
+            float ex = ev[0][i], ey = ev[1][i], ez = ev[2][i];
+            if (f->area_maps.rendered) {
+                pf_vec3 ea = gi__direct_area_irradiance(&f->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
+                                                        pf_v3(in[3][i], in[4][i], in[5][i]));
+                ex += ea.x;
+                ey += ea.y;
+                ez += ea.z;
+            }
+            float *o = out + 3 * (size_t)(x0 + i);
+            o[0] = ex * g->alb_r[p] * PF_INV_PI;
+            o[1] = ey * g->alb_g[p] * PF_INV_PI;
+            o[2] = ez * g->alb_b[p] * PF_INV_PI;
+        }
+    }
+}
+
+const gi_direct_kernels GI_DIRECT_KERNELS = {SIMD_NAME, gi__direct_row};

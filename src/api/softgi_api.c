@@ -664,8 +664,10 @@ softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_er
         if (c->flags & SOFTGI_RAYTRACE) gi_frame_render_raytraced(&c->frame);
         else gi_frame_render_raster(&c->frame);
         c->frames++;
+        if (c->frame.status != PF_OK) r = c->frame.status, e = c->frame.error;
         /* what the program refuses to write is not returned either */
-        r = pf_imageio_check("the frame", c->frame.final, c->width, c->height, PF_IMAGEIO_RADIANCE, &e);
+        if (r == PF_OK)
+            r = pf_imageio_check("the frame", c->frame.final, c->width, c->height, PF_IMAGEIO_RADIANCE, &e);
     }
     if (r == PF_OK) {
         const float *src = c->frame.final;

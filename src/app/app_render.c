@@ -148,6 +148,13 @@ int app_render(const pf_options *o)
     else gi_frame_render_raster(&frame);
     pf_stage_hook_set(hook);
     app_progress_end(&prog.bar);
+    if (frame.status != PF_OK) {
+        err = frame.error;
+        gi_frame_free(&frame);
+        rs_context_destroy(raster);
+        app_setup_end(&su);
+        return app_fail(&err);
+    }
     for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
 
     /* Output */

@@ -461,6 +461,7 @@ int app_sequence(const pf_options *o)
         else if (o->raytrace) gi_frame_render_raytraced(fr);
         else gi_frame_render_raster(fr);
         pf_stage_hook_set(hook);
+        if (r == PF_OK && fr->status != PF_OK) r = fr->status, err = fr->error;
         double t_render = (pf_time_now() - t0) * 1e3;
         prog->expected = prog->stages;
         prog->done++;

@@ -292,7 +292,8 @@ void gi_stage_gbuffer_raster(gi_frame *f)
 
 void gi_stage_gbuffer_resolve(gi_frame *f)
 {
-    int simd = f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR;
+    /* the frame's SIMD path: 8 lanes with AVX2, 16 with AVX-512 (same bits) */
+    int simd = f->raster ? (int)rs_context_simd(f->raster) : 0;
     rs_gbuffer_resolve_simd(&f->gbuf, f->scene, f->raster ? rs_context_resolve_table(f->raster) : NULL, &f->camera,
                             f->jobs, simd);
 }
@@ -352,4 +353,6 @@ void gi_frame_render_raster(gi_frame *f)
     gi__run(f, GI_STAGE_COMPOSE);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
+    /* the G-buffer's and the shadow maps' passes, all at once */
+    f->status = rs_context_status(f->raster, &f->error);
 }

@@ -189,6 +189,11 @@ typedef struct gi_frame {
     gi_indirect ind;       /* many-light state and buffers (when enabled) */
     int indirect;          /* run steps 3-9 */
     int show_direct;       /* compose adds emission + direct (0 for --indirect-only) */
+    /* PF_OK, or the first failure of the last frame (a rasterizer pass that
+     * ran out of memory drew fewer triangles: rs_context_status); the
+     * commands check it after every frame and refuse its image */
+    pf_result status;
+    pf_error error;
     float *direct; /* RGB, width*height*3 */
     float *final;  /* RGB, width*height*3 */
     pf_stage_times times;

@@ -1,6 +1,8 @@
 /* gi_indirect: the many-light stages of a frame (see gi_indirect.h). */
 #include "gi_indirect.h"
+#include "gi_indirect_kernels.h"
 #include "pf_random.h"
+#include "simd.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,10 +10,6 @@
 
 #include "gi_frame.h"
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define GI_HAVE_X86 1
-#endif
 
 #define GI__DEFAULT_CLAMP 400.0f
 #define GI__MAPS_CHUNK 64u /* VPL maps rendered between two progress reports */
@@ -339,6 +337,19 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
 
 /* ---------------------------------------------------------- 5. split */
 
+/* The SIMD kernels of the frame's path (gi_indirect_kernels.h); NULL on the
+ * scalar path, which runs the per-pixel loops, the reference. */
+static const gi_indirect_kernels *gi__kernels(const gi_frame *f)
+{
+    rs_simd simd = f->raster ? rs_context_simd(f->raster) : RS_SIMD_SCALAR;
+#if SIMD_X86
+    if (simd == RS_SIMD_AVX512) return &gi_indirect_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) return &gi_indirect_kernels_avx2;
+#endif
+    (void)simd;
+    return NULL;
+}
+
 /* The G-buffer the indirect stages read: the frame's, or its samples. */
 static const rs_gbuffer *gi__indirect_gbuffer(const gi_frame *f)
 {
@@ -509,137 +520,6 @@ pf_vec3 gi_vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec
     return pf_v3_scale(v->intensity, G);
 }
 
-#ifdef GI_HAVE_X86
-/* The accumulation of `groups` runs of 8 consecutive tile pixels against
- * the tile's VPLs with AVX2 — gi_vpl_irradiance and rs_para_visible_at
- * written lane-wise with the same operations in the same order (sqrt and
- * division are correctly rounded in both; floor, min/max and the integer
- * texel arithmetic are exact), so every lane gets the scalar path's bits.
- * The VPL loop is the outer one: one VPL's paraboloid map serves all the
- * runs before the next map is read (cache locality); each pixel still adds
- * its VPLs in the tile's order, so its sum is the same. Paraboloid
- * visibility only; e[24*g + 3*i + c] receives the (unweighted) sum of run g,
- * lane i, colour c. At most GI__ACC_GROUPS runs. */
-#define GI__ACC_GROUPS 64
-__attribute__((target("avx2"))) static void gi__accumulate8_avx2(const gi_indirect *ind, const float *px_,
-                                                                    const float *py_, const float *pz_,
-                                                                    const float *nx_, const float *ny_,
-                                                                    const float *nz_, uint32_t groups, uint32_t a0,
-                                                                    uint32_t a1, float *e)
-{
-    const uint32_t R = ind->opt.para_res;
-    const size_t map = (size_t)R * R;
-    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-    const __m256 b = _mm256_set1_ps(ind->b);
-    const __m256 k4 = _mm256_set1_ps(4.0f / (float)R), tanmax = _mm256_set1_ps(RS_PARA_TAN_MAX);
-    const __m256 step = _mm256_set1_ps(ind->range / RS_PARA_CODES);
-    const __m256 qbias = _mm256_set1_ps(2.0f * ind->range / RS_PARA_CODES);
-    const __m256 bscale = _mm256_set1_ps(ind->bias_scale); /* 1 (exact maps: x 1 is exact) or the ISM scale */
-    const __m256 h = _mm256_set1_ps(0.5f * (float)R), rmax = _mm256_set1_ps((float)R - 1.0f);
-    const __m256 shrink = _mm256_set1_ps(1.0f - 1.5f / (float)R);
-    const __m256i iR = _mm256_set1_epi32((int)R), iR2 = _mm256_set1_epi32((int)(R * R));
-    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    __m256 acc[GI__ACC_GROUPS][3];
-    for (uint32_t g = 0; g < groups; g++) acc[g][0] = acc[g][1] = acc[g][2] = zero;
-    for (uint32_t q = a0; q < a1; q++) {
-        uint32_t vi = ind->assign[q];
-        const gi_vpl *v = &ind->vpls.v[vi];
-        const rs_para_frame *f = &ind->frames[vi];
-        for (uint32_t g = 0; g < groups; g++) {
-            const __m256 Px = _mm256_loadu_ps(px_ + 8 * g), Py = _mm256_loadu_ps(py_ + 8 * g);
-            const __m256 Pz = _mm256_loadu_ps(pz_ + 8 * g);
-            const __m256 Nx = _mm256_loadu_ps(nx_ + 8 * g), Ny = _mm256_loadu_ps(ny_ + 8 * g);
-            const __m256 Nz = _mm256_loadu_ps(nz_ + 8 * g);
-            /* gi_vpl_irradiance */
-            __m256 dx = _mm256_sub_ps(_mm256_set1_ps(v->pos.x), Px), dy = _mm256_sub_ps(_mm256_set1_ps(v->pos.y), Py),
-                   dz = _mm256_sub_ps(_mm256_set1_ps(v->pos.z), Pz);
-            __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-            __m256 ok = _mm256_cmp_ps(r2, zero, _CMP_GT_OQ);
-            __m256 r = _mm256_sqrt_ps(r2), inv = _mm256_div_ps(one, r);
-            __m256 wx = _mm256_mul_ps(dx, inv), wy = _mm256_mul_ps(dy, inv), wz = _mm256_mul_ps(dz, inv);
-            __m256 c1 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(Nx, wx), _mm256_mul_ps(Ny, wy)), _mm256_mul_ps(Nz, wz));
-            __m256 c2d = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(v->nrm.x), wx), _mm256_mul_ps(_mm256_set1_ps(v->nrm.y), wy)),
-                _mm256_mul_ps(_mm256_set1_ps(v->nrm.z), wz));
-            __m256 c2 = _mm256_sub_ps(zero, c2d); /* -dot: exact negation */
-            ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(c1, zero, _CMP_GT_OQ), _mm256_cmp_ps(c2, zero, _CMP_GT_OQ)));
-            if (_mm256_movemask_ps(ok) == 0) continue;
-            __m256 G = _mm256_div_ps(_mm256_mul_ps(c1, c2), r2);
-            G = _mm256_blendv_ps(G, b, _mm256_cmp_ps(G, b, _CMP_GT_OQ));
-            /* rs_para_visible_at */
-            __m256 qx = _mm256_sub_ps(Px, _mm256_set1_ps(f->o.x)), qy = _mm256_sub_ps(Py, _mm256_set1_ps(f->o.y)),
-                   qz = _mm256_sub_ps(Pz, _mm256_set1_ps(f->o.z));
-#define GI__DOT3(ax, ay, az)                                                                                           \
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, _mm256_set1_ps(ax)), _mm256_mul_ps(qy, _mm256_set1_ps(ay))),          \
-                      _mm256_mul_ps(qz, _mm256_set1_ps(az)))
-            __m256 lx = GI__DOT3(f->t.x, f->t.y, f->t.z), ly = GI__DOT3(f->b.x, f->b.y, f->b.z),
-                   lz = GI__DOT3(f->n.x, f->n.y, f->n.z);
-#undef GI__DOT3
-            __m256 front = _mm256_cmp_ps(lz, zero, _CMP_GT_OQ);
-            __m256 dist = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(lx, lx), _mm256_mul_ps(ly, ly)),
-                                                       _mm256_mul_ps(lz, lz)));
-            __m256 den = _mm256_add_ps(dist, lz);
-            __m256 u = _mm256_div_ps(lx, den), vv = _mm256_div_ps(ly, den);
-            __m256 wt = _mm256_div_ps(_mm256_mul_ps(dist, k4),
-                                      _mm256_add_ps(one, _mm256_add_ps(_mm256_mul_ps(u, u), _mm256_mul_ps(vv, vv))));
-            __m256 c = _mm256_and_ps(c1, absmask);
-            __m256 s = _mm256_sqrt_ps(_mm256_max_ps(zero, _mm256_sub_ps(one, _mm256_mul_ps(c, c))));
-            __m256 tan_t = _mm256_blendv_ps(tanmax, _mm256_div_ps(s, c),
-                                            _mm256_cmp_ps(c, _mm256_div_ps(s, tanmax), _CMP_GT_OQ));
-            /* rs__texel_of_uv: pass 0, then pass 1 for lanes whose texel centre is outside the disc */
-            __m256i idx = _mm256_setzero_si256();
-            __m256 pu = u, pv = vv;
-            __m256i done = _mm256_setzero_si256();
-            for (int pass = 0; pass < 2; pass++) {
-                __m256 fi = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pu, one), h));
-                __m256 fj = _mm256_floor_ps(_mm256_mul_ps(_mm256_add_ps(pv, one), h));
-                /* rs__texel_of_uv's clamp to [0, R-1] with a NaN going to 0: the
-                 * gather below reads every lane, masked or not, so its index
-                 * must be inside the map even where u, v are NaN (a pixel on
-                 * the VPL's axis behind it, 0/0; such lanes are not `front`
-                 * and contribute nothing). max_ps(x, 0) returns 0 for a NaN x. */
-                fi = _mm256_min_ps(_mm256_max_ps(fi, zero), rmax);
-                fj = _mm256_min_ps(_mm256_max_ps(fj, zero), rmax);
-                __m256i ii = _mm256_cvttps_epi32(fi), jj = _mm256_cvttps_epi32(fj);
-                __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(jj, iR), ii);
-                __m256i ai = _mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(ii, ii), _mm256_set1_epi32(1)), iR);
-                __m256i aj = _mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(jj, jj), _mm256_set1_epi32(1)), iR);
-                __m256i d2 = _mm256_add_epi32(_mm256_mullo_epi32(ai, ai), _mm256_mullo_epi32(aj, aj));
-                __m256i inside = pass == 0 ? _mm256_xor_si256(_mm256_cmpgt_epi32(d2, iR2), _mm256_set1_epi32(-1))
-                                           : _mm256_set1_epi32(-1);
-                __m256i take = _mm256_andnot_si256(done, inside);
-                idx = _mm256_blendv_epi8(idx, t, take);
-                done = _mm256_or_si256(done, take);
-                if (pass == 0) {
-                    if (_mm256_movemask_ps(_mm256_castsi256_ps(done)) == 0xff) break;
-                    __m256 rr = _mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(pu, pu), _mm256_mul_ps(pv, pv)));
-                    __m256 kk = _mm256_div_ps(shrink, _mm256_blendv_ps(one, rr, _mm256_cmp_ps(rr, zero, _CMP_GT_OQ)));
-                    pu = _mm256_mul_ps(pu, kk);
-                    pv = _mm256_mul_ps(pv, kk);
-                }
-            }
-            const uint16_t *mp = ind->atlas + vi * map;
-            __m256i code = _mm256_and_si256(_mm256_i32gather_epi32((const int *)mp, idx, 2), _mm256_set1_epi32(0xffff));
-            __m256i empty = _mm256_cmpgt_epi32(code, _mm256_set1_epi32((int)RS_PARA_MAX_CODE));
-            __m256 decoded = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(code), one), step);
-            __m256 limit = _mm256_add_ps(
-                decoded, _mm256_mul_ps(bscale, _mm256_add_ps(_mm256_mul_ps(wt, _mm256_add_ps(one, tan_t)), qbias)));
-            __m256 vis = _mm256_or_ps(_mm256_castsi256_ps(empty), _mm256_cmp_ps(dist, limit, _CMP_LE_OQ));
-            vis = _mm256_and_ps(_mm256_and_ps(vis, front), ok);
-            acc[g][0] = _mm256_add_ps(acc[g][0], _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.x), G)));
-            acc[g][1] = _mm256_add_ps(acc[g][1], _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.y), G)));
-            acc[g][2] = _mm256_add_ps(acc[g][2], _mm256_and_ps(vis, _mm256_mul_ps(_mm256_set1_ps(v->intensity.z), G)));
-        }
-    }
-    for (uint32_t g = 0; g < groups; g++) {
-        float bx[8], by[8], bz[8];
-        _mm256_storeu_ps(bx, acc[g][0]);
-        _mm256_storeu_ps(by, acc[g][1]);
-        _mm256_storeu_ps(bz, acc[g][2]);
-        for (int i = 0; i < 8; i++) e[24 * g + 3 * i] = bx[i], e[24 * g + 3 * i + 1] = by[i], e[24 * g + 3 * i + 2] = bz[i];
-    }
-}
-#endif
 
 static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
 {
@@ -656,26 +536,26 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     const uint32_t R = ind->opt.para_res;
     const size_t map = (size_t)R * R;
     uint32_t a = 0;
-#ifdef GI_HAVE_X86
-    if (ind->atlas && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
-        float e8[24 * GI__ACC_GROUPS];
-        while (a + 8 <= ind->tile_w[t]) {
-            uint32_t groups = (ind->tile_w[t] - a) / 8;
-            if (groups > GI__ACC_GROUPS) groups = GI__ACC_GROUPS;
+    const gi_indirect_kernels *kt = gi__kernels(f);
+    if (ind->atlas && kt) {
+        const uint32_t W = kt->width;
+        float ew[3 * 16 * GI_ACC_GROUPS];
+        while (a + W <= ind->tile_w[t]) {
+            uint32_t groups = (ind->tile_w[t] - a) / W;
+            if (groups > GI_ACC_GROUPS) groups = GI_ACC_GROUPS;
             uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
-            gi__accumulate8_avx2(ind, ind->split_px + k, ind->split_py + k, ind->split_pz + k, ind->split_nx + k,
-                                 ind->split_ny + k, ind->split_nz + k, groups, a0, a1, e8);
-            for (uint32_t i = 0; i < 8 * groups; i++) {
+            kt->accumulate(ind, ind->split_px + k, ind->split_py + k, ind->split_pz + k, ind->split_nx + k,
+                           ind->split_ny + k, ind->split_nz + k, groups, a0, a1, ew);
+            for (uint32_t i = 0; i < W * groups; i++) {
                 float *e = ind->split_e + 3 * (size_t)(k + i);
                 int valid = ind->split_valid[k + i] != 0;
-                e[0] = valid ? e8[3 * i] * weight : 0.0f;
-                e[1] = valid ? e8[3 * i + 1] * weight : 0.0f;
-                e[2] = valid ? e8[3 * i + 2] * weight : 0.0f;
+                e[0] = valid ? ew[3 * i] * weight : 0.0f;
+                e[1] = valid ? ew[3 * i + 1] * weight : 0.0f;
+                e[2] = valid ? ew[3 * i + 2] * weight : 0.0f;
             }
-            a += 8 * groups;
+            a += W * groups;
         }
     }
-#endif
     for (; a < ind->tile_w[t]; a++) {
         uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
         float *e = ind->split_e + 3 * (size_t)k;
@@ -839,75 +719,6 @@ void gi_stage_compensate(gi_frame *f)
 
 /* ---------------------------------------------------------- 9. filter */
 
-#ifdef GI_HAVE_X86
-/* Laine's box filter for 8 interior pixels x..x+7 of row y (every window
- * pixel on screen horizontally), lane-wise with the scalar loop's operations
- * in its order: the same bits. Rows outside the image are skipped for all
- * lanes, as the scalar loop does. */
-__attribute__((target("avx2"))) static void gi__filter8_avx2(const gi_frame *f, int x, int y, float *out)
-{
-    const gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = gi__indirect_gbuffer(f);
-    const int H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
-    const size_t i0 = (size_t)y * ind->w + (size_t)x;
-    const __m256 a2 = _mm256_set1_ps(ind->alpha * ind->alpha), beta = _mm256_set1_ps(ind->opt.beta);
-    const __m256 px = _mm256_loadu_ps(g->pos_x + i0), py = _mm256_loadu_ps(g->pos_y + i0),
-                 pz = _mm256_loadu_ps(g->pos_z + i0);
-    const __m256 nx = _mm256_loadu_ps(g->nrm_x + i0), ny = _mm256_loadu_ps(g->nrm_y + i0),
-                 nz = _mm256_loadu_ps(g->nrm_z + i0);
-    const __m256i empty = _mm256_set1_epi32((int)RS_GBUFFER_EMPTY);
-    /* lane k of colour c is float 3k + c of the 24 floats e0|e1|e2 */
-    const __m256i pr0 = _mm256_setr_epi32(0, 3, 6, 0, 0, 0, 0, 0), pr1 = _mm256_setr_epi32(0, 0, 0, 1, 4, 7, 0, 0),
-                  pr2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 2, 5);
-    const __m256i pg0 = _mm256_setr_epi32(1, 4, 7, 0, 0, 0, 0, 0), pg1 = _mm256_setr_epi32(0, 0, 0, 2, 5, 0, 0, 0),
-                  pg2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 3, 6);
-    const __m256i pb0 = _mm256_setr_epi32(2, 5, 0, 0, 0, 0, 0, 0), pb1 = _mm256_setr_epi32(0, 0, 0, 3, 6, 0, 0, 0),
-                  pb2 = _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 4, 7);
-    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, ws = ar, one = _mm256_set1_ps(1.0f);
-    for (int dy = 0; dy < m; dy++) {
-        int ty = y + dy - m / 2;
-        if (ty < 0 || ty >= H) continue;
-        for (int dx = 0; dx < n; dx++) {
-            size_t j = (size_t)ty * ind->w + (size_t)(x + dx - n / 2);
-            __m256i prim = _mm256_loadu_si256((const __m256i *)(g->prim + j));
-            __m256 valid = _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(prim, empty), _mm256_set1_epi32(-1)));
-            __m256 ddx = _mm256_sub_ps(_mm256_loadu_ps(g->pos_x + j), px);
-            __m256 ddy = _mm256_sub_ps(_mm256_loadu_ps(g->pos_y + j), py);
-            __m256 ddz = _mm256_sub_ps(_mm256_loadu_ps(g->pos_z + j), pz);
-            __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ddx, ddx), _mm256_mul_ps(ddy, ddy)), _mm256_mul_ps(ddz, ddz));
-            __m256 nd = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_loadu_ps(g->nrm_x + j)),
-                                                    _mm256_mul_ps(ny, _mm256_loadu_ps(g->nrm_y + j))),
-                                      _mm256_mul_ps(nz, _mm256_loadu_ps(g->nrm_z + j)));
-            __m256 take = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(d2, a2, _CMP_LT_OQ), _mm256_cmp_ps(nd, beta, _CMP_GT_OQ)));
-            /* the 8 RGB triples de-interleaved with permutes and blends
-             * (data movement only: the values the gathers read) */
-            const float *e = ind->combined + 3 * j;
-            __m256 e0 = _mm256_loadu_ps(e), e1 = _mm256_loadu_ps(e + 8), e2 = _mm256_loadu_ps(e + 16);
-            __m256 er = _mm256_blend_ps(
-                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pr0), _mm256_permutevar8x32_ps(e1, pr1), 0x38),
-                _mm256_permutevar8x32_ps(e2, pr2), 0xc0);
-            __m256 eg = _mm256_blend_ps(
-                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pg0), _mm256_permutevar8x32_ps(e1, pg1), 0x18),
-                _mm256_permutevar8x32_ps(e2, pg2), 0xe0);
-            __m256 eb = _mm256_blend_ps(
-                _mm256_blend_ps(_mm256_permutevar8x32_ps(e0, pb0), _mm256_permutevar8x32_ps(e1, pb1), 0x1c),
-                _mm256_permutevar8x32_ps(e2, pb2), 0xe0);
-            ar = _mm256_add_ps(ar, _mm256_and_ps(take, er));
-            ag = _mm256_add_ps(ag, _mm256_and_ps(take, eg));
-            ab = _mm256_add_ps(ab, _mm256_and_ps(take, eb));
-            ws = _mm256_add_ps(ws, _mm256_and_ps(take, one));
-        }
-    }
-    float r[8], gg[8], b[8], w[8];
-    _mm256_storeu_ps(r, ar), _mm256_storeu_ps(gg, ag), _mm256_storeu_ps(b, ab), _mm256_storeu_ps(w, ws);
-    for (int k = 0; k < 8; k++) {
-        size_t i = i0 + (size_t)k;
-        float *o = out + 3 * (size_t)k;
-        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, ind->combined + 3 * i, 3 * sizeof(float));
-        else o[0] = r[k] / w[k], o[1] = gg[k] / w[k], o[2] = b[k] / w[k];
-    }
-}
-#endif
 
 /* The weight of the neighbour at (dx, dy) pixels, squared distance d2 and
  * normal cosine nd; 0 leaves it out.
@@ -941,22 +752,19 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     const rs_gbuffer *g = gi__indirect_gbuffer(f);
     float *filtered = ind->scale > 1 ? ind->filtered_low : ind->filtered;
     const int W = (int)ind->w, H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
-    /* SIMD for the interior of the row: windows [x - n/2, x + 7 + n - 1 - n/2] on screen */
-    int simd_x0 = W, simd_x1 = W;
-#ifdef GI_HAVE_X86
-    if (ind->opt.filter == GI_FILTER_BOX && f->raster && rs_context_simd(f->raster) != RS_SIMD_SCALAR) {
+    /* SIMD for the interior of the row: windows [x - n/2, x + lanes - 1 + n - 1 - n/2] on screen */
+    const gi_indirect_kernels *kt = gi__kernels(f);
+    int simd_x0 = W, simd_x1 = W, lanes = kt ? (int)kt->width : 1;
+    if (ind->opt.filter == GI_FILTER_BOX && kt) {
         simd_x0 = n / 2;
-        simd_x1 = W - (n - 1 - n / 2) - 7; /* last x with x + 7 + (n - 1 - n/2) < W */
+        simd_x1 = W - (n - 1 - n / 2) - (lanes - 1); /* last x with x + lanes - 1 + (n - 1 - n/2) < W */
     }
-#endif
     for (int x = 0; x < W; x++) {
-#ifdef GI_HAVE_X86
         if (x >= simd_x0 && x < simd_x1) {
-            gi__filter8_avx2(f, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
-            x += 7;
+            kt->filter_box(ind, g, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
+            x += lanes - 1;
             continue;
         }
-#endif
         size_t i = (size_t)y * ind->w + (size_t)x;
         float *out = filtered + 3 * i;
         if (g->prim[i] == RS_GBUFFER_EMPTY || ind->opt.filter == GI_FILTER_NONE) {

@@ -442,15 +442,6 @@ void gi_ism_render(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, const rs_para_fram
 int gi_ism_visible_at(const uint16_t *map, uint32_t R, float range, const rs_para_frame *f, pf_vec3 p,
                       float cos_receiver, float bias_scale)
 {
-    /* rs_para_visible_at's operations, with the bias scaled */
-    pf_vec3 d = rs_para_to_local(f, p);
-    if (!(d.z > 0.0f)) return 0;
-    float dist = pf_v3_length(d), den = dist + d.z;
-    float u = d.x / den, v = d.y / den;
-    float w = dist * (4.0f / (float)R) / (1.0f + (u * u + v * v));
-    float c = fabsf(cos_receiver), s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
-    float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
-    uint16_t code = map[rs_para_texel_of(R, d)];
-    if (code > RS_PARA_MAX_CODE) return 1;
-    return dist <= rs_para_decode(code, range) + bias_scale * (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
+    /* the project's one paraboloid lookup, with the ISM's bias scale */
+    return rs_para_visible_scaled(map, R, range, f, p, cos_receiver, bias_scale);
 }

@@ -1,0 +1,126 @@
+/* gi_indirect_kernels: the many-light accumulation and Laine's box filter,
+ * SIMD_W pixels at a time, written once over the SIMD vocabulary and
+ * compiled once per instruction set (-DGI_INDIRECT_KERNELS=
+ * gi_indirect_kernels_<isa>; docs/raster.md "The SIMD vocabulary").
+ *
+ * Accumulation: gi_vpl_irradiance and the paraboloid lookup
+ * (rs_para_lookup.h, the project's one lookup) lane-wise with the scalar
+ * path's operations in its order (sqrt and division correctly rounded,
+ * min/max/floor and the integer texel arithmetic exact), so every lane gets
+ * the scalar loop's bits (tests/test_vpl.c compares every SIMD path with the
+ * scalar one). The VPL loop is the outer one: one VPL's map serves all the
+ * runs before the next is read; each pixel still adds its VPLs in the
+ * tile's order, so its sum is the same.
+ *
+ * Filter: the scalar box filter's tests and sums, lane-wise, the window in
+ * the scalar loop's order; rows outside the image are skipped for every
+ * lane, as the scalar loop skips them. */
+#include "gi_indirect_kernels.h"
+
+#include <string.h>
+
+#include "rs_para_lookup.h"
+#include "simd.h"
+
+#ifndef GI_INDIRECT_KERNELS
+#error "compile with -DGI_INDIRECT_KERNELS=<table name> (CMakeLists.txt)"
+#endif
+
+static simd_f gi__dot3(simd_f ax, simd_f ay, simd_f az, simd_f bx, simd_f by, simd_f bz)
+{
+    return simd_add_f(simd_add_f(simd_mul_f(ax, bx), simd_mul_f(ay, by)), simd_mul_f(az, bz));
+}
+
+static void gi__accumulate(const gi_indirect *ind, const float *px_, const float *py_, const float *pz_,
+                           const float *nx_, const float *ny_, const float *nz_, uint32_t groups, uint32_t a0,
+                           uint32_t a1, float *e)
+{
+    const uint32_t R = ind->opt.para_res;
+    const size_t map = (size_t)R * R;
+    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f), b = simd_set1_f(ind->b);
+    simd_f acc[GI_ACC_GROUPS][3];
+    for (uint32_t g = 0; g < groups; g++) acc[g][0] = acc[g][1] = acc[g][2] = zero;
+    for (uint32_t q = a0; q < a1; q++) {
+        const uint32_t vi = ind->assign[q];
+        const gi_vpl *v = &ind->vpls.v[vi];
+        const simd_f vx = simd_set1_f(v->pos.x), vy = simd_set1_f(v->pos.y), vz = simd_set1_f(v->pos.z);
+        const simd_f mx = simd_set1_f(v->nrm.x), my = simd_set1_f(v->nrm.y), mz = simd_set1_f(v->nrm.z);
+        const simd_f ir = simd_set1_f(v->intensity.x), ig = simd_set1_f(v->intensity.y);
+        const simd_f ib = simd_set1_f(v->intensity.z);
+        const uint16_t *mp = ind->atlas + vi * map;
+        for (uint32_t g = 0; g < groups; g++) {
+            const size_t o = (size_t)SIMD_W * g;
+            const simd_f Px = simd_loadu_f(px_ + o), Py = simd_loadu_f(py_ + o), Pz = simd_loadu_f(pz_ + o);
+            const simd_f Nx = simd_loadu_f(nx_ + o), Ny = simd_loadu_f(ny_ + o), Nz = simd_loadu_f(nz_ + o);
+            /* gi_vpl_irradiance */
+            simd_f dx = simd_sub_f(vx, Px), dy = simd_sub_f(vy, Py), dz = simd_sub_f(vz, Pz);
+            simd_f r2 = gi__dot3(dx, dy, dz, dx, dy, dz);
+            simd_mask ok = simd_gt_f(r2, zero);
+            simd_f inv = simd_div_f(one, simd_sqrt_f(r2));
+            simd_f wx = simd_mul_f(dx, inv), wy = simd_mul_f(dy, inv), wz = simd_mul_f(dz, inv);
+            simd_f c1 = gi__dot3(Nx, Ny, Nz, wx, wy, wz);
+            simd_f c2 = simd_sub_f(zero, gi__dot3(mx, my, mz, wx, wy, wz)); /* -dot: exact negation */
+            ok = simd_mask_and(ok, simd_mask_and(simd_gt_f(c1, zero), simd_gt_f(c2, zero)));
+            if (!simd_mask_bits(ok)) continue;
+            simd_f G = simd_div_f(simd_mul_f(c1, c2), r2);
+            G = simd_select_f(simd_gt_f(G, b), b, G); /* the bounded geometry term */
+            /* the VPL's map (rs_para_visible_scaled lane-wise), receiver cosine n . w */
+            simd_mask vis = simd_mask_and(ok, rs_para_visible_lanes(mp, R, ind->range, ind->bias_scale,
+                                                                    &ind->frames[vi], Px, Py, Pz, c1));
+            acc[g][0] = simd_add_f(acc[g][0], simd_select_f(vis, simd_mul_f(ir, G), zero));
+            acc[g][1] = simd_add_f(acc[g][1], simd_select_f(vis, simd_mul_f(ig, G), zero));
+            acc[g][2] = simd_add_f(acc[g][2], simd_select_f(vis, simd_mul_f(ib, G), zero));
+        }
+    }
+    for (uint32_t g = 0; g < groups; g++) {
+        float c[3][SIMD_W];
+        for (int ch = 0; ch < 3; ch++) simd_storeu_f(c[ch], acc[g][ch]);
+        for (uint32_t i = 0; i < SIMD_W; i++)
+            for (int ch = 0; ch < 3; ch++) e[3 * (SIMD_W * g + i) + ch] = c[ch][i];
+    }
+}
+
+static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, int y, float *out)
+{
+    const int H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
+    const size_t i0 = (size_t)y * ind->w + (size_t)x;
+    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);
+    const simd_f a2 = simd_set1_f(ind->alpha * ind->alpha), beta = simd_set1_f(ind->opt.beta);
+    const simd_f px = simd_loadu_f(g->pos_x + i0), py = simd_loadu_f(g->pos_y + i0), pz = simd_loadu_f(g->pos_z + i0);
+    const simd_f nx = simd_loadu_f(g->nrm_x + i0), ny = simd_loadu_f(g->nrm_y + i0), nz = simd_loadu_f(g->nrm_z + i0);
+    const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
+    /* lane k of colour c is float 3 k + c of the window pixel's run */
+    const simd_i three = simd_mullo_i(simd_iota_i(), simd_set1_i(3)), ione = simd_set1_i(1);
+    const simd_i i_r = three, i_g = simd_add_i(three, ione), i_b = simd_add_i(i_g, ione);
+    simd_f ar = zero, ag = zero, ab = zero, ws = zero;
+    for (int dy = 0; dy < m; dy++) {
+        int ty = y + dy - m / 2;
+        if (ty < 0 || ty >= H) continue;
+        for (int dx = 0; dx < n; dx++) {
+            size_t j = (size_t)ty * ind->w + (size_t)(x + dx - n / 2);
+            simd_mask valid = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + j)), empty));
+            simd_f ddx = simd_sub_f(simd_loadu_f(g->pos_x + j), px);
+            simd_f ddy = simd_sub_f(simd_loadu_f(g->pos_y + j), py);
+            simd_f ddz = simd_sub_f(simd_loadu_f(g->pos_z + j), pz);
+            simd_f d2 = gi__dot3(ddx, ddy, ddz, ddx, ddy, ddz);
+            simd_f nd = gi__dot3(nx, ny, nz, simd_loadu_f(g->nrm_x + j), simd_loadu_f(g->nrm_y + j),
+                                 simd_loadu_f(g->nrm_z + j));
+            simd_mask take = simd_mask_and(valid, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
+            const float *e = ind->combined + 3 * j;
+            ar = simd_add_f(ar, simd_select_f(take, simd_gather_f(e, i_r), zero));
+            ag = simd_add_f(ag, simd_select_f(take, simd_gather_f(e, i_g), zero));
+            ab = simd_add_f(ab, simd_select_f(take, simd_gather_f(e, i_b), zero));
+            ws = simd_add_f(ws, simd_select_f(take, one, zero));
+        }
+    }
+    float r[SIMD_W], gg[SIMD_W], bb[SIMD_W], w[SIMD_W];
+    simd_storeu_f(r, ar), simd_storeu_f(gg, ag), simd_storeu_f(bb, ab), simd_storeu_f(w, ws);
+    for (int k = 0; k < SIMD_W; k++) {
+        size_t i = i0 + (size_t)k;
+        float *o = out + 3 * (size_t)k;
+        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, ind->combined + 3 * i, 3 * sizeof(float));
+        else o[0] = r[k] / w[k], o[1] = gg[k] / w[k], o[2] = bb[k] / w[k];
+    }
+}
+
+const gi_indirect_kernels GI_INDIRECT_KERNELS = {SIMD_NAME, SIMD_W, gi__accumulate, gi__filter_box};

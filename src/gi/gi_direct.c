@@ -43,8 +43,7 @@ void gi_stage_shadow_maps(gi_frame *f)
         for (uint32_t i = 0; i < s->light_count; i++) {
             if (memcmp(&f->shadow_lights[i], &s->lights[i], sizeof(pf_light)) == 0) continue;
             rs_shadow_map *m = &f->shadows.maps[i];
-            rs_shadow_map_free(m);
-            if (rs_shadow_map_init(m, s, i, &desc, &err) != PF_OK) {
+            if (rs_shadow_map_update(m, s, i, &desc, &err) != PF_OK) {
                 fprintf(stderr, "softgi: shadow map of light %u: %s\n", i, err.message);
                 memset(m, 0, sizeof *m);
                 continue;
@@ -52,12 +51,14 @@ void gi_stage_shadow_maps(gi_frame *f)
             rs_shadow_render(f->raster, m, 1, NULL);
         }
     }
-    pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
-    if (!copy) {
-        f->shadows_rendered = 0; /* render everything next frame */
-        return;
+    if (!f->shadow_lights || f->shadow_light_count != s->light_count) { /* only when the lights were added or removed */
+        pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
+        if (!copy) {
+            f->shadows_rendered = 0; /* render everything next frame */
+            return;
+        }
+        f->shadow_lights = copy;
     }
-    f->shadow_lights = copy;
     if (s->light_count) memcpy(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count);
     f->shadow_light_count = s->light_count;
     f->shadows_rendered = 1;

@@ -101,8 +101,9 @@ static void rs__setup_ortho(rs_shadow_map *m, const pf_scene *s, const pf_light 
     m->view_proj[0] = rs_mat4_ortho(m->eye, f, b, m->half_w, m->half_h, m->znear, m->zfar);
 }
 
-pf_result rs_shadow_map_init(rs_shadow_map *m, const pf_scene *scene, uint32_t light, const rs_shadow_desc *desc,
-                             pf_error *err)
+/* The map's kind, size and matrices for the light (everything but the planes). */
+static pf_result rs__shadow_map_setup(rs_shadow_map *m, const pf_scene *scene, uint32_t light,
+                                     const rs_shadow_desc *desc, pf_error *err)
 {
     memset(m, 0, sizeof *m);
     if (desc) m->desc = *desc;
@@ -132,11 +133,37 @@ pf_result rs_shadow_map_init(rs_shadow_map *m, const pf_scene *scene, uint32_t l
         rs__setup_ortho(m, scene, L);
     else
         rs__setup_perspective(m, scene, L);
-    m->depth = rs_plane_alloc((size_t)m->face_count * size * size * sizeof(float));
+    return PF_OK;
+}
+
+static pf_result rs__shadow_map_alloc(rs_shadow_map *m, pf_error *err)
+{
+    m->depth = rs_plane_alloc((size_t)m->face_count * m->size * m->size * sizeof(float));
     if (!m->depth)
-        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%ux%u shadow map", size, size,
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%ux%u shadow map", m->size, m->size,
                             m->face_count);
     return PF_OK;
+}
+
+pf_result rs_shadow_map_init(rs_shadow_map *m, const pf_scene *scene, uint32_t light, const rs_shadow_desc *desc,
+                             pf_error *err)
+{
+    pf_result r = rs__shadow_map_setup(m, scene, light, desc, err);
+    return r == PF_OK ? rs__shadow_map_alloc(m, err) : r;
+}
+
+pf_result rs_shadow_map_update(rs_shadow_map *m, const pf_scene *scene, uint32_t light, const rs_shadow_desc *desc,
+                               pf_error *err)
+{
+    float *depth = m->depth;
+    uint32_t faces = m->face_count, size = m->size;
+    pf_result r = rs__shadow_map_setup(m, scene, light, desc, err);
+    if (r == PF_OK && depth && faces == m->face_count && size == m->size) {
+        m->depth = depth; /* the same planes: rendering writes every texel */
+        return PF_OK;
+    }
+    free(depth);
+    return r == PF_OK ? rs__shadow_map_alloc(m, err) : r;
 }
 
 void rs_shadow_map_free(rs_shadow_map *m)

@@ -120,6 +120,12 @@ typedef struct rs_shadow_map {
  * light that is not finite or has no direction, or out of memory. */
 pf_result rs_shadow_map_init(rs_shadow_map *map, const pf_scene *scene, uint32_t light, const rs_shadow_desc *desc,
                              pf_error *err);
+/* rs_shadow_map_init for a light that changed, keeping the planes when the
+ * kind (face count) and size stay, since rendering rewrites every texel: a
+ * moving light's map costs no allocation (and no page faults) per frame.
+ * On failure the planes are freed (map->depth NULL). */
+pf_result rs_shadow_map_update(rs_shadow_map *map, const pf_scene *scene, uint32_t light, const rs_shadow_desc *desc,
+                               pf_error *err);
 void rs_shadow_map_free(rs_shadow_map *map);
 /* Face f's depth plane (size*size floats, top row first). */
 float *rs_shadow_map_face(const rs_shadow_map *map, uint32_t face);

@@ -89,9 +89,6 @@ static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, i
     const simd_f px = simd_loadu_f(g->pos_x + i0), py = simd_loadu_f(g->pos_y + i0), pz = simd_loadu_f(g->pos_z + i0);
     const simd_f nx = simd_loadu_f(g->nrm_x + i0), ny = simd_loadu_f(g->nrm_y + i0), nz = simd_loadu_f(g->nrm_z + i0);
     const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
-    /* lane k of colour c is float 3 k + c of the window pixel's run */
-    const simd_i three = simd_mullo_i(simd_iota_i(), simd_set1_i(3)), ione = simd_set1_i(1);
-    const simd_i i_r = three, i_g = simd_add_i(three, ione), i_b = simd_add_i(i_g, ione);
     simd_f ar = zero, ag = zero, ab = zero, ws = zero;
     for (int dy = 0; dy < m; dy++) {
         int ty = y + dy - m / 2;
@@ -106,10 +103,11 @@ static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, i
             simd_f nd = gi__dot3(nx, ny, nz, simd_loadu_f(g->nrm_x + j), simd_loadu_f(g->nrm_y + j),
                                  simd_loadu_f(g->nrm_z + j));
             simd_mask take = simd_mask_and(valid, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
-            const float *e = ind->combined + 3 * j;
-            ar = simd_add_f(ar, simd_select_f(take, simd_gather_f(e, i_r), zero));
-            ag = simd_add_f(ag, simd_select_f(take, simd_gather_f(e, i_g), zero));
-            ab = simd_add_f(ab, simd_select_f(take, simd_gather_f(e, i_b), zero));
+            simd_f er, eg, eb; /* the run's RGB triples, de-interleaved */
+            simd_load3_f(ind->combined + 3 * j, &er, &eg, &eb);
+            ar = simd_add_f(ar, simd_select_f(take, er, zero));
+            ag = simd_add_f(ag, simd_select_f(take, eg, zero));
+            ab = simd_add_f(ab, simd_select_f(take, eb, zero));
             ws = simd_add_f(ws, simd_select_f(take, one, zero));
         }
     }

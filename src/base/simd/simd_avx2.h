@@ -141,6 +141,22 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
 {
     return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, idx, m, 4);
 }
+/* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
+ * vectors of their first, second and third members (data movement only). */
+static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
+{
+    /* lane k of member m is float 3 k + m of the 24: permutes and blends */
+    const __m256 e0 = _mm256_loadu_ps(p), e1 = _mm256_loadu_ps(p + 8), e2 = _mm256_loadu_ps(p + 16);
+    *a = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(e0, _mm256_setr_epi32(0, 3, 6, 0, 0, 0, 0, 0)),
+                                         _mm256_permutevar8x32_ps(e1, _mm256_setr_epi32(0, 0, 0, 1, 4, 7, 0, 0)), 0x38),
+                         _mm256_permutevar8x32_ps(e2, _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 2, 5)), 0xc0);
+    *b = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(e0, _mm256_setr_epi32(1, 4, 7, 0, 0, 0, 0, 0)),
+                                         _mm256_permutevar8x32_ps(e1, _mm256_setr_epi32(0, 0, 0, 2, 5, 0, 0, 0)), 0x18),
+                         _mm256_permutevar8x32_ps(e2, _mm256_setr_epi32(0, 0, 0, 0, 0, 0, 3, 6)), 0xe0);
+    *c = _mm256_blend_ps(_mm256_blend_ps(_mm256_permutevar8x32_ps(e0, _mm256_setr_epi32(2, 5, 0, 0, 0, 0, 0, 0)),
+                                         _mm256_permutevar8x32_ps(e1, _mm256_setr_epi32(0, 0, 0, 3, 6, 0, 0, 0)), 0x1c),
+                         _mm256_permutevar8x32_ps(e2, _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 4, 7)), 0xe0);
+}
 
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm256_set1_epi64x(x); }

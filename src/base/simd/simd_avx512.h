@@ -125,6 +125,25 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
 {
     return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), (__mmask16)m, idx, base, 4);
 }
+/* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
+ * vectors of their first, second and third members (data movement only). */
+static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
+{
+    /* member m of lane k is float 3 k + m of the 48: a two-source permute of
+     * the first two vectors gives the lanes whose float lies there, a second
+     * one takes the rest from the third (index 16 + j selects its float j) */
+    const __m512 e0 = _mm512_loadu_ps(p), e1 = _mm512_loadu_ps(p + 16), e2 = _mm512_loadu_ps(p + 32);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512i k3 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(3));
+    simd_f *out[3] = {a, b, c};
+    for (int m = 0; m < 3; m++) {
+        __m512i idx = _mm512_add_epi32(k3, _mm512_set1_epi32(m)); /* 3 k + m, 0..47 */
+        __mmask16 in01 = _mm512_cmplt_epi32_mask(idx, _mm512_set1_epi32(32));
+        __m512 t = _mm512_permutex2var_ps(e0, _mm512_and_si512(idx, _mm512_set1_epi32(31)), e1);
+        __m512i sel = _mm512_mask_mov_epi32(_mm512_sub_epi32(idx, _mm512_set1_epi32(16)), in01, lane);
+        *out[m] = _mm512_permutex2var_ps(t, sel, e2);
+    }
+}
 
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm512_set1_epi64(x); }

@@ -355,6 +355,12 @@ static inline simd_f simd_gather_f(const float *base, simd_i idx)
     for (int l = 0; l < SIMD_W; l++) r.v[l] = base[idx.v[l]];
     return r;
 }
+/* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
+ * vectors of their first, second and third members (data movement only). */
+static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
+{
+    for (int l = 0; l < SIMD_W; l++) a->v[l] = p[3 * l], b->v[l] = p[3 * l + 1], c->v[l] = p[3 * l + 2];
+}
 /* base[idx] for the lanes of m, 0 elsewhere (reads nothing for the others) */
 static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
 {

@@ -191,6 +191,14 @@ static inline simd_f simd_gather_f(const float *base, simd_i idx)
     _mm_storeu_si128((__m128i *)i, idx);
     return _mm_setr_ps(base[i[0]], base[i[1]], base[i[2]], base[i[3]]);
 }
+/* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
+ * vectors of their first, second and third members (data movement only). */
+static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
+{
+    *a = _mm_setr_ps(p[0], p[3], p[6], p[9]);
+    *b = _mm_setr_ps(p[1], p[4], p[7], p[10]);
+    *c = _mm_setr_ps(p[2], p[5], p[8], p[11]);
+}
 static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
 {
     int32_t i[4];

@@ -13,6 +13,7 @@
 
 #define GI__DEFAULT_CLAMP 400.0f
 #define GI__MAPS_CHUNK 64u /* VPL maps rendered between two progress reports */
+#define GI__COMP_MAX_TAPS 1024u /* clamp compensation: taps per pixel at most */
 /* Paraboloid maps are 2 bytes a texel: 32768 maps of 128^2 = 1 GiB. */
 #define GI__MAX_MAP_BYTES ((size_t)4 << 30)
 
@@ -81,9 +82,9 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->filtered = pf_arena_calloc(mem, 3 * (size_t)f->width * f->height, sizeof(float));
     if (o.compensate) {
         if (!o.compensate_taps) o.compensate_taps = 32;
-        if (o.compensate_taps > 1024)
-            return pf_error_set(err, PF_ERR_ARGUMENT, "clamp compensation with %u taps: expected 1..1024",
-                                o.compensate_taps);
+        if (o.compensate_taps > GI__COMP_MAX_TAPS)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "clamp compensation with %u taps: expected 1..%u",
+                                o.compensate_taps, GI__COMP_MAX_TAPS);
         ind->opt.compensate_taps = o.compensate_taps;
         if (!(ind->comp = pf_arena_calloc(mem, 3 * px, sizeof(float))))
             return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the clamp compensation");
@@ -642,6 +643,7 @@ typedef struct gi__comp_ctx {
     gi_frame *f;
     float th;   /* tan(fov / 2) */
     float rb;   /* 1 / sqrt(b), world units */
+    float (*spiral)[2]; /* the K taps of the unit disc: sqrt((k + 1/2) / K) (cos, sin)(golden angle k) */
 } gi__comp_ctx;
 
 static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
@@ -666,10 +668,11 @@ static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
         if (!(R >= 1.0f)) continue;
         if (R > 128.0f) R = 128.0f;
         const float rot = 2.0f * PF_PI * pf_random((uint32_t)i, 0, 0x434f4d50u, 0);
+        const float cr = R * cosf(rot), sr = R * sinf(rot); /* the spiral rotated and scaled to the disc */
         float acc[3] = {0, 0, 0};
         for (uint32_t k = 0; k < K; k++) {
-            float rr = R * sqrtf(((float)k + 0.5f) / (float)K), ang = rot + 2.39996323f * (float)k; /* golden angle */
-            int tx = (int)x + (int)lrintf(rr * cosf(ang)), ty = (int)y + (int)lrintf(rr * sinf(ang));
+            const float sx = c->spiral[k][0], sy = c->spiral[k][1];
+            int tx = (int)x + (int)lrintf(sx * cr - sy * sr), ty = (int)y + (int)lrintf(sx * sr + sy * cr);
             if (tx < 0 || ty < 0 || tx >= (int)w || ty >= (int)h) continue;
             size_t j = (size_t)ty * w + (size_t)tx;
             if (j == i || g->prim[j] == RS_GBUFFER_EMPTY) continue;
@@ -712,7 +715,13 @@ void gi_stage_compensate(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     if (!ind->opt.compensate || !(ind->b < INFINITY)) return;
-    gi__comp_ctx c = {f, tanf(0.5f * f->camera.yfov), 1.0f / sqrtf(ind->b)};
+    float spiral[GI__COMP_MAX_TAPS][2];
+    const uint32_t K = ind->opt.compensate_taps;
+    for (uint32_t k = 0; k < K; k++) {
+        float rr = sqrtf(((float)k + 0.5f) / (float)K), ang = 2.39996323f * (float)k; /* the golden angle */
+        spiral[k][0] = rr * cosf(ang), spiral[k][1] = rr * sinf(ang);
+    }
+    gi__comp_ctx c = {f, tanf(0.5f * f->camera.yfov), 1.0f / sqrtf(ind->b), spiral};
     pf_jobs_parallel_for(f->jobs, gi__compensate_row, &c, ind->h, 4);
     pf_jobs_parallel_for(f->jobs, gi__compensate_add, f, ind->h, 16);
 }

@@ -169,7 +169,7 @@ static const struct {
     {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},
     {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
     {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},
-    {"--moving-light", NULL, {0}},
+    {"--moving-light", NULL, {0}},     {"--quality", NULL, {0}},
 };
 
 /* `softgi CMD --help` as text (pf_cli_usage_command). */

@@ -162,4 +162,26 @@ int app_view(const pf_options *opts);
  * against per-frame references (app_evaluate.c). Parses its own arguments. */
 int app_evaluate(int argc, char **argv);
 
+/* `softgi evaluate --quality` (issue 18 item 5, app_quality.c): every
+ * method at its paper defaults, with clamp compensation and with temporal
+ * accumulation, on a static view of each scene, against a path-traced
+ * reference and a many-VPL proxy of the indirect light: a Markdown table of
+ * mean relative error, energy ratio and frame time. The strings are
+ * evaluate's arguments as given (NULL: not given, the default); argc and
+ * argv are the command line, quoted in the table. */
+typedef struct app_quality_args {
+    const char *const *methods; /* --methods entries (METHOD+KEY=VALUE...); none: ir, iir, smc, mir, invtm,
+                                   tcas, ssvp */
+    uint32_t method_count;
+    const char *const *params; /* --param KEY=VALUE, to the methods that know KEY */
+    uint32_t param_count;
+    const char *out;        /* the cache (OUT/quality/SCENE) and OUT/quality.md */
+    const char *table;      /* --table FILE: the table here too */
+    const char *scene_list; /* --quality-scenes (default cornell,sibenik) */
+    const char *scenes_dir; /* --scenes (default SOURCE/../shared/scenes) */
+    const char *size, *spp, *vpls, *proxy_vpls, *threads, *isa;
+    int rerun_reference, quiet;
+} app_quality_args;
+int app_quality(const app_quality_args *a, int argc, char **argv);
+
 #endif

@@ -58,6 +58,12 @@
  * Progress (app_progress.h): one bar over the steps (a reference or a
  * method run each), on a terminal and without -q.
  *
+ * --quality (issue 18 item 5) runs app_quality instead (app_quality.c):
+ * the image-quality table of single static frames against a reference and
+ * a many-VPL proxy; the sequence options (--sequences, --track-spp,
+ * --frames, --full) do not apply to it, and its own (--quality-scenes,
+ * --scenes, --proxy-vpls, --table) only to it.
+ *
  * Everything runs in this process through the same functions as the
  * commands (app_sequence, app_compare), with argument vectors built here, so
  * the options are validated exactly as on the command line. */
@@ -91,6 +97,10 @@ typedef struct ev__args {
     const char *params[EV_MAX_ITEMS];
     uint32_t param_count;
     int full, rerun_reference, quiet;
+    int quality;                                   /* --quality: app_quality */
+    const char *table, *quality_scenes, *scenes_dir, *proxy_vpls; /* its options */
+    const char *given_seq_option;                  /* a sequence-only option given, as spelt */
+    const char *given_quality_option;              /* a --quality-only option given */
     app_progress *bar;               /* the steps' bar (ev__run's) */
     uint32_t steps_done, steps_total;
     int ranged;                      /* --frames A:B */
@@ -104,6 +114,10 @@ static void ev__usage(FILE *f)
     fputs("usage: softgi evaluate [--methods LIST] [--sequences FILE,FILE,...] [--out DIR]\n"
           "                       [--size WxH] [--spp N] [--track-spp N] [--vpls N] [--threads N] [--isa NAME]\n"
           "                       [--param KEY=VALUE ...] [--full] [--rerun-reference] [--frames A:B] [-q]\n"
+          "       softgi evaluate --quality [--methods LIST] [--quality-scenes LIST] [--scenes DIR]\n"
+          "                       [--size WxH] [--spp N] [--vpls N] [--proxy-vpls N] [--out DIR]\n"
+          "                       [--table FILE] [--threads N] [--isa NAME] [--param KEY=VALUE ...]\n"
+          "                       [--rerun-reference] [-q]\n"
           "\n"
           "Hedman et al. 2017, Table 1 on softgi's sequences: for each sequence, per-frame\n"
           "path-traced references (softgi sequence --reference), every method's frames\n"
@@ -130,7 +144,21 @@ static void ev__usage(FILE *f)
           "                      B excluded, clipped to each sequence; A: to the end; N: frame N), for a\n"
           "                      batch scheduler: merge the OUT folders of all ranges, then run evaluate\n"
           "                      again without --frames for the methods and tables\n"
-          "  -q, --quiet         no progress lines or bar\n",
+          "  -q, --quiet         no progress lines or bar\n"
+          "\n"
+          "--quality (issue 18): one static frame per method and scene at three settings (paper:\n"
+          "the paper defaults; softgi: --compensate on; temporal: also --temporal 16, frame 15),\n"
+          "indirect light only, against a path-traced reference and a proxy (IR, every VPL at every\n"
+          "pixel, no clamp, no filter) with the method's bounce count: mean relative error per\n"
+          "pixel, energy ratio and frame time as a Markdown table in OUT/quality.md. References and\n"
+          "proxies are kept in OUT/quality/SCENE and reused while their stamp matches.\n"
+          "  --quality           the quality table instead of the sequences (default methods: ir, iir,\n"
+          "                      smc, mir, invtm, tcas, ssvp; --size: each scene's own; --spp 1024)\n"
+          "  --quality-scenes LIST  cornell (embedded, 320x240), sibenik (256x192), conference\n"
+          "                      (256x192) (default cornell,sibenik)\n"
+          "  --scenes DIR        the shared scenes' folder (default: ../shared/scenes beside the source)\n"
+          "  --proxy-vpls N      the proxy's VPLs (default 16384)\n"
+          "  --table FILE        write the table to FILE too (docs/evaluation/quality.md)\n",
           f);
 }
 
@@ -170,23 +198,21 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
 {
     memset(a, 0, sizeof *a);
     a->out = "out/evaluate";
-    a->size = "320x240";
-    a->spp = "256";
-    a->track_spp = "4096";
-    a->vpls = "256";
     for (int i = 2; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
             *help = 1;
             return 0;
         }
-        if (!strcmp(o, "--full")) a->full = 1;
+        if (!strcmp(o, "--full")) a->full = 1, a->given_seq_option = o;
+        else if (!strcmp(o, "--quality")) a->quality = 1;
         else if (!strcmp(o, "--rerun-reference")) a->rerun_reference = 1;
         else if (!strcmp(o, "-q") || !strcmp(o, "--quiet")) a->quiet = 1;
         else {
             static const char *const with_value[] = {"--methods", "--sequences", "--out",   "--size", "--spp",
                                                      "--vpls",    "--threads",   "--param", "--isa",
-                                                     "--track-spp", "--frames"};
+                                                     "--track-spp", "--frames", "--table", "--quality-scenes",
+                                                     "--scenes", "--proxy-vpls"};
             int known = 0;
             for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++) known |= !strcmp(o, with_value[k]);
             if (!known) return ev__fail(2, "unknown option '%s' (see softgi evaluate --help)%s", o, "");
@@ -202,17 +228,23 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
                         rc = ev__fail(2, "--methods: unknown method '%s' (softgi knows %s)", a->methods[k],
                                       gi_vpl_method_names());
                 }
-            } else if (!strcmp(o, "--sequences"))
+            } else if (!strcmp(o, "--sequences")) {
+                a->given_seq_option = o;
                 rc = ev__split(v, a->lists[1], sizeof a->lists[1], a->sequences, &a->sequence_count, "sequences");
+            } else if (!strcmp(o, "--table")) a->table = v, a->given_quality_option = o;
+            else if (!strcmp(o, "--quality-scenes")) a->quality_scenes = v, a->given_quality_option = o;
+            else if (!strcmp(o, "--scenes")) a->scenes_dir = v, a->given_quality_option = o;
+            else if (!strcmp(o, "--proxy-vpls")) a->proxy_vpls = v, a->given_quality_option = o;
             else if (!strcmp(o, "--out")) a->out = v;
             else if (!strcmp(o, "--size")) a->size = v;
             else if (!strcmp(o, "--spp")) a->spp = v;
-            else if (!strcmp(o, "--track-spp")) a->track_spp = v;
+            else if (!strcmp(o, "--track-spp")) a->track_spp = v, a->given_seq_option = o;
             else if (!strcmp(o, "--vpls")) a->vpls = v;
             else if (!strcmp(o, "--threads")) a->threads = v;
             else if (!strcmp(o, "--isa")) a->isa = v;
             else if (!strcmp(o, "--frames")) {
                 pf_error err;
+                a->given_seq_option = o;
                 a->ranged = 1;
                 if (pf_cli_parse_frame_range("--frames", v, &a->frame_first, &a->frame_end, &err) != PF_OK)
                     rc = ev__fail(2, "%s%s", err.message, "");
@@ -225,6 +257,16 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
         }
     }
     if (strlen(a->out) > 2000) return ev__fail(2, "--out: the folder name is too long%s%s", "", "");
+    if (a->quality && a->given_seq_option)
+        return ev__fail(2, "%s does not apply to --quality (it is an option of the sequences' evaluation)%s",
+                        a->given_seq_option, "");
+    if (!a->quality && a->given_quality_option)
+        return ev__fail(2, "%s: only with --quality%s", a->given_quality_option, "");
+    if (a->quality) return 0; /* app_quality has its own defaults */
+    if (!a->size) a->size = "320x240";
+    if (!a->spp) a->spp = "256";
+    if (!a->track_spp) a->track_spp = "4096";
+    if (!a->vpls) a->vpls = "256";
     if (!a->method_count) {
         static const char *const all[] = {"ir", "ir+reseed=1", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
         for (size_t k = 0; k < sizeof all / sizeof all[0]; k++) a->methods[a->method_count++] = all[k];
@@ -598,6 +640,15 @@ static int ev__run(ev__args *ap, char (*names)[2600], app_progress *bar, int arg
     if (help) {
         ev__usage(stdout);
         return 0;
+    }
+    if (ap->quality) {
+        app_quality_args q = {.methods = ap->methods, .method_count = ap->method_count, .params = ap->params,
+                              .param_count = ap->param_count, .out = ap->out, .table = ap->table,
+                              .scene_list = ap->quality_scenes, .scenes_dir = ap->scenes_dir, .size = ap->size,
+                              .spp = ap->spp, .vpls = ap->vpls, .proxy_vpls = ap->proxy_vpls,
+                              .threads = ap->threads, .isa = ap->isa, .rerun_reference = ap->rerun_reference,
+                              .quiet = ap->quiet};
+        return app_quality(&q, argc, argv);
     }
     app_progress_begin(bar, "evaluate", ap->quiet);
     ap->bar = bar;

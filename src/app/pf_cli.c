@@ -27,7 +27,7 @@ typedef enum pf__opt_id {
     PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_HELP, PF__OPT_VERSION,
-    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_COUNT
+    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_COUNT
 } pf__opt_id;
 
 typedef struct pf__opt {
@@ -166,6 +166,12 @@ static const pf__opt k_options[] = {
     {PF__OPT_MOVING_LIGHT, "--moving-light", NULL, NULL, BF, "the light moves on a small circle every frame", NULL},
     {PF__OPT_HELP, "--help", "-h", NULL, ALL, "this text", NULL},
     {PF__OPT_VERSION, "--version", NULL, NULL, 0, "softgi's version (no command)", NULL},
+    /* evaluate parses its own options (app_evaluate.c, whose help lists
+     * --quality); this row only makes the other commands refuse it with a
+     * pointer there instead of "unknown option" */
+    {PF__OPT_QUALITY, "--quality", NULL, NULL, 0,
+     "evaluate only: the image-quality table (method x scene x setting:\nerror, energy ratio, frame time)",
+     "it is an option of softgi evaluate: softgi evaluate --quality"},
 };
 #define PF__OPTIONS (sizeof k_options / sizeof k_options[0])
 
@@ -658,6 +664,7 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
     case PF__OPT_MOVING_LIGHT: o->moving_light = 1; break;
     case PF__OPT_HELP: o->help = 1; break;
     case PF__OPT_VERSION: o->version = 1; break;
+    case PF__OPT_QUALITY: break; /* refused by every command pf_cli parses (pf__check_command) */
     case PF__OPT_COUNT: break;
     }
     return r;
@@ -690,6 +697,9 @@ static pf_result pf__check_command(const pf_options *o, const char *const given[
         char by[128], name[32];
         pf__command_list(takes, by, sizeof by);
         pf__command_list(bit, name, sizeof name);
+        if (!takes) /* an option of a command that parses its own (--quality: evaluate) */
+            return pf_error_set(err, PF_ERR_ARGUMENT, "%s does not apply to %s (%s; see softgi evaluate --help)",
+                                given[id], name, e->note ? e->note : "no command pf_cli parses takes it");
         return pf_error_set(err, PF_ERR_ARGUMENT, "%s does not apply to %s (%s: only %s take%s it%s%s; see softgi %s --help)",
                             given[id], name, given[id], by, (takes & (takes - 1)) ? "" : "s", e->note ? "; " : "",
                             e->note ? e->note : "", cmd);

@@ -95,6 +95,33 @@ static void check_screenshot(const char *tag, const char *settings)
     if (!same_file(shot, png)) fail_msg("%s: the viewer's screenshot %s differs from the render %s", tag, shot, png);
 }
 
+/* The optional stages' keys: U and J (half-resolution indirect light, clamp
+ * compensation) give render's image with --indirect-scale 2 --compensate
+ * on; T twice (temporal accumulation on, then off) leaves the plain image. */
+static void test_optional_stage_keys(void **state)
+{
+    (void)state;
+    if (!have_xvfb()) {
+        print_message("SKIP: xvfb-run is absent: cannot start the viewer\n");
+        return;
+    }
+    const char *cases[][3] = {{"uj", "U J", "--indirect-scale 2 --compensate on"}, {"tt", "T T", ""}};
+    for (int k = 0; k < 2; k++) {
+        char shot[512], png[512], cmd[8192], out[16384], args[2048];
+        snprintf(shot, sizeof shot, "%s/%s-view.png", g_tmp, cases[k][0]);
+        snprintf(png, sizeof png, "%s/%s-render.png", g_tmp, cases[k][0]);
+        snprintf(cmd, sizeof cmd,
+                 "SOFTGI_VIEW_KEYS='%s' xvfb-run -a -s '-screen 0 1280x1024x24' %s view %s --threads 1 --frames 8 "
+                 "--screenshot %s",
+                 cases[k][1], SOFTGI_BINARY, SIZE, shot);
+        int status = tu_run(cmd, out, sizeof out);
+        if (status != 0) fail_msg("%s: exit %d:\n%s", cmd, status, out);
+        snprintf(args, sizeof args, "render %s %s --threads 2 -q -o %s", SIZE, cases[k][2], png);
+        tu_softgi_expect(args, 0, NULL);
+        if (!same_file(shot, png)) fail_msg("keys '%s': the screenshot %s differs from %s", cases[k][1], shot, png);
+    }
+}
+
 static void test_screenshot_equals_render(void **state)
 {
     (void)state;
@@ -686,6 +713,7 @@ int main(void)
         cmocka_unit_test(test_dump_every_method),
         cmocka_unit_test(test_viewer_dump_equals_render_dump),
         cmocka_unit_test(test_keys_settings_and_stepper),
+        cmocka_unit_test(test_optional_stage_keys),
         cmocka_unit_test(test_no_display),
         cmocka_unit_test(test_probe_equals_buffers),
         cmocka_unit_test(test_zoom_and_pan),

@@ -404,6 +404,26 @@ static void view_cycle_filter(view_app *a)
     a->indirect_dirty = 1;
 }
 
+/* The three optional stages (docs/frame.md): temporal accumulation over 16
+ * frames, the indirect light at half resolution, the clamp compensation. */
+static void view_toggle_temporal(view_app *a)
+{
+    a->want.temporal = a->want.temporal ? 0 : 16;
+    a->indirect_dirty = 1;
+}
+
+static void view_toggle_scale(view_app *a)
+{
+    a->want.scale = a->want.scale > 1 ? 1 : 2;
+    a->indirect_dirty = 1;
+}
+
+static void view_toggle_compensate(view_app *a)
+{
+    a->want.compensate = !a->want.compensate;
+    a->indirect_dirty = 1;
+}
+
 /* paraboloid -> ism -> raytrace: the cursor moves on even when a choice
  * fails, so every press tries the next. */
 static void view_cycle_visibility(view_app *a)
@@ -619,6 +639,9 @@ static const char *const view_help[][2] = {
     {"F", "filter box, bilateral, none"},
     {"O", "visibility paraboloid, ism, raytrace"},
     {"C", "clamp 400, 1600, 6400, off, 25, 100"},
+    {"J", "clamp compensation on / off"},
+    {"T", "temporal accumulation over 16 frames on / off"},
+    {"U", "indirect light at half resolution on / off"},
     {"- / =", "exposure -/+ 0.5 stop"},
     {"P / space", "pause: the stage stepper"},
     {"N / B (arrows)", "next / previous stage"},
@@ -719,6 +742,9 @@ static void view_key_settings(view_app *a, int key, int shift)
     case 'F': view_cycle_filter(a); break;
     case 'O': view_cycle_visibility(a); break;
     case 'C': view_cycle_clamp(a); break;
+    case 'J': view_toggle_compensate(a); break;
+    case 'T': view_toggle_temporal(a); break;
+    case 'U': view_toggle_scale(a); break;
     default: break;
     }
 }
@@ -988,7 +1014,8 @@ static void view_draw_status(view_app *a, view_col *c)
              o->method->name, f->ind.vpls.count, o->vpls, a->vpls_moved, f->ind.maps_rendered, f->ind.n, f->ind.m,
              view_filter_name(o->filter));
     view_block(a, c, line, view_white, 0);
-    snprintf(line, sizeof line, "visibility %s  clamp %s  exposure %+.1f   H: help", vis, clamp, (double)a->exposure);
+    snprintf(line, sizeof line, "visibility %s  clamp %s%s  scale %u  temporal %u  exposure %+.1f   H: help", vis, clamp,
+             o->compensate ? " +comp" : "", f->ind.scale, o->temporal, (double)a->exposure);
     view_block(a, c, line, view_white, 0);
 }
 

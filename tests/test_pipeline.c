@@ -72,7 +72,7 @@ static void fx_begin(fx *x, uint32_t threads, int pipeline, int raytrace_vis, in
         m.create = gi_method_ir.create;
         m.destroy = gi_method_ir.destroy;
         io.method = &m;
-        assert_false(gi_vpl_method_gbuffer_free(&m));
+        assert_false(m.gbuffer_free);
     }
     tu_fx_begin(&x->t, threads, RS_SIMD_SCALAR, W, H, &x->t.scene.cameras[0], &io, 0);
 }

@@ -12,7 +12,7 @@
  *                       (app_budget_check) -> pf_rt_create -> rs_context_create
  *   softgi_set_camera   pf_camera_look_at, as --camera
  *   softgi_set_lights   the scene's lights replaced, as --light
- *   softgi_render       gi_frame_init + gi_frame_enable_indirect at the first frame
+ *   softgi_render       gi_frame_create (with the indirect options) at the first frame
  *                       (app_frame_init), then gi_frame_render_raster (or _raytraced)
  *
  * Duplicated from src/app/app_scene.c until it is factored below the

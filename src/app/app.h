@@ -75,9 +75,9 @@ pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t 
 
 struct gi_frame;
 struct rs_context;
-/* The frame the command line describes, on a loaded scene: gi_frame_init
- * with --shadow-size, then --area-strata/--area-points, then the indirect
- * stages (app_indirect_options) unless --direct-only or `indirect` is 0
+/* The frame the command line describes, on a loaded scene: gi_frame_create
+ * with --shadow-size, --area-strata/--area-points and the indirect stages
+ * (app_indirect_options) unless --direct-only or `indirect` is 0
  * (sequence --reference). render, sequence and view all build their frame
  * here, so each option means the same in each. On failure nothing is left
  * to free. */

@@ -1,6 +1,6 @@
 /* pf_arena: a bump allocator for memory with one lifetime.
  *
- * A frame's buffers live exactly as long as the frame (gi_frame_init to
+ * A frame's buffers live exactly as long as the frame (gi_frame_create to
  * gi_frame_free), and a frame's scratch exactly as long as one frame. An
  * arena gives each lifetime one owner: allocations are carved from a few
  * large blocks, zeroed, 64-byte aligned (a cache line, and the widest SIMD

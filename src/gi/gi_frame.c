@@ -150,8 +150,11 @@ uint64_t gi_frame_memory_estimate(const pf_scene *scene, uint32_t width, uint32_
     return bytes;
 }
 
-pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
-                        const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err)
+/* The frame's buffers, shadow-map set and default area sampling; gi_frame_create
+ * adds the rest of the description. */
+static pf_result gi__frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster,
+                                pf_jobs *jobs, const pf_camera *camera, uint32_t width, uint32_t height,
+                                uint32_t shadow_size, pf_error *err)
 {
     memset(f, 0, sizeof *f);
     f->scene = scene;
@@ -206,7 +209,7 @@ pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err)
         if (d->scene->camera_count == 0) return pf_error_set(err, PF_ERR_ARGUMENT, "frame: the scene has no camera");
         cam = &d->scene->cameras[0];
     }
-    pf_result r = gi_frame_init(f, d->scene, d->rt, d->raster, d->jobs, cam, d->width, d->height, d->shadow_size, err);
+    pf_result r = gi__frame_init(f, d->scene, d->rt, d->raster, d->jobs, cam, d->width, d->height, d->shadow_size, err);
     if (r == PF_OK && (d->area_strata || d->area_points))
         r = gi_frame_set_area_sampling(f, d->area_strata ? d->area_strata : GI_AREA_DEFAULT_STRATA,
                                        d->area_points ? d->area_points : GI_AREA_DEFAULT_POINTS, err);

@@ -41,7 +41,7 @@
  * steps 4-9 use the set made during the previous frame: Laine 2007 Sec. 3
  * and 6, one frame of delay in the VPLs (gi_indirect.h, "Pipelining").
  *
- * Memory: everything a frame writes is allocated once in gi_frame_init
+ * Memory: everything a frame writes is allocated once in gi_frame_create
  * (frame lifetime, reused every frame); stages do not allocate. */
 #ifndef GI_FRAME_H
 #define GI_FRAME_H
@@ -218,10 +218,6 @@ typedef struct gi_frame_desc {
  * d->indirect, the many-light stages. On failure everything allocated is
  * freed and f is zeroed. */
 pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err);
-/* The same with positional arguments, no indirect light and the default
- * area sampling (kept for the callers that predate gi_frame_desc). */
-pf_result gi_frame_init(gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster, pf_jobs *jobs,
-                        const pf_camera *camera, uint32_t width, uint32_t height, uint32_t shadow_size, pf_error *err);
 void gi_frame_free(gi_frame *f);
 
 /* Bytes a frame will allocate, estimated before anything is (pf_budget.h):
@@ -240,7 +236,7 @@ pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, 
 /* Sets the area-light sampling of the direct light: strata per side
  * (1..GI_AREA_MAX_STRATA) for the ray-traced frame, K points
  * (1..GI_AREA_MAX_POINTS) for the rasterized one (their maps are redrawn at
- * the next frame). gi_frame_init sets the defaults. */
+ * the next frame). gi_frame_create sets them (the defaults or the description's). */
 pf_result gi_frame_set_area_sampling(gi_frame *f, uint32_t strata, uint32_t points, pf_error *err);
 
 /* The primary ray through the centre of pixel (x, y): dir is scaled so that

@@ -229,7 +229,6 @@ void gi_stage_vpl_update(gi_frame *f)
     ind->maps_current = 0;
 }
 
-int gi_vpl_method_gbuffer_free(const gi_vpl_method *m) { return m->gbuffer_free; }
 
 /* The pipelined update: one job of one item. It touches only the method's
  * state, vpls_next and pipe_ms; the frame's stages meanwhile read `vpls`
@@ -262,7 +261,7 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
         for (uint32_t i = 0; i < ind->vpls.count; i++) ind->vpls.v[i].moved = 0;
     }
     if (ind->pending) return;
-    if (!gbuffer_ready && !gi_vpl_method_gbuffer_free(ind->opt.method)) return;
+    if (!gbuffer_ready && !ind->opt.method->gbuffer_free) return;
     ind->pipe_camera = f->camera;
     gi_vpl_inputs in = {f->scene,        f->rt,
                         f->jobs,         &ind->pipe_camera,
@@ -573,12 +572,9 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             pf_vec3 c = gi_vpl_irradiance(v, pos, nrm, ind->b, &w, &r, NULL, NULL);
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
-            if (ind->ism) {
-                visible = gi_ism_visible_at(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
-                                            pf_v3_dot(nrm, w), ind->bias_scale);
-            } else if (ind->para) {
-                visible = rs_para_visible_at(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
-                                             pf_v3_dot(nrm, w));
+            if (ind->atlas) { /* exact maps (bias_scale 1) or ISMs: the one lookup */
+                visible = rs_para_visible_scaled(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
+                                                 pf_v3_dot(nrm, w), ind->bias_scale);
             } else {
                 pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
                 visible = !pf_rt_occluded1(f->rt, ray);

@@ -180,9 +180,6 @@ void gi_stage_vpl_update(struct gi_frame *f);
  * job's time as the "VPL update" stage. */
 void gi_stage_vpl_update_begin(struct gi_frame *f, int gbuffer_ready);
 void gi_stage_vpl_update_end(struct gi_frame *f);
-/* Whether a method's update never reads the G-buffer (the method says so:
- * gi_vpl_method.gbuffer_free). */
-int gi_vpl_method_gbuffer_free(const gi_vpl_method *m);
 void gi_stage_vpl_shadow_maps(struct gi_frame *f);
 void gi_stage_split(struct gi_frame *f);
 void gi_stage_assign(struct gi_frame *f);

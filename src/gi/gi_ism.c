@@ -438,10 +438,3 @@ void gi_ism_render(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, const rs_para_fram
 }
 
 /* ------------------------------------------------------------------ lookup */
-
-int gi_ism_visible_at(const uint16_t *map, uint32_t R, float range, const rs_para_frame *f, pf_vec3 p,
-                      float cos_receiver, float bias_scale)
-{
-    /* the project's one paraboloid lookup, with the ISM's bias scale */
-    return rs_para_visible_scaled(map, R, range, f, p, cos_receiver, bias_scale);
-}

@@ -32,8 +32,8 @@
  * parametrisation, texel layout R x R per map, map k at atlas + k R R, the
  * same 16-bit distance codes (code = floor(t * 65534 / range)), so the
  * frame's lookup (rs_para_visible_at and the SIMD accumulation) reads them
- * unchanged; only the bias differs (gi_ism_visible_at: the exact maps' bias
- * times bias_scale, see GI_ISM_DEFAULT_BIAS).
+ * unchanged; only the bias differs (rs_para_visible_scaled: the exact maps'
+ * bias times bias_scale, see GI_ISM_DEFAULT_BIAS).
  *
  * Every VPL's ISM is rebuilt every frame: a map costs a few thousand splats,
  * and the points are regenerated and reassigned to VPLs at random each frame
@@ -162,11 +162,5 @@ void gi_ism_stage_pull_push(gi_ism *ism, uint16_t *atlas, pf_jobs *jobs, uint32_
  * texels filled. */
 size_t gi_ism_pull_push_scratch_floats(uint32_t resolution);
 uint32_t gi_ism_pull_push(uint16_t *map, uint32_t resolution, float *scratch);
-
-/* rs_para_visible_at with the ISM bias: visible iff
- *   |p - o| <= decode(code) + bias_scale (w (1 + tan theta) + 2 range / 65534)
- * (the same float operations as the frame's SIMD accumulation). */
-int gi_ism_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
-                      float cos_receiver, float bias_scale);
 
 #endif

@@ -70,7 +70,7 @@
  * and Debug builds give the same bytes too (the golden hash test runs in
  * both).
  *
- * Speed (tests/test_paraboloid.c, SOFTGI_PARA_BENCH=1; one 128x128 map,
+ * Speed (measured with a timing function then in tests/test_paraboloid.c, since removed; one 128x128 map,
  * 1 thread, mean over 64 VPLs; Embree traces one ray per texel in 8-wide
  * packets): Sibenik 1.14 ms (AVX-512) / 1.26 ms (AVX2) / 2.8 ms (scalar)
  * vs Embree 2.3 ms (AVX-512) / 2.45 ms (AVX2); conference room 0.81 / 0.92 /

@@ -533,7 +533,7 @@ static int gi__ssvp_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *r
     c->text(c, rgb, 4, 2, text, white);
     c->text(c, rgb, 4, 12, "crosses: centroids and normals (one paraboloid RSM each, III-C)", white);
     /* the key: the clusters' colours and sizes (the first 8) */
-    char names[8][32];
+    char names[8][48]; /* "cluster %u: %u VPLs" with two 10-digit numbers fits */
     const char *np[8];
     uint8_t cols[8][3];
     uint32_t nk = 0;

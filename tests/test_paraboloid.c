@@ -440,6 +440,25 @@ static void check_same_bytes(const pf_scene *s, uint32_t count)
         assert_memory_equal(ref, other, bytes);
     }
     rs_para_set_simd(ctx, best);
+    /* rs_para_render_slots: the maps in reverse order, each into its slot
+     * (map k of the list to slot count-1-k), spread over two workers, give
+     * the same atlas; slots NULL is rs_para_render */
+    pf_vec3 *rpos = malloc(count * sizeof(pf_vec3)), *rnrm = malloc(count * sizeof(pf_vec3));
+    uint32_t *slots = malloc(count * sizeof(uint32_t));
+    for (uint32_t k = 0; k < count; k++) {
+        rpos[k] = pos[count - 1 - k];
+        rnrm[k] = nrm[count - 1 - k];
+        slots[k] = count - 1 - k;
+    }
+    memset(other, 0, bytes);
+    rs_para_render_slots(other, ctx, j2, rpos, rnrm, slots, count, range, NULL);
+    assert_memory_equal(ref, other, bytes);
+    memset(other, 0, bytes);
+    rs_para_render_slots(other, ctx, j2, pos, nrm, NULL, count, range, NULL);
+    assert_memory_equal(ref, other, bytes);
+    free(rpos);
+    free(rnrm);
+    free(slots);
     pf_jobs_destroy(j1);
     pf_jobs_destroy(j2);
     free(ref);

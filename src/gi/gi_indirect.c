@@ -137,8 +137,9 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         ind->frames = pf_arena_calloc(mem, o.vpls, sizeof(rs_para_frame));
         ind->map_pos = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
         ind->map_nrm = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
+        ind->map_slot = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
         ind->range = rs_para_default_range(s);
-        ok = ind->atlas && ind->frames && ind->map_pos && ind->map_nrm;
+        ok = ind->atlas && ind->frames && ind->map_pos && ind->map_nrm && ind->map_slot;
     }
     if (!ok) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the indirect-light buffers");
     /* tile (i, j): columns i, i + n, ... and rows j, j + m, ... */
@@ -305,32 +306,29 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     /* pipelined frame 1 shades with frame 0's set again: its maps are there */
     if (!ind->para || ind->maps_current) return;
     ind->maps_current = 1;
-    const size_t map = (size_t)ind->opt.para_res * ind->opt.para_res;
-    /* Each run of consecutive slots whose VPL is new or moved is rendered in
-     * one call, straight into its slots (the call spreads the run's maps
-     * over the workers); unmoved VPLs keep last frame's maps. */
+    /* The slots whose VPL is new or moved are listed (map_pos, map_nrm,
+     * map_slot: the k-th map to render and its slot) and rendered straight
+     * into their slots by one call, which spreads them over the workers
+     * however scattered the slots are; unmoved VPLs keep last frame's maps. */
     uint32_t N = ind->vpls.count, todo = 0;
-    for (uint32_t i = 0; i < N; i++) todo += ind->vpls.v[i].moved || i >= ind->atlas_slots;
-    /* Runs of at most GI__MAPS_CHUNK maps, so a listener hears of progress
+    for (uint32_t i = 0; i < N; i++) {
+        if (!ind->vpls.v[i].moved && i < ind->atlas_slots) continue;
+        ind->map_pos[todo] = ind->vpls.v[i].pos;
+        ind->map_nrm[todo] = ind->vpls.v[i].nrm;
+        ind->map_slot[todo++] = i;
+        ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+    }
+    /* Calls of at most GI__MAPS_CHUNK maps, so a listener hears of progress
      * between them (a first frame of 100,000 VPLs takes minutes); the maps
      * are independent, so the pieces change no bits. */
     const uint32_t chunk = f->progress ? GI__MAPS_CHUNK : UINT32_MAX;
-    for (uint32_t i = 0; i < N;) {
-        const gi_vpl *v = &ind->vpls.v[i];
-        if (!v->moved && i < ind->atlas_slots) {
-            i++;
-            continue;
-        }
-        uint32_t start = i;
-        for (; i < N && i - start < chunk && (ind->vpls.v[i].moved || i >= ind->atlas_slots); i++) {
-            ind->map_pos[i] = ind->vpls.v[i].pos;
-            ind->map_nrm[i] = ind->vpls.v[i].nrm;
-            ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
-        }
-        rs_para_render(ind->atlas + start * map, ind->para, f->jobs, ind->map_pos + start, ind->map_nrm + start,
-                       i - start, ind->range, NULL);
-        ind->maps_rendered += i - start;
-        if (f->progress) f->progress(f->progress_user, gi_stage_get(GI_STAGE_VPL_MAPS)->name, ind->maps_rendered, todo);
+    for (uint32_t k = 0; k < todo;) {
+        uint32_t n = todo - k < chunk ? todo - k : chunk;
+        rs_para_render_slots(ind->atlas, ind->para, f->jobs, ind->map_pos + k, ind->map_nrm + k, ind->map_slot + k,
+                             n, ind->range, NULL);
+        k += n;
+        ind->maps_rendered = k;
+        if (f->progress) f->progress(f->progress_user, gi_stage_get(GI_STAGE_VPL_MAPS)->name, k, todo);
     }
     ind->atlas_slots = N;
 }

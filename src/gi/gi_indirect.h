@@ -126,7 +126,8 @@ typedef struct gi_indirect {
     rs_para_frame *frames;
     float range;
     uint32_t maps_rendered;   /* this frame */
-    pf_vec3 *map_pos, *map_nrm; /* VPL positions / normals as the map renderer takes them */
+    pf_vec3 *map_pos, *map_nrm; /* this frame's maps to render: VPL positions / normals, */
+    uint32_t *map_slot;         /* and the atlas slot of each */
     /* per-frame scratch, allocated once at init for the VPL budget */
     void *sort_keys;          /* luminance keys for gi_stage_assign */
     uint32_t *cursor;

@@ -972,6 +972,7 @@ typedef struct rs__job {
     rs_para_context *ctx;
     uint16_t *atlas;
     const pf_vec3 *positions, *normals;
+    const uint32_t *slots; /* NULL: map k in slot k */
     float range;
 } rs__job;
 
@@ -979,12 +980,20 @@ static void rs__map_job(void *p, uint32_t item, uint32_t worker)
 {
     rs__job *job = p;
     size_t texels = (size_t)job->ctx->res * job->ctx->res;
+    size_t slot = job->slots ? job->slots[item] : item;
     rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
-                   job->atlas + texels * item);
+                   job->atlas + texels * slot);
 }
 
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                     const pf_vec3 *normals, uint32_t count, float range, rs_para_stats *stats)
+{
+    rs_para_render_slots(atlas, ctx, jobs, positions, normals, NULL, count, range, stats);
+}
+
+void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                          const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
+                          rs_para_stats *stats)
 {
     assert(range > 0.0f);
     uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
@@ -995,7 +1004,7 @@ void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const 
         jobs = NULL;
     }
     for (uint32_t k = 0; k < ctx->scratch_count; k++) memset(&ctx->scratch[k]->stats, 0, sizeof(rs_para_stats));
-    rs__job job = {ctx, atlas, positions, normals, range};
+    rs__job job = {ctx, atlas, positions, normals, slots, range};
     if (jobs)
         pf_jobs_parallel_for(jobs, rs__map_job, &job, count, 1);
     else

@@ -171,6 +171,13 @@ float rs_para_default_range(const pf_scene *scene);
  * stats may be NULL. */
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                     const pf_vec3 *normals, uint32_t count, float range, rs_para_stats *stats);
+/* The same with map k written to slot slots[k] of the atlas (atlas +
+ * slots[k] * R * R; the slots distinct): maps scattered over an atlas (the
+ * VPLs a method moved this frame) are spread over the workers in one call.
+ * slots NULL: slot k. */
+void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                          const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
+                          rs_para_stats *stats);
 
 /* The reference: the same maps traced with Embree, one ray per inside texel
  * centre along its direction (pf_rt_intersect, 8-wide packets), quantised the

@@ -78,6 +78,8 @@ typedef struct bench_check {
     double gbuf_attr;    /* of the pixels with the same triangle: depth within 1e-3, normal within 1 degree,
                           * albedo equal */
     double para_codes;   /* inside texels: same EMPTY, or distance codes within 1 step */
+    double para_error;   /* inside texels: one EMPTY and the other not, or distances more than a texel's
+                          * footprint apart (the measure --para-lod is held to: at most 1%) */
     double cube_depth;   /* texels: both empty, or depth within 1e-3 relative */
 } bench_check;
 
@@ -199,7 +201,8 @@ static void bench__close(bench_run *r)
 }
 
 static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *bs, const app_embree *emb,
-                       const pf_vec3 *vp, const pf_vec3 *vn, uint32_t threads, pf_isa isa, uint32_t frames)
+                       const pf_vec3 *vp, const pf_vec3 *vn, uint32_t threads, pf_isa isa, uint32_t frames,
+                       float para_lod)
 {
     pf_error err;
     memset(r, 0, sizeof *r);
@@ -213,7 +216,7 @@ static int bench__open(bench_run *r, const pf_scene *scene, const bench_scene *b
         goto fail;
     }
     if (rs_context_create(&r->rs, scene, r->jobs, rs_simd_for_isa(isa), &err) != PF_OK ||
-        rs_para_context_create(&r->para, scene, NULL, &err) != PF_OK ||
+        rs_para_context_create(&r->para, scene, &(rs_para_options){.lod = para_lod}, &err) != PF_OK ||
         pf_camera_look_at(&r->cam, bs->eye, bs->target, pf_radians(bs->fovy_deg), &err) != PF_OK ||
         gi_frame_create(&r->f,
                         &(gi_frame_desc){.scene = scene, .jobs = r->jobs, .raster = r->rs, .camera = &r->cam,
@@ -412,15 +415,24 @@ static void bench__check(bench_run *r, bench_check *c)
     bench__softgi_para(r);
     bench__embree_para(r);
     uint32_t res = rs_para_resolution(r->para);
-    size_t texels = (size_t)res * res * BENCH_VPLS, inside = 0, close = 0;
+    size_t texels = (size_t)res * res * BENCH_VPLS, inside = 0, close = 0, off = 0;
     for (size_t i = 0; i < texels; i++) {
         uint16_t a = r->atlas[i], b = r->eatlas[i];
         if (a == RS_PARA_OUTSIDE && b == RS_PARA_OUTSIDE) continue;
         inside++;
         int a_code = a <= RS_PARA_MAX_CODE, b_code = b <= RS_PARA_MAX_CODE;
         close += a_code && b_code ? abs((int)a - (int)b) <= 1 : a == b;
+        if (a_code != b_code) {
+            off++;
+        } else if (a_code) {
+            uint32_t t = (uint32_t)(i % ((size_t)res * res));
+            pf_vec3 d = rs_para_uv_to_dir(rs_para_texel_uv(res, t % res, t / res));
+            float da = rs_para_decode(a, r->range), db = rs_para_decode(b, r->range);
+            off += fabsf(da - db) > rs_para_texel_world_size(res, db, d);
+        }
     }
     c->para_codes = inside ? (double)close / (double)inside : 1.0;
+    c->para_error = inside ? (double)off / (double)inside : 0.0;
     /* cube map: reversed depth per texel */
     bench__softgi_cube(r);
     bench__embree_cube(r);
@@ -459,9 +471,12 @@ static void bench__result(bench_run *r, const bench_run *base, const char *scene
     out->pixels_per_s = (double)BENCH_W * BENCH_H / (out->ms[BENCH_GBUF] * 1e-3);
 }
 
-static int bench__check_ok(const bench_check *c)
+/* With levels of detail the paraboloid codes cannot agree within a step;
+ * their error must stay within issue 13's 1% of texels instead. */
+static int bench__check_ok(const bench_check *c, float para_lod)
 {
-    return c->vis_ids >= BENCH_AGREE_TARGET && c->para_codes >= BENCH_AGREE_TARGET;
+    return c->vis_ids >= BENCH_AGREE_TARGET &&
+           (para_lod > 0.0f ? c->para_error <= 1.0 - BENCH_AGREE_TARGET : c->para_codes >= BENCH_AGREE_TARGET);
 }
 
 int app_bench_raster(const pf_options *o)
@@ -510,7 +525,8 @@ int app_bench_raster(const pf_options *o)
         bench_run runs[2];
         uint32_t opened = 0;
         for (; opened < nthreads; opened++)
-            if (!bench__open(&runs[opened], &scene, &k_scenes[k], emb, vp, vn, thread_list[opened], isa, frames))
+            if (!bench__open(&runs[opened], &scene, &k_scenes[k], emb, vp, vn, thread_list[opened], isa, frames,
+                             o->para_lod))
                 break;
         double *tmp = opened == nthreads ? malloc(sizeof(double) * frames) : NULL;
         if (!tmp) {
@@ -522,13 +538,17 @@ int app_bench_raster(const pf_options *o)
         }
         bench_check check;
         bench__check(&runs[0], &check);
-        checks_ok &= bench__check_ok(&check);
+        checks_ok &= bench__check_ok(&check, o->para_lod);
         printf("%s: %u triangles, Embree build %.0f ms; baselines vs softgi: triangle ids %.2f%% of pixels, "
-               "G-buffer attributes %.2f%% of those, paraboloid codes within 1 step %.2f%% of texels, "
-               "cube depth %.2f%%%s\n",
+               "G-buffer attributes %.2f%% of those, paraboloid codes within 1 step %.2f%% of texels (off by more "
+               "than a texel's footprint: %.3f%%%s), cube depth %.2f%%%s\n",
                k_scenes[k].name, scene.tri_count, app_embree_build_ms(emb), 100.0 * check.vis_ids,
-               100.0 * check.gbuf_attr, 100.0 * check.para_codes, 100.0 * check.cube_depth,
-               bench__check_ok(&check) ? "" : " (BELOW 99%: the baseline is not doing the same job)");
+               100.0 * check.gbuf_attr, 100.0 * check.para_codes, 100.0 * check.para_error,
+               o->para_lod > 0.0f ? ", levels of detail" : "", 100.0 * check.cube_depth,
+               bench__check_ok(&check, o->para_lod)
+                   ? ""
+                   : o->para_lod > 0.0f ? " (PARABOLOID ERROR ABOVE 1%, or ids below 99%)"
+                                        : " (BELOW 99%: the baseline is not doing the same job)");
         pf_cpu_ticks c0 = pf_cpu_ticks_now();
         for (uint32_t i = 0; i <= frames; i++) /* thread counts take turns */
             for (uint32_t t = 0; t < nthreads; t++) bench__frame(&runs[t], i);
@@ -602,8 +622,8 @@ int app_bench_raster(const pf_options *o)
                "guests; the 2-thread rows, which need both CPUs at once, suffer most)\n",
                100.0 * steal_share);
     printf("json: {\"bench\":\"raster\",\"width\":%d,\"height\":%d,\"isa\":\"%s\",\"frames\":%u,\"cpu_steal\":%.4f,"
-           "\"embree_packet\":%u,\"results\":[",
-           BENCH_W, BENCH_H, pf_isa_name(isa), frames, steal_share, lanes);
+           "\"embree_packet\":%u,\"para_lod\":%g,\"results\":[",
+           BENCH_W, BENCH_H, pf_isa_name(isa), frames, steal_share, lanes, (double)o->para_lod);
     for (uint32_t i = 0; i < nres; i++) {
         const bench_result *r = &results[i];
         printf("%s{\"scene\":\"%s\",\"threads\":%u,\"gbuffer_resolve_ms\":%.3f,\"triangles_per_s\":%.0f,"
@@ -614,8 +634,8 @@ int app_bench_raster(const pf_options *o)
                    k_job_names[j], r->ms[j], k_job_names[j], r->embree_ms[j], k_job_names[j], r->x[j],
                    k_job_names[j], r->up[j]);
         printf(",\"check_visibility_ids\":%.5f,\"check_gbuffer_attributes\":%.5f,\"check_paraboloid_codes\":%.5f,"
-               "\"check_cube_depth\":%.5f}",
-               r->check.vis_ids, r->check.gbuf_attr, r->check.para_codes, r->check.cube_depth);
+               "\"check_paraboloid_error\":%.5f,\"check_cube_depth\":%.5f}",
+               r->check.vis_ids, r->check.gbuf_attr, r->check.para_codes, r->check.para_error, r->check.cube_depth);
     }
     printf("]}\n");
     return checks_ok ? 0 : 1;

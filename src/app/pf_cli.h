@@ -86,6 +86,7 @@ typedef struct pf_options {
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
+    float para_lod;          /* bench raster: --para-lod F, paraboloid maps from levels of detail (0: exact) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
     uint32_t track_spp;      /* sequence --reference --track-spp N: tracked pixels with N samples (0: --spp) */
     int reuse_frames;        /* sequence --reference --reuse-frames: keep the folder's images, redo tracked pixels */

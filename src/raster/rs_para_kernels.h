@@ -29,6 +29,15 @@ typedef struct rs__cluster {
     uint32_t first, count;
 } rs__cluster;
 
+/* A level-of-detail group as a map selects it (rs_para_lod.h): its sphere,
+ * and per level the error and the run of clusters. */
+typedef struct rs__lod_sel {
+    float cx, cy, cz, r;
+    uint32_t levels;
+    float err[8];
+    uint32_t cl_first[8], cl_count[8];
+} rs__lod_sel;
+
 typedef struct rs__rect {
     int32_t i0, i1, j0, j1; /* inclusive texel range; empty when i0 > i1 or j0 > j1 */
 } rs__rect;
@@ -83,6 +92,10 @@ struct rs_para_context {
     float *soa[13]; /* x0 y0 z0 x1 y1 z1 x2 y2 z2 nx ny nz emax, tri_padded each (zero padding) */
     float *soa_block;
     rs__cluster *clusters;
+    /* levels of detail (rs_para_lod.h; lod 0: none, every cluster is drawn) */
+    float lod;
+    uint32_t lod_count;
+    struct rs__lod_sel *lod_groups;
     /* texel tables */
     float *u;                 /* R: u_i = (2i+1-R)/R (also v_j) */
     float *d2;                /* R: 2 u_i (D.x of column i, D.y of row j) */

@@ -123,6 +123,7 @@
 #include <string.h>
 
 #include "rs_para_kernels.h"
+#include "rs_para_lod.h"
 #include "simd.h" /* SIMD_X86 */
 
 /* ------------------------------------------------------------------ mapping */
@@ -376,6 +377,61 @@ static rs_simd rs__simd_supported(rs_simd want)
     return RS_SIMD_SCALAR;
 }
 
+/* Slot t of the structure of arrays: the corners, the plane normal
+ * (B - A) x (C - A) made in double and rounded once, and the longest edge. */
+static void rs__fill_tri(rs_para_context *ctx, size_t t, pf_vec3 a, pf_vec3 b, pf_vec3 c)
+{
+    const pf_vec3 q[3] = {a, b, c};
+    double p[3][3];
+    for (int v = 0; v < 3; v++) {
+        ctx->soa[3 * v + 0][t] = q[v].x;
+        ctx->soa[3 * v + 1][t] = q[v].y;
+        ctx->soa[3 * v + 2][t] = q[v].z;
+        p[v][0] = q[v].x;
+        p[v][1] = q[v].y;
+        p[v][2] = q[v].z;
+    }
+    double ab[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    double ac[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    ctx->soa[9][t] = (float)(ab[1] * ac[2] - ab[2] * ac[1]);
+    ctx->soa[10][t] = (float)(ab[2] * ac[0] - ab[0] * ac[2]);
+    ctx->soa[11][t] = (float)(ab[0] * ac[1] - ab[1] * ac[0]);
+    /* longest edge, rounded up: every point of the triangle lies within it
+     * of each vertex */
+    double bc[3] = {p[2][0] - p[1][0], p[2][1] - p[1][1], p[2][2] - p[1][2]};
+    double e2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    double e2b = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2], e2c = bc[0] * bc[0] + bc[1] * bc[1] + bc[2] * bc[2];
+    e2 = e2b > e2 ? e2b : e2;
+    e2 = e2c > e2 ? e2c : e2;
+    ctx->soa[12][t] = nextafterf((float)(sqrt(e2) * (1.0 + 1e-6)), INFINITY);
+}
+
+/* A cluster's bounding sphere: around its box centre, radius measured in
+ * double and rounded up. */
+static void rs__cluster_sphere(const rs_para_context *ctx, rs__cluster *cl)
+{
+    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
+        for (int v = 0; v < 3; v++)
+            for (int a = 0; a < 3; a++) {
+                float x = ctx->soa[3 * v + a][t];
+                lo[a] = x < lo[a] ? x : lo[a];
+                hi[a] = x > hi[a] ? x : hi[a];
+            }
+    cl->cx = 0.5f * (lo[0] + hi[0]);
+    cl->cy = 0.5f * (lo[1] + hi[1]);
+    cl->cz = 0.5f * (lo[2] + hi[2]);
+    double r2 = 0.0;
+    for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
+        for (int v = 0; v < 3; v++) {
+            double dx = (double)ctx->soa[3 * v][t] - cl->cx, dy = (double)ctx->soa[3 * v + 1][t] - cl->cy,
+                   dz = (double)ctx->soa[3 * v + 2][t] - cl->cz;
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 > r2) r2 = d2;
+        }
+    cl->r = nextafterf((float)(sqrt(r2) * (1.0 + 1e-6)), INFINITY);
+}
+
 pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, const rs_para_options *opts,
                                  pf_error *err)
 {
@@ -392,6 +448,9 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
                             o.cluster_size, RS__LANES, RS__LANES);
     if (!scene || scene->tri_count == 0)
         return pf_error_set(err, PF_ERR_NO_TRIANGLES, "paraboloid maps: the scene has no triangles");
+    if (!(o.lod >= 0.0f && o.lod <= RS_PARA_MAX_LOD))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid level-of-detail factor %g is outside 0..%g",
+                            (double)o.lod, (double)RS_PARA_MAX_LOD);
 
     rs_para_context *ctx = calloc(1, sizeof *ctx);
     if (!ctx) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "paraboloid maps: out of memory");
@@ -404,6 +463,24 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->tri_padded = ctx->cluster_count * o.cluster_size;
     ctx->simd = o.force_scalar ? RS_SIMD_SCALAR : rs__simd_supported(RS_SIMD_AVX512);
 
+    rs__lod lod = {0};
+    if (o.lod > 0.0f) {
+        pf_result r = rs__lod_build(&lod, scene, err);
+        if (r != PF_OK) {
+            rs_para_context_destroy(ctx);
+            return r;
+        }
+        /* one run of clusters per group and level, each starting on a
+         * cluster boundary */
+        ctx->cluster_count = 0;
+        for (uint32_t g = 0; g < lod.group_count; g++)
+            for (uint32_t L = 0; L < lod.groups[g].levels; L++)
+                ctx->cluster_count += (lod.groups[g].count[L] + o.cluster_size - 1) / o.cluster_size;
+        ctx->tri_padded = ctx->cluster_count * o.cluster_size;
+        ctx->lod = o.lod;
+        ctx->lod_count = lod.group_count;
+        ctx->lod_groups = calloc(lod.group_count, sizeof(rs__lod_sel));
+    }
     ctx->soa_block = aligned_alloc(64, (size_t)13 * ctx->tri_padded * sizeof(float));
     ctx->clusters = calloc(ctx->cluster_count, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
@@ -413,69 +490,57 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
     if (!ctx->soa_block || !ctx->clusters || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
-        !ctx->row_hi) {
+        !ctx->row_hi || (o.lod > 0.0f && !ctx->lod_groups)) {
+        rs__lod_free(&lod);
         rs_para_context_destroy(ctx);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "paraboloid maps: out of memory");
     }
 
-    /* Triangles in scene order, structure of arrays, zero padding (padding
-     * lanes are masked off), with the plane normal (B - A) x (C - A) made in
-     * double and rounded once. */
+    /* Triangles in structure of arrays, zero padding (padding lanes are
+     * masked off): exact maps take the scene's in scene order, cluster c
+     * holding triangles [c * cluster_size, ...); with levels of detail each
+     * group's levels follow one another, each level's run of clusters
+     * starting on a cluster boundary. */
     memset(ctx->soa_block, 0, (size_t)13 * ctx->tri_padded * sizeof(float));
     for (int k = 0; k < 13; k++) ctx->soa[k] = ctx->soa_block + (size_t)k * ctx->tri_padded;
-    for (uint32_t t = 0; t < scene->tri_count; t++) {
-        double p[3][3];
-        for (int v = 0; v < 3; v++) {
-            pf_vec3 q = scene->positions[scene->indices[3 * t + v]];
-            ctx->soa[3 * v + 0][t] = q.x;
-            ctx->soa[3 * v + 1][t] = q.y;
-            ctx->soa[3 * v + 2][t] = q.z;
-            p[v][0] = q.x;
-            p[v][1] = q.y;
-            p[v][2] = q.z;
-        }
-        double ab[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        double ac[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        ctx->soa[9][t] = (float)(ab[1] * ac[2] - ab[2] * ac[1]);
-        ctx->soa[10][t] = (float)(ab[2] * ac[0] - ab[0] * ac[2]);
-        ctx->soa[11][t] = (float)(ab[0] * ac[1] - ab[1] * ac[0]);
-        /* longest edge, rounded up: every point of the triangle lies within
-         * it of each vertex */
-        double bc[3] = {p[2][0] - p[1][0], p[2][1] - p[1][1], p[2][2] - p[1][2]};
-        double e2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-        double e2b = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2], e2c = bc[0] * bc[0] + bc[1] * bc[1] + bc[2] * bc[2];
-        e2 = e2b > e2 ? e2b : e2;
-        e2 = e2c > e2 ? e2c : e2;
-        ctx->soa[12][t] = nextafterf((float)(sqrt(e2) * (1.0 + 1e-6)), INFINITY);
-    }
-
-    /* Clusters: bounding sphere around the box centre, radius measured in
-     * double and rounded up. */
-    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
-        rs__cluster *cl = &ctx->clusters[c];
-        cl->first = c * o.cluster_size;
-        cl->count = scene->tri_count - cl->first < o.cluster_size ? scene->tri_count - cl->first : o.cluster_size;
-        float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-        for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
-            for (int v = 0; v < 3; v++)
-                for (int a = 0; a < 3; a++) {
-                    float x = ctx->soa[3 * v + a][t];
-                    lo[a] = x < lo[a] ? x : lo[a];
-                    hi[a] = x > hi[a] ? x : hi[a];
+    if (o.lod > 0.0f) {
+        uint32_t c = 0;
+        for (uint32_t g = 0; g < lod.group_count; g++) {
+            const rs__lod_group *gr = &lod.groups[g];
+            rs__lod_sel *sel = &ctx->lod_groups[g];
+            sel->cx = gr->cx, sel->cy = gr->cy, sel->cz = gr->cz, sel->r = gr->r;
+            sel->levels = gr->levels;
+            for (uint32_t L = 0; L < gr->levels; L++) {
+                uint32_t n = gr->count[L], nc = (n + o.cluster_size - 1) / o.cluster_size;
+                sel->err[L] = gr->err[L];
+                sel->cl_first[L] = c;
+                sel->cl_count[L] = nc;
+                for (uint32_t k = 0; k < n; k++) {
+                    const pf_vec3 *q = &lod.tri[3 * (size_t)(gr->first[L] + k)];
+                    rs__fill_tri(ctx, c * o.cluster_size + k, q[0], q[1], q[2]);
                 }
-        cl->cx = 0.5f * (lo[0] + hi[0]);
-        cl->cy = 0.5f * (lo[1] + hi[1]);
-        cl->cz = 0.5f * (lo[2] + hi[2]);
-        double r2 = 0.0;
-        for (uint32_t t = cl->first; t < cl->first + cl->count; t++)
-            for (int v = 0; v < 3; v++) {
-                double dx = (double)ctx->soa[3 * v][t] - cl->cx, dy = (double)ctx->soa[3 * v + 1][t] - cl->cy,
-                       dz = (double)ctx->soa[3 * v + 2][t] - cl->cz;
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 > r2) r2 = d2;
+                for (uint32_t j = 0; j < nc; j++, c++) {
+                    ctx->clusters[c].first = c * o.cluster_size;
+                    ctx->clusters[c].count = n - j * o.cluster_size < o.cluster_size ? n - j * o.cluster_size
+                                                                                     : o.cluster_size;
+                }
             }
-        cl->r = nextafterf((float)(sqrt(r2) * (1.0 + 1e-6)), INFINITY);
+        }
+        ctx->tri_count = lod.tri_count;
+        rs__lod_free(&lod);
+    } else {
+        for (uint32_t t = 0; t < scene->tri_count; t++) {
+            const uint32_t *i = &scene->indices[3 * t];
+            rs__fill_tri(ctx, t, scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]]);
+        }
+        for (uint32_t c = 0; c < ctx->cluster_count; c++) {
+            ctx->clusters[c].first = c * o.cluster_size;
+            ctx->clusters[c].count = scene->tri_count - ctx->clusters[c].first < o.cluster_size
+                                         ? scene->tri_count - ctx->clusters[c].first
+                                         : o.cluster_size;
+        }
     }
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) rs__cluster_sphere(ctx, &ctx->clusters[c]);
 
     /* Texel tables. */
     for (uint32_t i = 0; i < R; i++) {
@@ -510,6 +575,7 @@ void rs_para_context_destroy(rs_para_context *ctx)
     free(ctx->scratch);
     free(ctx->soa_block);
     free(ctx->clusters);
+    free(ctx->lod_groups);
     free(ctx->u);
     free(ctx->d2);
     free(ctx->dz);
@@ -924,21 +990,40 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
     }
     sc->stats.maps++;
 
-    /* 1. cull clusters, bound the rest */
+    /* 1. cull clusters, bound the rest (with levels of detail: the clusters
+     * of each group's level for this map) */
     uint32_t n = 0;
     float key_scale = 65535.0f / range;
-    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
-        sc->stats.clusters_in++;
-        if (!rs__cluster_bound(ctx, &f, &ctx->clusters[c], &sc->crect[c], &sc->cnear[c])) {
-            sc->stats.clusters_behind++;
-            continue;
+    const uint32_t groups = ctx->lod_groups ? ctx->lod_count : 1;
+    /* smallest texel footprint per unit distance (the rim's angle), times
+     * the allowed fraction */
+    const float lod_per_dist = ctx->lod * 2.0f / (float)R;
+    for (uint32_t g = 0; g < groups; g++) {
+        uint32_t c0 = 0, c1 = ctx->cluster_count;
+        if (ctx->lod_groups) {
+            const rs__lod_sel *sel = &ctx->lod_groups[g];
+            float dx = sel->cx - f.o.x, dy = sel->cy - f.o.y, dz = sel->cz - f.o.z;
+            float near = sqrtf(dx * dx + dy * dy + dz * dz) - sel->r;
+            float allowed = near > 0.0f ? near * lod_per_dist : 0.0f;
+            uint32_t L = 0;
+            while (L + 1 < sel->levels && sel->err[L + 1] <= allowed) L++;
+            c0 = sel->cl_first[L];
+            c1 = c0 + sel->cl_count[L];
+            sc->stats.lod_levels += L;
         }
-        float k = sc->cnear[c] * key_scale;
-        /* a cluster reaching behind the map's origin has a negative near
-         * distance (key 0: first); converting a negative or NaN float to
-         * uint16_t is undefined */
-        sc->key[c] = !(k > 0.0f) ? 0 : k < 65535.0f ? (uint16_t)k : 65535;
-        sc->order[n++] = c;
+        for (uint32_t c = c0; c < c1; c++) {
+            sc->stats.clusters_in++;
+            if (!rs__cluster_bound(ctx, &f, &ctx->clusters[c], &sc->crect[c], &sc->cnear[c])) {
+                sc->stats.clusters_behind++;
+                continue;
+            }
+            float k = sc->cnear[c] * key_scale;
+            /* a cluster reaching behind the map's origin has a negative near
+             * distance (key 0: first); converting a negative or NaN float to
+             * uint16_t is undefined */
+            sc->key[c] = !(k > 0.0f) ? 0 : k < 65535.0f ? (uint16_t)k : 65535;
+            sc->order[n++] = c;
+        }
     }
     /* 2. front to back */
     rs__sort_clusters(sc, n);
@@ -1024,6 +1109,7 @@ void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, 
             stats->triangles_drawn += s->triangles_drawn;
             stats->texels_tested += s->texels_tested;
             stats->texels_exact_fallback += s->texels_exact_fallback;
+            stats->lod_levels += s->lod_levels;
         }
     }
 }

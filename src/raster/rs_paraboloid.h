@@ -70,20 +70,13 @@
  * and Debug builds give the same bytes too (the golden hash test runs in
  * both).
  *
- * Speed (measured with a timing function then in tests/test_paraboloid.c, since removed; one 128x128 map,
- * 1 thread, mean over 64 VPLs; Embree traces one ray per texel in 8-wide
- * packets): Sibenik 1.14 ms (AVX-512) / 1.26 ms (AVX2) / 2.8 ms (scalar)
- * vs Embree 2.3 ms (AVX-512) / 2.45 ms (AVX2); conference room 0.81 / 0.92 /
- * 2.4 ms vs 2.0 / 2.3 ms. The SIMD paths are 2-2.5x faster than Embree at
- * the same ISA; the scalar reference is 1.2x slower than Embree (measured
- * when each path was written out by hand; the kernels written once over the
- * vocabulary time the same within the loaded machine's noise, `softgi bench
- * raster --isa sse2|avx2|avx512`). That
- * Embree side goes through pf_rt (8-wide packets and softgi's exact
- * double-precision hits); against Embree used directly (16-wide coherent
- * packets, `softgi bench raster`, docs/perf.md) these maps are 2.4-2.9x
- * SLOWER (provisional, loaded machine): the real-time issue's target (2x
- * faster) is open.
+ * Speed: against Embree used directly (16-wide coherent packets over 4x4
+ * texels, `softgi bench raster`, docs/perf.md), one 128x128 map takes
+ * softgi 1.5x (Sibenik) and 2.3x (conference room) as long on AVX-512 with
+ * 1 thread, since the front end's compress-stores no longer go to memory
+ * (src/base/simd/simd_avx512.h); the real-time issue's target (2x faster
+ * than Embree) is open. Levels of detail (rs_para_options.lod,
+ * rs_para_lod.h) buy 1.1-1.2x within 0.5% of the texels (docs/raster.md).
  *
  * Geometry: all triangles are two-sided occluders, alpha masks are ignored
  * (shadow geometry only; the Embree reference honours them, so compare on
@@ -112,12 +105,17 @@
 #define RS_PARA_CODES 65534.0f
 /* rs_para_bias: tan(theta) is clamped here (grazing receivers). */
 #define RS_PARA_TAN_MAX 8.0f
+/* rs_para_options.lod: largest factor. */
+#define RS_PARA_MAX_LOD 16.0f
 
 /* Zero-initialised means defaults. */
 typedef struct rs_para_options {
     uint32_t resolution;   /* texels per side (0: RS_PARA_DEFAULT_RES), RS_PARA_MIN_RES..RS_PARA_MAX_RES */
     uint32_t cluster_size; /* triangles per cluster (0: RS_PARA_DEFAULT_CLUSTER), 16..1024, multiple of 16 */
     int force_scalar;      /* 1: the scalar reference path, whatever the CPU has (0: the widest it has) */
+    float lod;             /* levels of detail (rs_para_lod.h): per map and spatial group of triangles, the
+                              coarsest simplified level whose error is at most lod x the smallest texel
+                              footprint at the group's distance; 0: none, the exact maps (0..RS_PARA_MAX_LOD) */
 } rs_para_options;
 
 /* What a render call did, summed over its maps (integers: order-free). */
@@ -133,6 +131,7 @@ typedef struct rs_para_stats {
     uint64_t triangles_drawn;          /* set up exactly and scanned */
     uint64_t texels_tested;            /* texel centres given the exact test */
     uint64_t texels_exact_fallback;    /* edge tests that needed the double path */
+    uint64_t lod_levels;               /* levels of detail: the levels drawn, summed over groups and maps */
 } rs_para_stats;
 
 typedef struct rs_para_context rs_para_context;

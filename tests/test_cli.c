@@ -162,7 +162,7 @@ static const struct {
     {"--vpls", "8", {0}},              {"--method", "ir", {0}},          {"--bounces", "1", {0}},
     {"--tiles", "2x2", {0}},           {"--no-interleave", NULL, {0}},   {"--clamp", "1", {0}},
     {"--filter", "box", {0}},          {"--visibility", "raytrace", {0}}, {"--ism-res", "64", {0}},
-    {"--ism-points", "1000", {0}},     {"--ism-bias", "2", {0}},         {"--param", "a=1", {0}},
+    {"--ism-points", "1000", {0}},     {"--ism-bias", "2", {0}},         {"--para-lod", "4", {0}},         {"--param", "a=1", {0}},
     {"--dump-stages", "d", {0}},       {"--dump-format", "exr", {"--dump-stages", "d"}},
     {"--pipeline", "on", {0}},         {"--indirect-scale", "2", {0}}, {"--temporal", "4", {0}},
     {"--compensate", "on", {0}},       {"--spp", "4", {0}},              {"--reference", NULL, {0}},
@@ -302,6 +302,8 @@ static void test_wrong_command_options(void **state)
     tu_softgi_expect("sequence x.seq.json --hdr x.exr", 2, "--hdr does not apply to sequence");
     tu_softgi_expect("sequence x.seq.json --screenshot s.png", 2, "--screenshot does not apply to sequence");
     tu_softgi_expect("bench raster --vpls 8", 2, "--vpls does not apply to bench raster");
+    tu_softgi_expect("render --para-lod 4", 2, "--para-lod does not apply to render");
+    tu_softgi_expect("bench raster --para-lod 17", 2, "--para-lod '17': expected a number in 0..16");
     tu_softgi_expect("bench frame -q", 2, "-q does not apply to bench frame");
     tu_softgi_expect("render --scenes d", 2, "see softgi render --help");
     /* options that need another */

@@ -37,10 +37,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <xmmintrin.h>
-#endif
-
 #include "pf_defaults.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
@@ -143,28 +139,14 @@ static void api__ok(softgi_error *err)
  * (pf_fpenv.h), on the caller's thread for one call, then the caller's own
  * back: the calling thread runs jobs too, and FTZ/DAZ are part of the
  * determinism contract, but a library must not leave them changed. */
-typedef struct api__fpenv {
-    unsigned int csr;
-} api__fpenv;
-
-static api__fpenv api__fpenv_enter(void)
+static pf_fpenv_state api__fpenv_enter(void)
 {
-    api__fpenv s = {0};
-#if defined(__x86_64__) || defined(__i386__)
-    s.csr = _mm_getcsr();
-#endif
+    pf_fpenv_state s = pf_fpenv_save();
     pf_fpenv_set();
     return s;
 }
 
-static void api__fpenv_leave(api__fpenv s)
-{
-#if defined(__x86_64__) || defined(__i386__)
-    _mm_setcsr(s.csr);
-#else
-    (void)s;
-#endif
-}
+static void api__fpenv_leave(pf_fpenv_state s) { pf_fpenv_restore(s); }
 
 const char *softgi_result_name(softgi_result code) { return pf_result_name((pf_result)code); }
 
@@ -460,7 +442,7 @@ static pf_result api__scene_load(softgi_context *c, const char *path, pf_error *
 softgi_result softgi_load_scene(softgi_context *c, const char *path, softgi_error *err)
 {
     if (!c) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_load_scene: the context is NULL");
-    api__fpenv env = api__fpenv_enter();
+    pf_fpenv_state env = api__fpenv_enter();
     api__scene_free(c);
     pf_error e;
     double t0 = pf_time_now();
@@ -504,7 +486,7 @@ softgi_result softgi_set_camera(softgi_context *c, const softgi_camera *cam, sof
     pf_error e;
     if (pf_camera_look_at(&next, eye, target, pf_radians(cam->fovy_deg), &e) != PF_OK) return api__fail(err, &e);
     if (c->auto_light) { /* the program places its light at the camera it renders with */
-        api__fpenv env = api__fpenv_enter();
+        pf_fpenv_state env = api__fpenv_enter();
         pf_light l;
         pf_result r = api__default_light(c, &next, &l, &e);
         api__fpenv_leave(env);
@@ -654,7 +636,7 @@ softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_er
     softgi_result sr = api__check_target(c, t, err);
     if (sr != SOFTGI_OK) return sr;
     if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: no scene loaded (softgi_load_scene)");
-    api__fpenv env = api__fpenv_enter();
+    pf_fpenv_state env = api__fpenv_enter();
     pf_error e;
     pf_result r = PF_OK;
     if (!c->frame_ready) {

@@ -9,11 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "pf_fpenv.h"
+#include "simd.h" /* the baseline vocabulary (SSE2 on x86-64): streaming stores */
 #include "pf_timer.h"
 #include "rs_paraboloid.h"
 
@@ -225,14 +222,12 @@ typedef struct app__tile {
 /* n 32-bit values of a tile row to the image (rs_raster's rs__copy_out). */
 static void app__copy_out(void *dst, const void *src, size_t n)
 {
-#if defined(__SSE2__)
-    if (n % 4 == 0 && ((uintptr_t)dst & 15) == 0) {
-        __m128i *d = dst;
-        const __m128i *s = src; /* tile rows: 64-byte aligned */
-        for (size_t i = 0; i < n / 4; i++) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+    if (n % SIMD_W == 0 && ((uintptr_t)dst & (SIMD_W * 4 - 1)) == 0) {
+        int32_t *d = dst;
+        const int32_t *s = src; /* tile rows: 64-byte aligned */
+        for (size_t i = 0; i < n; i += SIMD_W) simd_stream_i(d + i, simd_load_i(s + i));
         return;
     }
-#endif
     memcpy(dst, src, n * 4);
 }
 
@@ -247,9 +242,7 @@ static void app__tile_store(const app__tile *t, float *const *dst, uint32_t plan
         for (uint32_t k = 0; k < planes; k++) app__copy_out(dst[k] + row, &t->f[k][y * APP_EMBREE_TILE], w);
         if (prim) app__copy_out(prim + row, &t->prim[y * APP_EMBREE_TILE], w);
     }
-#if defined(__SSE2__)
-    _mm_sfence(); /* the streamed rows are visible before the job reports the tile done */
-#endif
+    simd_stream_fence(); /* the streamed rows are visible before the job reports the tile done */
 }
 
 /* The G-buffer values of one traced packet into the tile at (tx, ty), as

@@ -6,7 +6,15 @@
 #ifndef PF_FPENV_H
 #define PF_FPENV_H
 
-#if defined(__x86_64__) || defined(__i386__)
+#include "simd_arch.h"
+
+/* A thread's environment as pf_fpenv_save found it (the library restores
+ * its caller's on the way out). */
+typedef struct pf_fpenv_state {
+    unsigned csr;
+} pf_fpenv_state;
+
+#if SIMD_X86
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 static inline void pf_fpenv_set(void)
@@ -15,8 +23,12 @@ static inline void pf_fpenv_set(void)
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     _MM_SET_ROUNDING_MODE(_MM_ROUND_NEAREST);
 }
+static inline pf_fpenv_state pf_fpenv_save(void) { return (pf_fpenv_state){_mm_getcsr()}; }
+static inline void pf_fpenv_restore(pf_fpenv_state s) { _mm_setcsr(s.csr); }
 #else
 static inline void pf_fpenv_set(void) {}
+static inline pf_fpenv_state pf_fpenv_save(void) { return (pf_fpenv_state){0}; }
+static inline void pf_fpenv_restore(pf_fpenv_state s) { (void)s; }
 #endif
 
 #endif

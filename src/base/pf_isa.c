@@ -1,6 +1,8 @@
 /* pf_isa: ISA names, CPU detection and pinning (see pf_isa.h). */
 #include "pf_isa.h"
 
+#include "simd_arch.h"
+
 #include <string.h>
 
 static const char *const pf__isa_names[] = {"auto", "sse2", "sse4.2", "avx2", "avx512"};
@@ -22,7 +24,7 @@ const char *pf_isa_name(pf_isa isa)
 
 pf_isa pf_isa_detect(void)
 {
-#if defined(__x86_64__) || defined(__i386__)
+#if SIMD_X86
     __builtin_cpu_init();
     /* Embree's AVX-512 path needs F, DQ, CD, BW and VL (Skylake-X). */
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&

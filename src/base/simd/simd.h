@@ -31,12 +31,7 @@
 #ifndef SIMD_H
 #define SIMD_H
 
-/* The one "is this x86?" test of the project. */
-#if defined(__x86_64__) || defined(__i386__)
-#define SIMD_X86 1
-#else
-#define SIMD_X86 0
-#endif
+#include "simd_arch.h" /* SIMD_X86: the one "is this x86?" test of the project */
 
 #if defined(SIMD_FORCE_SCALAR)
 #include "simd_scalar.h"

@@ -28,10 +28,11 @@
  *                           does not move (bitwise), so a static scene
  *                           renders its maps once;
  *   gi_ssvp_second_bounce   (III-C) "uniform sampling on the unit circle":
- *                           the Hammersley set mapped to the unit disc
- *                           (r = sqrt(u), phi = 2 pi v), each point read at
- *                           its paraboloid texel; a second-bounce VPL on every
- *                           texel that hit a surface;
+ *                           the Hammersley set, shifted per cluster, mapped
+ *                           to the unit disc (r = sqrt(u), phi = 2 pi v),
+ *                           each point read at its paraboloid texel; a
+ *                           second-bounce VPL on every texel that hit a
+ *                           surface;
  *   (III-D, shading, is the frame's: gi_indirect.c, with the paper's
  *   edge-aware Gaussian denoise as --filter gaussian.)
  *
@@ -49,13 +50,16 @@
  *   estimate of the light's flux landing on the scene.
  * - Second bounce. A cluster radiates from its centroid what its members
  *   reflect: radiant intensity J(w) = sum_i I_i (n_i . w)^+ (each member
- *   with its own normal, all moved to the centroid). Paraboloid texel t of
- *   the cluster's map receives flux Phi_t = J(w_t) dOmega_t with
- *   dOmega_t = 4 / (1 + r_t^2)^2 * (2 / R)^2 (r_t = |uv| of the texel
- *   centre: the stereographic map's area element). A uniform unit-disc
- *   sample lands in texel t with probability (2 / R)^2 / pi, so with m
- *   samples for the cluster the VPL's flux is
- *   Phi = Phi_t * pi / ((2 / R)^2 m) = J(w_t) * 4 pi / ((1 + r_t^2)^2 m).
+ *   with its own normal, all moved to the centroid). Texel t of the
+ *   cluster's map receives flux Phi_t = J(w_t) dOmega_t; a sample picks it
+ *   with probability pdf(w_t) dOmega_t, so with m samples for the cluster
+ *   the VPL's flux is Phi = J(w_t) / (pdf(w_t) m): J(w_t) pi / (cos_c m)
+ *   for the default cosine-distributed disc, J(w_t) 4 pi / ((1 + r_t^2)^2
+ *   m) for points uniform on the paraboloid map's disc (the paper's
+ *   reading, --param disc=paraboloid; dOmega_t = 4 / (1 + r_t^2)^2 (2 /
+ *   R)^2, r_t = |uv| of the texel centre). The sample points are shifted
+ *   per cluster so that this is unbiased for any m (gi_ssvp_second_bounce,
+ *   issue 14 item 6).
  *
  * Deviations from the paper (README "ssvp"):
  * - Eq. 6 prints the geometry term as (cos theta + cos sigma) / d^2 and
@@ -91,6 +95,13 @@
  *   cheap; on a CPU the unread texels are pure cost.
  * - Second-bounce samples are split evenly over the non-empty clusters (the
  *   paper does not say how they are distributed).
+ * - The second bounce's disc points are cosine-distributed about the
+ *   centroid's normal by default and shifted per cluster
+ *   (gi_ssvp_second_bounce). --param disc=paraboloid takes them uniform on
+ *   the paraboloid map's disc, as the paper does. --param origin=members
+ *   (beyond the paper) traces each sample from a member VPL instead of
+ *   the centroid, the unbiased second bounce the cluster model
+ *   approximates.
  * - The frame's VPL budget (--vpls) caps first + second; with the defaults
  *   (256 + 256) and a smaller budget the two counts are halved to fit
  *   (--vpls 512 gives the paper's configuration); counts given with --param
@@ -99,6 +110,7 @@
  * VPL ids: first bounce k (the Hammersley index), second bounce
  * 0x80000000 | cluster << 16 | sample. Moved flags compare with the previous
  * frame's VPL in the same slot (as gi_ir.c). */
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -107,10 +119,17 @@
 #include "gi_kmeans.h"
 #include "gi_rsm.h"
 #include "gi_vpl.h"
+#include "pf_random.h"
 #include "rs_paraboloid.h"
 
 #define GI__SSVP_MAX_CLUSTERS 64u
 #define GI__SSVP_MAX_SAMPLES 65535u
+#define GI__SSVP_STREAM 0x55u /* pf_random stream of the clusters' sample shifts */
+
+/* --param disc and origin: how a second-bounce sample's unit-disc point
+ * becomes a direction, and where its ray starts (gi_ssvp_second_bounce). */
+enum { GI__SSVP_DISC_COSINE, GI__SSVP_DISC_PARABOLOID };
+enum { GI__SSVP_ORIGIN_CENTROID, GI__SSVP_ORIGIN_MEMBERS };
 
 typedef struct gi__ssvp_map {
     pf_vec3 cpos, cnrm;        /* the centroid the map was rendered from */
@@ -125,6 +144,8 @@ typedef struct gi__ssvp_map {
 typedef struct gi__ssvp_state {
     /* options */
     uint32_t clusters, first, second, map_res, rsm_res, iters, lazy_maps, area_points;
+    uint32_t disc; /* GI__SSVP_DISC_*: how a unit-disc sample picks a cluster map texel */
+    uint32_t origin; /* GI__SSVP_ORIGIN_*: where the second-bounce rays start */
     int first_set, second_set;
     /* k-means state kept between frames */
     pf_vec3 cpos[GI__SSVP_MAX_CLUSTERS], cnrm[GI__SSVP_MAX_CLUSTERS];
@@ -170,7 +191,10 @@ static int gi__has(const gi_params *p, const char *key)
 static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error *err)
 {
     static const char *const known[] = {"clusters", "first",     "second",      "map_res", "rsm_res",
-                                        "iters",    "lazy_maps", "area_points", NULL};
+                                        "iters",    "lazy_maps", "area_points", "disc",    "origin",
+                                        NULL};
+    static const char *const discs[] = {"cosine", "paraboloid", NULL};
+    static const char *const origins[] = {"centroid", "members", NULL};
     *state = NULL;
     pf_result r = gi_params_check(params, "ssvp", known, err);
     if (r != PF_OK) return r;
@@ -183,6 +207,8 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     s->rsm_res = 256;      /* not given by the paper */
     s->iters = GI_KMEANS_MAX_ITER;
     s->area_points = GI_RSM_DEFAULT_AREA_POINTS;
+    s->disc = GI__SSVP_DISC_COSINE;       /* see gi_ssvp_second_bounce */
+    s->origin = GI__SSVP_ORIGIN_CENTROID; /* Sec. III-C */
     if ((r = gi_param_u32(params, "clusters", 1, GI__SSVP_MAX_CLUSTERS, &s->clusters, err)) != PF_OK ||
         (r = gi_param_u32(params, "first", 1, GI__SSVP_MAX_SAMPLES, &s->first, err)) != PF_OK ||
         (r = gi_param_u32(params, "second", 0, GI__SSVP_MAX_SAMPLES, &s->second, err)) != PF_OK ||
@@ -190,7 +216,9 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
         (r = gi_param_u32(params, "rsm_res", GI_RSM_MIN_SIZE, GI_RSM_MAX_SIZE, &s->rsm_res, err)) != PF_OK ||
         (r = gi_param_u32(params, "iters", 1, 100, &s->iters, err)) != PF_OK ||
         (r = gi_param_u32(params, "lazy_maps", 0, 1, &s->lazy_maps, err)) != PF_OK ||
-        (r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &s->area_points, err)) != PF_OK) {
+        (r = gi_param_u32(params, "area_points", 1, GI_RSM_MAX_AREA_POINTS, &s->area_points, err)) != PF_OK ||
+        (r = gi_param_choice(params, "disc", discs, &s->disc, err)) != PF_OK ||
+        (r = gi_param_choice(params, "origin", origins, &s->origin, err)) != PF_OK) {
         gi__ssvp_destroy(s);
         return r;
     }
@@ -387,11 +415,67 @@ static pf_vec3 gi__cluster_intensity(const gi_vpl *first, uint32_t nfirst, const
     return J;
 }
 
+/* Aranha Sec. III-C: m "uniform samples on the unit circle" per cluster, each
+ * read at its texel of the cluster's paraboloid map, one second-bounce VPL
+ * per texel that hit a surface. The paper gives no flux for these VPLs;
+ * softgi's follows Eq. 6's normalisation ("divide the contribution of each
+ * VPL by the probability of it being selected"): the flux sent towards the
+ * sample's direction divided by the sample's probability density and by m,
+ * Phi = J(w) / (pdf(w) m), the intensity then Phi albedo / pi.
+ *
+ * The sample points. The 2D Hammersley set of Eq. 1, shifted by a
+ * per-cluster random offset (xi, zeta) (Cranley-Patterson rotation; the
+ * same every frame, so a static cluster keeps its VPLs):
+ * u = (k + xi) / m, v = radical_inverse_2(k) + zeta (mod 1), then r =
+ * sqrt(u), phi = 2 pi v. Each point is uniform over its own ring of equal
+ * area, so the estimate is unbiased for any m. Issue 14 item 6: without the
+ * shift (u = k / m), point k = 0 sat at r = 0, on the centroid's normal, in
+ * every cluster, and every point at the inner edge of its ring. For a
+ * cluster facing its normal the paraboloid weight J / pdf = 4 pi sum I_i
+ * (1 - u) / (1 + u)^3 (u = r^2: cos = (1 - u) / (1 + u), pdf = (1 + u)^2 /
+ * (4 pi)) falls from 4 pi sum I_i at the centre to 0 at the rim (mean pi
+ * sum I_i), so those points were a left Riemann sum of a falling
+ * function: the cluster's flux came out 1 + 2 / m times
+ * too large for large m (+4.8% at m = 42, +6% at m = 32), 1.58x at m = 4 and
+ * 2.3x at m = 2. With the budget split over more clusters, m shrinks, so the
+ * second bounce got brighter with the cluster count (docs/ssvp.md has the
+ * before/after measurements).
+ *
+ * disc (--param disc=), what the disc point means:
+ * - cosine (the default): the point is lifted to the hemisphere about the
+ *   centroid's normal (Malley's method, z = sqrt(1 - r^2)): pdf = cos_c / pi.
+ *   It is looked up in the same paraboloid map, and the weight uses the
+ *   texel's direction. A cluster whose members face the centroid's normal
+ *   has J(w) = cos_c sum I_i, so every VPL carries exactly pi sum I_i / m.
+ *   That has no sampling error, even at m = 2.
+ * - paraboloid (the paper's reading): the point is the map's own (u, v),
+ *   uniform over its disc, so texel t is picked with probability
+ *   (2 / R)^2 / pi, i.e. pdf = (1 + r_t^2)^2 / (4 pi) per steradian
+ *   (dOmega = 4 / (1 + r^2)^2 du dv). The weights vary 4:1 over the disc,
+ *   so with few samples per cluster the second bounce is noisier.
+ *
+ * origin (--param origin=), where the second-bounce rays start:
+ * - centroid (the paper): the cluster is one point light at its centroid.
+ *   It radiates J(w), what its members reflect, and its map gives the
+ *   visibility. The estimate conserves the members' flux but moves it to the
+ *   centroid, and a k-means centroid can float in the air or sit inside a
+ *   solid (the paper's own caveat in III-B). The flux then lands where the
+ *   centroid would send it, not where the members would: a bias that depends
+ *   on the clusters' shapes (+16% flux at 8 clusters on the Cornell box:
+ *   docs/ssvp.md).
+ * - members (beyond the paper; unbiased): each sample picks a member i
+ *   with probability P_i = lum(I_i) / sum lum(I), stratified (u selects the
+ *   member, and its remainder within the member's interval is the sample's
+ *   u). It traces one ray from the member itself: J = I_i (n_i . w)^+ / P_i,
+ *   with the disc point about n_i. This is the "visibility map for each VPL"
+ *   the paper wishes for (IV-B) at one ray per sample. It needs no cluster
+ *   map; the clusters only split the budget. */
 static void gi_ssvp_second_bounce(gi__ssvp_state *s, const pf_rt *rt, uint32_t nfirst, uint32_t m_total,
                                   gi_vpl_set *out)
 {
     const uint32_t R = s->map_res;
     const gi_vpl *first = out->v; /* the first nfirst VPLs of out, in assign's order */
+    const int members = s->origin == GI__SSVP_ORIGIN_MEMBERS, cosine = s->disc == GI__SSVP_DISC_COSINE;
     uint32_t nonempty = 0;
     for (uint32_t c = 0; c < s->clusters; c++) nonempty += s->members[c] > 0;
     if (!nonempty || !m_total) return;
@@ -402,30 +486,62 @@ static void gi_ssvp_second_bounce(gi__ssvp_state *s, const pf_rt *rt, uint32_t n
         uint32_t m = m_total / nonempty + (rank < m_total % nonempty);
         rank++;
         if (!m) continue;
+        double total = 0.0; /* origin=members: the members' summed luminance */
+        for (uint32_t i = 0; members && i < nfirst; i++)
+            if (s->assign[i] == c) total += (double)pf_luminance(first[i].intensity);
+        if (members && !(total > 0.0)) continue;
         const gi__ssvp_map *map = &s->map[c];
         rs_para_frame fr = rs_para_frame_make(s->cpos[c], s->cnrm[c]);
         pf_vec3 org = pf_rt_offset_origin(s->cpos[c], fr.n, fr.n);
+        /* the cluster's own shift of the point set, the same every frame */
+        const double xi = pf_random(GI__SSVP_STREAM, c, 0, 0), zeta = pf_random(GI__SSVP_STREAM, c, 0, 1);
+        uint32_t src = 0;   /* origin=members: the member u falls in (scanned forward: u grows with k) */
+        double below = 0.0; /* the summed luminance of the members before src */
         for (uint32_t k = 0; k < m; k++) {
-            float u, v;
-            gi__hammersley(k, m, &u, &v);
-            float r = sqrtf(u), ph = 2.0f * PF_PI * v;
+            double u = ((double)k + xi) / (double)m, v = (double)gi__vdc(k) + zeta, p_src = 1.0;
+            if (v >= 1.0) v -= 1.0;
+            if (members) {
+                double x = u * total, l;
+                for (;;) {
+                    while (src < nfirst && s->assign[src] != c) src++;
+                    assert(src < nfirst);
+                    l = (double)pf_luminance(first[src].intensity);
+                    if (x < below + l) break;
+                    below += l, src++;
+                }
+                p_src = l / total;
+                u = (x - below) / l; /* uniform in [0, 1) again */
+                fr = rs_para_frame_make(first[src].pos, first[src].nrm);
+            }
+            float uf = fminf((float)u, 0x1.fffffep-1f), r = sqrtf(uf), ph = 2.0f * PF_PI * (float)v;
             pf_vec2 uv = {r * cosf(ph), r * sinf(ph)};
-            uint32_t t = rs_para_texel_of(R, rs_para_uv_to_dir(uv));
-            pf_vec2 tc = rs_para_texel_uv(R, t % R, t / R);
-            pf_vec3 dl = rs_para_uv_to_dir(tc);
+            pf_vec3 dl = cosine ? pf_v3(uv.x, uv.y, sqrtf(fmaxf(0.0f, 1.0f - uf))) : rs_para_uv_to_dir(uv);
+            uint32_t t = 0;
+            if (!members) { /* the map's texel, and its direction from here on */
+                t = rs_para_texel_of(R, dl);
+                uv = rs_para_texel_uv(R, t % R, t / R);
+                dl = rs_para_uv_to_dir(uv);
+            }
+            /* the sample's probability density per steradian */
+            float q = 1.0f + uv.x * uv.x + uv.y * uv.y;
+            float pdf = cosine ? dl.z * PF_INV_PI : q * q / (4.0f * PF_PI);
+            if (!(pdf > 0.0f)) continue; /* on the horizon: never picked by the cosine density */
             /* the texel's ray, the same expression as gi__map_row's */
             pf_vec3 w = pf_v3_add(pf_v3_add(pf_v3_scale(fr.t, dl.x), pf_v3_scale(fr.b, dl.y)), pf_v3_scale(fr.n, dl.z));
             pf_hit hit;
-            if (s->lazy_maps) {
+            if (members) {
+                pf_ray ray = {first[src].pos, 0.0f, w, INFINITY}; /* already off its surface */
+                hit = pf_rt_intersect1(rt, ray);
+            } else if (s->lazy_maps) {
                 pf_ray ray = {org, 0.0f, w, INFINITY};
                 hit = pf_rt_intersect1(rt, ray); /* the same bits as in a packet (pf_rt.h) */
             } else {
                 hit = map->hit[t];
             }
             if (hit.prim == PF_RT_MISS) continue;
-            pf_vec3 J = gi__cluster_intensity(first, nfirst, s->assign, c, w);
-            float r2 = tc.x * tc.x + tc.y * tc.y, q = 1.0f + r2;
-            float f = 4.0f * PF_PI / (q * q * (float)m) * PF_INV_PI; /* Phi / J, then albedo / pi */
+            pf_vec3 J = members ? pf_v3_scale(first[src].intensity, fmaxf(0.0f, pf_v3_dot(first[src].nrm, w)))
+                                : gi__cluster_intensity(first, nfirst, s->assign, c, w);
+            float f = (float)(1.0 / ((double)pdf * (double)m * p_src)) * PF_INV_PI; /* Phi / J, then albedo / pi */
             pf_vec3 alb;
             gi_vpl *vp = &out->v[out->count++];
             gi__site(rt, &hit, w, &vp->pos, &vp->nrm, &alb);
@@ -465,7 +581,7 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
         uint32_t nf = gi_ssvp_first_bounce(s, n1, out);
         gi_ssvp_cluster(s, in->scene, nf);
         if (n2 && nf) {
-            if (!s->lazy_maps && !gi_ssvp_cluster_maps(s, in))
+            if (!s->lazy_maps && s->origin == GI__SSVP_ORIGIN_CENTROID && !gi_ssvp_cluster_maps(s, in))
                 return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
             gi_ssvp_second_bounce(s, in->rt, nf, n2, out);
         }

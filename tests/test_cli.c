@@ -41,6 +41,11 @@ static void test_usage_errors(void **state)
     tu_softgi_expect("render --param nosuch=1", 2, "method ir has no such parameter");
     tu_softgi_expect("render --vpls 0", 2, "--vpls");
     tu_softgi_expect("render --bounces 0", 2, "--bounces");
+    tu_softgi_expect("render --aa 0", 2, "--aa '0': expected an integer in 1..256");
+    tu_softgi_expect("render --aa 257", 2, "--aa '257': expected an integer in 1..256");
+    tu_softgi_expect("render --aa 2x", 2, "--aa '2x'");
+    tu_softgi_expect("view --taa 1", 2, "--taa '1': expected 0 (off) or 2..256 frames");
+    tu_softgi_expect("sequence x.seq.json --taa 300", 2, "--taa '300'");
     /* 1,000,000 paraboloid maps (31 GiB) exceed the memory budget: refused before allocating, with the hint */
     tu_softgi_expect("render --vpls 1000000 --max-memory 8G -q -o /dev/null/x.png", 1,
                      "use fewer VPLs or --visibility raytrace");
@@ -169,7 +174,8 @@ static const struct {
     {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},
     {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
     {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},
-    {"--moving-light", NULL, {0}},     {"--quality", NULL, {0}},
+    {"--moving-light", NULL, {0}},     {"--quality", NULL, {0}},        {"--aa", "4", {0}},
+    {"--taa", "8", {0}},
 };
 
 /* `softgi CMD --help` as text (pf_cli_usage_command). */
@@ -306,6 +312,9 @@ static void test_wrong_command_options(void **state)
     tu_softgi_expect("bench raster --para-lod 17", 2, "--para-lod '17': expected a number in 0..16");
     tu_softgi_expect("bench frame -q", 2, "-q does not apply to bench frame");
     tu_softgi_expect("render --scenes d", 2, "see softgi render --help");
+    tu_softgi_expect("render --taa 8", 2, "--taa does not apply to render (--taa: only view, sequence and bench frame "
+                                          "take it; one frame has no history to average; render takes --aa N");
+    tu_softgi_expect("reference --aa 4", 2, "--aa does not apply to reference");
     /* options that need another */
     tu_softgi_expect("render --dump-format exr", 2, "--dump-format: only with --dump-stages");
     tu_softgi_expect("render --dump-format tiff --dump-stages d", 2, "--dump-format 'tiff': expected png, exr or both");

@@ -51,7 +51,14 @@
  * below, which `bench raster` uses too). With pipelining the VPL update
  * overlaps the other stages, so its stage boundaries say nothing about a
  * critical path and no table is printed. The profile costs two clock
- * reads per job item (a few thousand items a frame). */
+ * reads per job item (a few thousand items a frame).
+ *
+ * Anti-aliasing (docs/aa.md): --aa N renders every frame with N jittered
+ * samples, --taa N adds the temporal anti-aliasing stage. A stage that runs
+ * once per sample (gi_stage_info.per_sample) then has the sum of its N runs
+ * in its row; two more rows give the per-sample stages' time per sample and
+ * the once-a-frame stages' time, so the cost of each extra sample reads
+ * directly. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include <math.h>
 #include <stddef.h>
@@ -315,6 +322,14 @@ static double bf__stage_ms(const pf_stage_times *t, const char *name)
     return 0.0;
 }
 
+/* 1 when `name` is a stage the frame runs once per anti-aliasing sample. */
+static int bf__per_sample(const char *name)
+{
+    for (int id = 0; id < GI_STAGE_COUNT; id++)
+        if (!strcmp(gi_stage_get((gi_stage_id)id)->name, name)) return gi_stage_get((gi_stage_id)id)->per_sample;
+    return 0;
+}
+
 static uint32_t bf__moved(const gi_frame *f)
 {
     uint32_t n = 0;
@@ -375,7 +390,7 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         out[m].threads = threads;
         out[m].pipeline = modes[m];
         gi_frame_desc fd = {.scene = lit, .rt = rt, .jobs = jobs, .raster = rs, .camera = &cam, .width = BF_W,
-                            .height = BF_H};
+                            .height = BF_H, .aa_samples = o->aa, .taa_frames = o->taa};
         if ((r = gi_frame_create(&f[m], &fd, err)) != PF_OK) break;
         ready++;
         /* the command line's method, --param and --visibility; --vpls and
@@ -537,7 +552,7 @@ static void bf__print_hedman_table2(const bf_result *res, uint32_t n)
 }
 
 static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_result *res, uint32_t n,
-                            uint32_t frames, int moving)
+                            uint32_t frames, int moving, uint32_t aa)
 {
     float r = BF_LIGHT_RADIUS * pf_v3_length(pf_v3_sub(scene->bounds_max, scene->bounds_min));
     printf("\n%s: %u triangles, point light (%g, %g, %g) %g W/sr", bs->name, scene->tri_count,
@@ -565,6 +580,22 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].frame_ms, "100%");
     printf("\n%-28s", "frames/s");
     for (uint32_t c = 0; c < n; c++) printf("  %8.2f %6s", res[c].fps, "");
+    if (aa > 1) { /* --aa N: the rows above hold each per-sample stage's N runs */
+        double per[BF_MAX_CONFIGS], once[BF_MAX_CONFIGS];
+        for (uint32_t c = 0; c < n; c++) {
+            per[c] = once[c] = 0.0;
+            for (uint32_t s = 0; s < res[c].stages.count; s++) {
+                if (bf__per_sample(res[c].stages.name[s])) per[c] += res[c].stages.ms[s];
+                else once[c] += res[c].stages.ms[s];
+            }
+        }
+        char label[64];
+        snprintf(label, sizeof label, "per-sample stages, ms/sample");
+        printf("\n%-28s", label);
+        for (uint32_t c = 0; c < n; c++) printf("  %8.2f %5.1f%%", per[c] / aa, 100.0 * per[c] / aa / res[c].frame_ms);
+        printf("\n%-28s", "once-a-frame stages, ms");
+        for (uint32_t c = 0; c < n; c++) printf("  %8.2f %5.1f%%", once[c], 100.0 * once[c] / res[c].frame_ms);
+    }
     printf("\n%-28s", "VPL management (update) ms");
     for (uint32_t c = 0; c < n; c++)
         printf("  %8.2f %6s", bf__stage_ms(&res[c].stages, BF_UPDATE_STAGE), res[c].pipeline ? "overl." : "serial");
@@ -647,8 +678,9 @@ static void bf__json_stages(const pf_stage_times *t)
 
 /* bench frame honours --threads, --frames, --scenes, --isa, --vpls (one
  * count instead of 256 and 2048), --tiles, --method, --param, --visibility,
- * --pipeline and --moving-light; any other frame option would silently
- * change what is measured, so it is refused. */
+ * --pipeline, --moving-light, --aa and --taa (and the optional stages'
+ * options); any other frame option would silently change what is
+ * measured, so it is refused. */
 static pf_result bf__check_options(const pf_options *o, pf_error *err)
 {
     const char *bad = o->width                 ? "--size"
@@ -674,7 +706,7 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
     if (bad)
         return pf_error_set(err, PF_ERR_ARGUMENT,
                             "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
-                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light)",
+                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --aa, --taa)",
                             bad);
     /* the method and its parameters now, before minutes of scene loading */
     gi_indirect_options io;
@@ -695,6 +727,7 @@ int app_bench_frame(const pf_options *o)
     const char *method = o->method ? o->method : "ir";
     const char *visibility = o->visibility_raytrace ? "raytrace" : o->visibility_ism ? "ism" : "paraboloid";
     uint32_t frames = o->frames ? o->frames : 15;
+    const uint32_t aa = o->aa ? o->aa : 1;
     uint32_t thread_list[2] = {1, 2}, nthreads = 2;
     if (o->threads) thread_list[0] = o->threads, nthreads = 1;
     if (o->threads > pf_jobs_core_count()) {
@@ -714,6 +747,10 @@ int app_bench_frame(const pf_options *o)
            BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm,
            o->moving_light ? "moving" : "static", o->pipeline < 0 ? "off and on" : o->pipeline ? "on" : "off",
            frames);
+    if (aa > 1 || o->taa)
+        printf("anti-aliasing: %u sample%s per pixel (a per-sample stage's row sums its %u runs), temporal "
+               "anti-aliasing %s\n",
+               aa, aa > 1 ? "s" : "", aa, o->taa ? "on" : "off");
     fflush(stdout);
     for (size_t k = 0; k < BF_SCENES; k++) {
         char path[4096];
@@ -726,7 +763,7 @@ int app_bench_frame(const pf_options *o)
         }
         bf_result *res = &results[k * per_scene];
         pf_result r = bf__scene(&scene, &k_scenes[k], vpl_list, nvpls, thread_list, nthreads, isa, o, frames, res, &err);
-        if (r == PF_OK) bf__print_table(&k_scenes[k], &scene, res, per_scene, frames, o->moving_light);
+        if (r == PF_OK) bf__print_table(&k_scenes[k], &scene, res, per_scene, frames, o->moving_light, aa);
         pf_scene_free(&scene);
         if (r != PF_OK) {
             fprintf(stderr, "softgi: bench frame: %s: %s\n", k_scenes[k].name, err.message);
@@ -770,9 +807,9 @@ int app_bench_frame(const pf_options *o)
         bf__json_string(o->params[i]);
     }
     printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"tiles\":[%u,%u],\"frames\":%u,"
-           "\"static_ok\":%s,\"results\":[",
+           "\"aa\":%u,\"taa\":%u,\"static_ok\":%s,\"results\":[",
            visibility, o->pipeline < 0 ? "both" : o->pipeline ? "on" : "off", o->moving_light ? "true" : "false", tn,
-           tm, frames, static_ok ? "true" : "false");
+           tm, frames, aa, o->taa, static_ok ? "true" : "false");
     for (uint32_t i = 0; i < n; i++) {
         const bf_result *r = &results[i];
         printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"pipeline\":%s,\"frame_ms\":%.3f,"

@@ -21,6 +21,10 @@
  * time so far and the last stage finished (app_progress.h; through
  * pf_stage_hook, so the frame knows nothing of it).
  *
+ * --aa N (gi_aa.h): N jittered samples per pixel, averaged in linear
+ * radiance before anything is written; --aa 1 (the default) is the
+ * unjittered frame, bit for bit.
+ *
  * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
  * way, since frame 0 runs the VPL update in place; gi_indirect.h). */
@@ -180,6 +184,10 @@ int app_render(const pf_options *o)
                        frame.ind.ism    ? "imperfect shadow maps"
                        : frame.ind.para ? "paraboloid maps"
                                         : "Embree rays");
+            if (frame.aa.samples > 1)
+                printf("anti-aliasing: %u jittered samples per pixel, averaged (the per-sample stages' times are "
+                       "their sums)\n",
+                       frame.aa.samples);
             pf_stage_print(&t, stdout);
             if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
             else printf("wrote %s\n", out.linear);

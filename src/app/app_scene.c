@@ -297,7 +297,8 @@ pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene
     gi_frame_desc d = {.scene = scene, .rt = rt, .jobs = jobs, .raster = raster, .camera = camera,
                        .width = width, .height = height, .shadow_size = o->shadow_size,
                        .area_strata = o->area_strata, .area_points = o->area_points,
-                       .indirect = with_indirect ? &io : NULL, .indirect_only = o->indirect_only};
+                       .indirect = with_indirect ? &io : NULL, .indirect_only = o->indirect_only,
+                       .aa_samples = o->aa, .taa_frames = o->taa};
     return gi_frame_create(f, &d, err);
 }
 

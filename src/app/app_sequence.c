@@ -41,6 +41,12 @@
  * is the light. --exposure auto is picked on frame 0 and held. Instant Radiosity regenerates every VPL when a light
  * moves (the expected baseline); a moving camera alone moves none.
  *
+ * --aa N renders every frame with N jittered samples per pixel, --taa N
+ * accumulates the frames' jittered samples with reprojection (temporal
+ * anti-aliasing, its history kept from frame to frame like the VPL
+ * method's state: gi_aa.h); neither with --reference, whose path tracer
+ * box-filters every pixel already.
+ *
  * --pipeline on (default off): each frame's VPL update runs as a job
  * alongside the frame and its set is used one frame later (frame 0 is
  * unchanged; frame N >= 1 shades with frame N-1's set; gi_indirect.h,

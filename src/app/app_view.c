@@ -339,6 +339,15 @@ static int view_size_display(view_app *a, uint32_t w, uint32_t h)
 
 /* ------------------------------------------------------------ state changes */
 
+/* Temporal anti-aliasing over `frames` (0: off; gi_aa.h), the frame's
+ * --aa samples kept; restarts its history. */
+static void view_set_taa(view_app *a, uint32_t frames)
+{
+    pf_error err;
+    if (gi_frame_set_aa(&a->frame, a->frame.aa.samples, frames, &err) != PF_OK)
+        view_message(a, "temporal anti-aliasing: %s", err.message);
+}
+
 /* Rebuilds the frame's indirect state with a->want; on failure shows why
  * and goes back to the previous settings. */
 static void view_apply_indirect(view_app *a)
@@ -351,6 +360,7 @@ static void view_apply_indirect(view_app *a)
     if (gi_frame_enable_indirect(&a->frame, &a->want, a->opt->indirect_only, &err) == PF_OK) {
         a->io = a->frame.ind.opt;
         a->want = a->io;
+        if (a->frame.aa.taa.frames) view_set_taa(a, a->frame.aa.taa.frames); /* a new image: a new history */
         return;
     }
     view_message(a, "%s (kept the previous settings)", err.message);
@@ -405,11 +415,19 @@ static void view_cycle_filter(view_app *a)
 }
 
 /* The three optional stages (docs/frame.md): temporal accumulation over 16
- * frames, the indirect light at half resolution, the clamp compensation. */
+ * frames, the indirect light at half resolution, the clamp compensation.
+ * T turns the temporal accumulation of the indirect light and the temporal
+ * anti-aliasing (docs/aa.md: the samples jittered from frame to frame) on
+ * and off together: a still camera then converges to an anti-aliased image
+ * with every VPL group seen. */
 static void view_toggle_temporal(view_app *a)
 {
-    a->want.temporal = a->want.temporal ? 0 : 16;
-    a->indirect_dirty = 1;
+    int on = !(a->want.temporal || a->frame.aa.taa.frames);
+    if (a->frame.indirect) {
+        a->want.temporal = on ? 16 : 0;
+        a->indirect_dirty = 1;
+    }
+    view_set_taa(a, on ? 16 : 0);
 }
 
 static void view_toggle_scale(view_app *a)
@@ -640,7 +658,7 @@ static const char *const view_help[][2] = {
     {"O", "visibility paraboloid, ism, raytrace"},
     {"C", "clamp 400, 1600, 6400, off, 25, 100"},
     {"J", "clamp compensation on / off"},
-    {"T", "temporal accumulation over 16 frames on / off"},
+    {"T", "temporal accumulation and anti-aliasing, 16 frames, on / off"},
     {"U", "indirect light at half resolution on / off"},
     {"- / =", "exposure -/+ 0.5 stop"},
     {"P / space", "pause: the stage stepper"},
@@ -1014,8 +1032,9 @@ static void view_draw_status(view_app *a, view_col *c)
              o->method->name, f->ind.vpls.count, o->vpls, a->vpls_moved, f->ind.maps_rendered, f->ind.n, f->ind.m,
              view_filter_name(o->filter));
     view_block(a, c, line, view_white, 0);
-    snprintf(line, sizeof line, "visibility %s  clamp %s%s  scale %u  temporal %u  exposure %+.1f   H: help", vis, clamp,
-             o->compensate ? " +comp" : "", f->ind.scale, o->temporal, (double)a->exposure);
+    snprintf(line, sizeof line, "visibility %s  clamp %s%s  scale %u  temporal %u  aa %u  taa %u  exposure %+.1f   H: help",
+             vis, clamp, o->compensate ? " +comp" : "", f->ind.scale, o->temporal, f->aa.samples, f->aa.taa.frames,
+             (double)a->exposure);
     view_block(a, c, line, view_white, 0);
 }
 

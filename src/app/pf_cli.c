@@ -9,6 +9,7 @@
 #include "pf_cli.h"
 #include "pf_budget.h"
 #include "pf_imageio.h"
+#include "gi_aa.h"
 #include "gi_indirect.h"
 
 #include <errno.h>
@@ -27,7 +28,8 @@ typedef enum pf__opt_id {
     PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
-    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_COUNT
+    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
+    PF__OPT_COUNT
 } pf__opt_id;
 
 typedef struct pf__opt {
@@ -135,6 +137,14 @@ static const pf__opt k_options[] = {
      "average the indirect light over up to N frames (2..256) with\nreprojection, the tiles' VPL groups rotating "
      "each frame\n(default 0: off; docs/frame.md)",
      NULL},
+    {PF__OPT_AA, "--aa", NULL, "N", FRAME | BF,
+     "anti-aliasing: N jittered samples per pixel (1..256), averaged\nin linear radiance before the tone map "
+     "(default 1: the pixel\ncentres; docs/aa.md)",
+     NULL},
+    {PF__OPT_TAA, "--taa", NULL, "N", V | S | BF,
+     "temporal anti-aliasing: the samples jittered from frame to\nframe, averaged over up to N frames (2..256) with "
+     "reprojection\n(default 0: off; docs/aa.md)",
+     "one frame has no history to average; render takes --aa N"},
     {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", FRAME,
      "overlap the next frame's VPL update with this frame\n(one frame of VPL delay; default off)", NULL},
     {PF__OPT_PIPELINE, "--pipeline", NULL, "on|off", BF, "measure only with or only without pipelining (default: both)",
@@ -638,6 +648,12 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
             r = pf_error_set(err, PF_ERR_ARGUMENT, "--temporal '%s': expected 0 (off) or 2..%u frames", val,
                              GI_INDIRECT_MAX_TEMPORAL);
         break;
+    case PF__OPT_AA: r = pf__uint(a, val, 1, GI_AA_MAX_SAMPLES, &o->aa, err); break;
+    case PF__OPT_TAA:
+        r = pf__uint(a, val, 0, GI_AA_MAX_TAA, &o->taa, err);
+        if (r == PF_OK && o->taa == 1)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--taa '%s': expected 0 (off) or 2..%u frames", val, GI_AA_MAX_TAA);
+        break;
     case PF__OPT_COMPENSATE:
         k = pf__choice(val, "off|on");
         if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--compensate '%s': expected on or off", val);
@@ -736,6 +752,9 @@ static pf_result pf__check_combinations(const pf_options *o, pf_error *err)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
     if (o->dump_format && !o->dump_dir)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format: only with --dump-stages DIR");
+    if (o->reference && (o->aa || o->taa))
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "--aa and --taa: not with --reference (the path tracer box-filters every pixel already)");
     return PF_OK;
 }
 

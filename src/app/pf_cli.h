@@ -85,6 +85,8 @@ typedef struct pf_options {
     uint32_t indirect_scale; /* --indirect-scale N: indirect light at 1/N resolution (0: 1) */
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
+    uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */
+    uint32_t taa;            /* --taa N: temporal anti-aliasing over up to N frames (0: off) */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
     float para_lod;          /* bench raster: --para-lod F, paraboloid maps from levels of detail (0: exact) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */

@@ -21,62 +21,69 @@ const char *gi_buffer_name(gi_buffer_id id) { return (unsigned)id < GI_BUF_COUNT
 static const gi_stage_info gi__stages[GI_STAGE_COUNT] = {
     [GI_STAGE_GBUFFER_RASTER] = {"gbuffer raster (visibility)", 1, "Laine 2007 Sec. 3 step 5, Sec. 5.1",
                                  "G-buffer, visibility: the nearest triangle and its depth per pixel, rasterized",
-                                 0, B(VISIBILITY), gi_stage_gbuffer_raster},
+                                 0, B(VISIBILITY), gi_stage_gbuffer_raster, 1},
     [GI_STAGE_GBUFFER_RAYTRACE] = {"gbuffer (embree)", 1, "Laine 2007 Sec. 3 step 5 (ray-traced, the reference)",
                                    "G-buffer from Embree primary rays: visibility and attributes in one pass", 0,
-                                   B(VISIBILITY) | B(GBUFFER), gi_stage_gbuffer_raytrace},
+                                   B(VISIBILITY) | B(GBUFFER), gi_stage_gbuffer_raytrace, 1},
     [GI_STAGE_GBUFFER_RESOLVE] = {"gbuffer resolve (attributes)", 1, "Laine 2007 Sec. 5.1",
                                   "G-buffer attributes: position, camera-facing normal and albedo of each visible "
                                   "triangle",
-                                  B(VISIBILITY), B(GBUFFER), gi_stage_gbuffer_resolve},
+                                  B(VISIBILITY), B(GBUFFER), gi_stage_gbuffer_resolve, 1},
     [GI_STAGE_SHADOW_MAPS] = {"shadow maps", 2, "Laine 2007 Sec. 6",
                               "Direct light's shadow maps: one map per light (a cube for point lights), reused while "
                               "the light stays",
-                              0, B(SHADOW_MAPS), gi_stage_shadow_maps},
+                              0, B(SHADOW_MAPS), gi_stage_shadow_maps, 0},
     [GI_STAGE_AREA_MAPS] = {"area-light maps", 2, "Brabec 2002 paraboloid maps",
                             "Area lights' maps: paraboloid maps of K fixed emitter points, first frame only", 0,
-                            B(AREA_MAPS), gi_stage_area_shadow_maps},
+                            B(AREA_MAPS), gi_stage_area_shadow_maps, 0},
     [GI_STAGE_DIRECT_SHADOWMAP] = {"direct light (shadow maps)", 2, "Laine 2007 Sec. 3 (beside steps 1-4), Sec. 6",
                                    "Direct light: every light with its 16-tap PCF shadow test, E per pixel",
                                    B(GBUFFER) | B(SHADOW_MAPS) | B(AREA_MAPS), B(DIRECT),
-                                   gi_stage_direct_shadowmap},
+                                   gi_stage_direct_shadowmap, 1},
     [GI_STAGE_DIRECT_RAYTRACE] = {"direct light (shadow rays)", 2, "Laine 2007 Sec. 3 (ray-traced, the reference)",
                                   "Direct light with Embree shadow rays; area lights by stratified samples",
-                                  B(GBUFFER), B(DIRECT), gi_stage_direct_raytrace},
+                                  B(GBUFFER), B(DIRECT), gi_stage_direct_raytrace, 1},
     [GI_STAGE_VPL_UPDATE] = {"VPL update", 3, "Laine 2007 Sec. 3 steps 1-4; survey Sec. 4.1; the method's paper",
                              "VPL set: the method places the VPLs and sets their intensities", B(GBUFFER),
-                             B(VPLS), gi_stage_vpl_update},
+                             B(VPLS), gi_stage_vpl_update, 0},
     [GI_STAGE_VPL_MAPS] = {"VPL paraboloid maps", 4, "Laine 2007 Sec. 3 step 3, Sec. 4.6; Brabec 2002",
                            "VPL shadow maps: paraboloid maps of new and moved VPLs (or every VPL's ISM)", B(VPLS),
-                           B(VPL_MAPS), gi_stage_vpl_shadow_maps},
+                           B(VPL_MAPS), gi_stage_vpl_shadow_maps, 0},
     [GI_STAGE_SPLIT] = {"split", 5, "Laine 2007 Sec. 3 step 6, Sec. 5.1",
                         "Split G-buffer: n x m interleaved tiles, each the image sub-sampled with its own offset",
-                        B(GBUFFER), B(SPLIT), gi_stage_split},
+                        B(GBUFFER), B(SPLIT), gi_stage_split, 1},
     [GI_STAGE_ASSIGN] = {"assign VPLs to tiles", 6, "Laine 2007 Sec. 5.1 and Sec. 7",
                          "Assignment: each VPL to one tile, a surviving VPL keeps its tile", B(VPLS),
-                         B(ASSIGNMENT), gi_stage_assign},
+                         B(ASSIGNMENT), gi_stage_assign, 0},
     [GI_STAGE_ACCUMULATE] = {"accumulate", 7, "Laine 2007 Sec. 3 step 7, Sec. 5.1; survey Sec. 5",
                              "Accumulated: each tile's irradiance from its share of the VPLs, bounded geometry term",
                              B(SPLIT) | B(VPLS) | B(VPL_MAPS) | B(ASSIGNMENT), B(ACCUMULATED),
-                             gi_stage_accumulate},
+                             gi_stage_accumulate, 1},
     [GI_STAGE_COMBINE] = {"combine", 8, "Laine 2007 Sec. 3 step 8, Sec. 5.1",
                           "Combined: the tiles back in image layout; the n x m structured noise is visible (Fig. 4a)",
-                          B(ACCUMULATED), B(COMBINED), gi_stage_combine},
+                          B(ACCUMULATED), B(COMBINED), gi_stage_combine, 1},
     [GI_STAGE_COMPENSATE] = {"compensate", 8, "survey Sec. 5.2; Novak 2011 screen-space bias compensation",
                              "Compensated: the light the clamp removed, gathered from nearby pixels, added back",
-                             B(GBUFFER) | B(DIRECT) | B(COMBINED), B(COMBINED), gi_stage_compensate},
+                             B(GBUFFER) | B(DIRECT) | B(COMBINED), B(COMBINED), gi_stage_compensate, 1},
     [GI_STAGE_FILTER] = {"filter", 9, "Laine 2007 Sec. 3 step 9, Sec. 5.2, Fig. 5",
                          "Filtered: the geometry-aware n x m box filter (or the chosen filter) removes the pattern",
-                         B(GBUFFER) | B(COMBINED), B(FILTERED), gi_stage_filter},
+                         B(GBUFFER) | B(COMBINED), B(FILTERED), gi_stage_filter, 1},
     [GI_STAGE_UPSAMPLE] = {"upsample", 9, "beyond the papers: joint bilateral upsampling (Kopf 2007) with Laine's tests",
                            "Upsampled: the reduced-resolution irradiance to the frame's size, geometry-aware",
-                           B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_upsample},
+                           B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_upsample, 1},
     [GI_STAGE_TEMPORAL] = {"temporal", 9, "beyond the papers: reprojected history (Nehab 2007; Schied 2017)",
                            "Temporal: the filtered irradiance averaged with last frames' at the same surface",
-                           B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_temporal},
+                           B(GBUFFER) | B(FILTERED), B(FILTERED), gi_stage_temporal, 1},
     [GI_STAGE_COMPOSE] = {"compose", 10, "Laine 2007 Sec. 3 (after step 9)",
                           "Final: emission + direct + albedo / pi x filtered indirect, linear RGB",
-                          B(VISIBILITY) | B(GBUFFER) | B(DIRECT) | B(FILTERED), B(FINAL), gi_stage_compose},
+                          B(VISIBILITY) | B(GBUFFER) | B(DIRECT) | B(FILTERED), B(FINAL), gi_stage_compose, 1},
+    [GI_STAGE_AA_RESOLVE] = {"anti-aliasing (average)", 10, "supersampling: the pixel's box filter, N jittered samples "
+                             "(pbrt 3rd ed. Sec. 7.8)",
+                             "Final: the N jittered samples' linear radiance averaged (--aa N)", B(FINAL), B(FINAL),
+                             gi_stage_aa_resolve, 1},
+    [GI_STAGE_TAA] = {"temporal anti-aliasing", 10, "beyond the papers: Yang 2009; Karis 2014 (reprojection, clamp)",
+                      "Final: averaged with the reprojected history of earlier frames, each jittered (--taa N)",
+                      B(VISIBILITY) | B(GBUFFER) | B(FINAL), B(FINAL), gi_stage_taa, 0},
 };
 #undef B
 
@@ -165,6 +172,7 @@ static pf_result gi__frame_init(gi_frame *f, const pf_scene *scene, const pf_rt 
     f->width = width;
     f->height = height;
     f->show_direct = 1;
+    f->aa.samples = 1;
     pf_result r = rs_gbuffer_init(&f->gbuf, width, height, err);
     if (r != PF_OK) return r;
     r = gi_area_lights_build(&f->area, scene, err);
@@ -214,6 +222,7 @@ pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err)
         r = gi_frame_set_area_sampling(f, d->area_strata ? d->area_strata : GI_AREA_DEFAULT_STRATA,
                                        d->area_points ? d->area_points : GI_AREA_DEFAULT_POINTS, err);
     if (r == PF_OK && d->indirect) r = gi_frame_enable_indirect(f, d->indirect, d->indirect_only, err);
+    if (r == PF_OK) r = gi_frame_set_aa(f, d->aa_samples ? d->aa_samples : 1, d->taa_frames, err);
     if (r != PF_OK) gi_frame_free(f);
     return r;
 }
@@ -226,15 +235,23 @@ void gi_frame_free(gi_frame *f)
     gi_indirect_free(&f->ind);
     gi__area_maps_free(&f->area_maps);
     gi_area_lights_free(&f->area);
+    gi_aa_free(&f->aa);
     pf_arena_release(&f->mem); /* direct, final */
     memset(f, 0, sizeof *f);
 }
 
 pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y)
 {
+    return gi_camera_ray_at(cam, width, height, x, y, 0.0f, 0.0f);
+}
+
+pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y, float jx,
+                        float jy)
+{
     pf_ray r;
     r.org = cam->eye;
-    r.dir = pf_camera_ray_dir(cam, width, height, (float)x + 0.5f, (float)y + 0.5f);
+    /* x + 1/2 + 0 is x + 1/2 exactly: the centre's bits for (0, 0) */
+    r.dir = pf_camera_ray_dir(cam, width, height, (float)x + 0.5f + jx, (float)y + 0.5f + jy);
     r.tnear = cam->znear;
     r.tfar = cam->zfar > 0.0f ? cam->zfar : INFINITY;
     return r;
@@ -288,7 +305,8 @@ void gi_stage_gbuffer_raster(gi_frame *f)
 {
     rs_target t = {f->width, f->height, f->gbuf.depth, f->gbuf.prim, NULL};
     rs_pass pass;
-    pass.view_proj = rs_mat4_camera(&f->camera, f->width, f->height);
+    /* the sample's jitter (gi_aa.h): rs_mat4_camera's matrix at the centre */
+    pass.view_proj = gi_aa_view_proj(&f->camera, f->width, f->height, f->aa.jx, f->aa.jy);
     pass.cull = RS_CULL_NONE; /* two-sided shading, like the ray-traced path */
     rs_render(f->raster, &pass, &t, NULL);
 }
@@ -297,8 +315,12 @@ void gi_stage_gbuffer_resolve(gi_frame *f)
 {
     /* the frame's SIMD path: 8 lanes with AVX2, 16 with AVX-512 (same bits) */
     int simd = f->raster ? (int)rs_context_simd(f->raster) : 0;
-    rs_gbuffer_resolve_simd(&f->gbuf, f->scene, f->raster ? rs_context_resolve_table(f->raster) : NULL, &f->camera,
+    /* the resolve traces the pixel centres' rays: a jittered sample's rays
+     * are those of a camera with a tilted forward axis (gi_aa.h) */
+    pf_camera cam = gi_aa_resolve_camera(&f->camera, f->width, f->height, f->aa.jx, f->aa.jy);
+    rs_gbuffer_resolve_simd(&f->gbuf, f->scene, f->raster ? rs_context_resolve_table(f->raster) : NULL, &cam,
                             f->jobs, simd);
+    gi_aa_resolve_depth(f);
 }
 
 pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, int indirect_only, pf_error *err)
@@ -310,17 +332,25 @@ pf_result gi_frame_enable_indirect(gi_frame *f, const gi_indirect_options *opt, 
     return PF_OK;
 }
 
-/* Steps 3-9 (both frames). Pipelined (after frame 0), step 3 is the
- * update job for the next frame, started here unless it started before the
- * G-buffer; steps 4-9 shade with the set made during the previous frame. */
-static void gi__indirect_stages(gi_frame *f)
+/* Steps 3-9 (both frames) of one anti-aliasing sample: the VPL update, its
+ * maps and the assignment with the frame's first sample only (`first`).
+ * Pipelined (after frame 0), step 3 is the update job for the next frame,
+ * started here, after the last sample's G-buffer (`last`: the centre
+ * sample's, which nothing overwrites before the frame ends), unless it
+ * started before the G-buffer; steps 4-9 shade with the set made during the
+ * previous frame. With one sample (the default) first and last are the same
+ * sample and this is the paper's outline. */
+static void gi__indirect_stages(gi_frame *f, int first, int last)
 {
     if (!f->indirect) return;
-    if (f->ind.opt.pipeline && f->ind.have_set) gi_stage_vpl_update_begin(f, 1);
-    else gi__run(f, GI_STAGE_VPL_UPDATE);
-    gi__run(f, GI_STAGE_VPL_MAPS);
+    const int pipelined = f->ind.opt.pipeline && f->ind.have_set;
+    if (pipelined && last) gi_stage_vpl_update_begin(f, 1);
+    if (first) {
+        if (!pipelined) gi__run(f, GI_STAGE_VPL_UPDATE);
+        gi__run(f, GI_STAGE_VPL_MAPS);
+    }
     gi__run(f, GI_STAGE_SPLIT);
-    gi__run(f, GI_STAGE_ASSIGN);
+    if (first) gi__run(f, GI_STAGE_ASSIGN);
     gi__run(f, GI_STAGE_ACCUMULATE);
     gi__run(f, GI_STAGE_COMBINE);
     if (f->ind.opt.compensate) gi__run(f, GI_STAGE_COMPENSATE);
@@ -329,14 +359,23 @@ static void gi__indirect_stages(gi_frame *f)
     if (f->ind.opt.temporal) gi__run(f, GI_STAGE_TEMPORAL);
 }
 
+/* The samples of the frame (gi_aa.h): k-th of N renders sample (k + 1)
+ * mod N, the centre last; each ends by adding its `final` to the average
+ * (N > 1), and the temporal anti-aliasing (--taa) follows the last. */
 void gi_frame_render_raytraced(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
-    gi__run(f, GI_STAGE_GBUFFER_RAYTRACE);
-    if (gi__needs_direct(f)) gi__run(f, GI_STAGE_DIRECT_RAYTRACE);
-    gi__indirect_stages(f);
-    gi__run(f, GI_STAGE_COMPOSE);
+    const uint32_t N = f->aa.samples;
+    for (uint32_t k = 0; k < N; k++) {
+        gi_aa_sample_begin(f, k);
+        gi__run(f, GI_STAGE_GBUFFER_RAYTRACE);
+        if (gi__needs_direct(f)) gi__run(f, GI_STAGE_DIRECT_RAYTRACE);
+        gi__indirect_stages(f, k == 0, k + 1 == N);
+        gi__run(f, GI_STAGE_COMPOSE);
+        if (N > 1) gi__run(f, GI_STAGE_AA_RESOLVE);
+    }
+    if (f->aa.taa.frames) gi__run(f, GI_STAGE_TAA);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
 }
@@ -345,15 +384,23 @@ void gi_frame_render_raster(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
-    gi__run(f, GI_STAGE_GBUFFER_RASTER);
-    gi__run(f, GI_STAGE_GBUFFER_RESOLVE);
-    if (gi__needs_direct(f)) {
-        gi__run(f, GI_STAGE_SHADOW_MAPS);
-        gi__run(f, GI_STAGE_AREA_MAPS);
-        gi__run(f, GI_STAGE_DIRECT_SHADOWMAP);
+    const uint32_t N = f->aa.samples;
+    for (uint32_t k = 0; k < N; k++) {
+        gi_aa_sample_begin(f, k);
+        gi__run(f, GI_STAGE_GBUFFER_RASTER);
+        gi__run(f, GI_STAGE_GBUFFER_RESOLVE);
+        if (gi__needs_direct(f)) {
+            if (k == 0) { /* the lights' maps do not depend on the camera */
+                gi__run(f, GI_STAGE_SHADOW_MAPS);
+                gi__run(f, GI_STAGE_AREA_MAPS);
+            }
+            gi__run(f, GI_STAGE_DIRECT_SHADOWMAP);
+        }
+        gi__indirect_stages(f, k == 0, k + 1 == N);
+        gi__run(f, GI_STAGE_COMPOSE);
+        if (N > 1) gi__run(f, GI_STAGE_AA_RESOLVE);
     }
-    gi__indirect_stages(f);
-    gi__run(f, GI_STAGE_COMPOSE);
+    if (f->aa.taa.frames) gi__run(f, GI_STAGE_TAA);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
     /* the G-buffer's and the shadow maps' passes, all at once */

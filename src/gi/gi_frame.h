@@ -26,14 +26,23 @@
  *                          gi_stage_temporal           (--temporal N only: reprojected history, rotated
  *                                                       VPL groups)
  *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
+ *                          gi_stage_aa_resolve         (--aa N > 1 only: the samples' average)
+ *                          gi_stage_taa                (--taa N only: temporal anti-aliasing)
  *
  *   gi_frame_render_raytraced (--raytrace, the reference):
  *   1. G-buffer            gi_stage_gbuffer_raytrace   (Embree primary rays)
  *   2. direct light        gi_stage_direct_raytrace    (shadow rays; area lights: stratified samples)
- *   3. compose             gi_stage_compose
+ *   3. compose             gi_stage_compose            (then the two anti-aliasing stages, as above)
  *
  * (steps 3-9 run when gi_frame_enable_indirect was called; the ray-traced
  * frame runs them too, with its G-buffer).
+ *
+ * Anti-aliasing (gi_aa.h): with --aa N the stages that depend on the camera
+ * (the G-buffer, the direct light, split, accumulate .. compose: the table's
+ * `per_sample` rows) run once for each of N jittered samples and
+ * gi_stage_aa_resolve averages their `final`; the others (shadow maps, area
+ * maps, VPL update, VPL maps, assign) run once, with the first sample. With
+ * --aa 1 (the default) the frame is the outline above, bit for bit.
  *
  * With gi_indirect_options.pipeline (--pipeline on), step 3 is the update
  * for the next frame, run as a job that overlaps the frame (from before step
@@ -53,6 +62,7 @@
 #include "rs_gbuffer.h"
 #include "rs_raster.h"
 #include "rs_shadow.h"
+#include "gi_aa.h"
 #include "gi_area.h"
 #include "gi_indirect.h"
 #include "rs_paraboloid.h"
@@ -106,6 +116,8 @@ typedef enum gi_stage_id {
     GI_STAGE_UPSAMPLE,
     GI_STAGE_TEMPORAL,
     GI_STAGE_COMPOSE,
+    GI_STAGE_AA_RESOLVE,
+    GI_STAGE_TAA,
     GI_STAGE_COUNT
 } gi_stage_id;
 
@@ -117,6 +129,7 @@ typedef struct gi_stage_info {
     const char *caption;    /* what it does, one line */
     uint32_t reads, writes; /* GI_BUFFER_BIT masks */
     void (*run)(struct gi_frame *f);
+    int per_sample;         /* runs once per anti-aliasing sample (--aa N, gi_aa.h); else once a frame */
 } gi_stage_info;
 
 /* The table entry of a stage (NULL for an id out of range). */
@@ -197,6 +210,7 @@ typedef struct gi_frame {
     float *direct; /* RGB, width*height*3 */
     float *final;  /* RGB, width*height*3 */
     pf_stage_times times;
+    gi_aa aa;      /* anti-aliasing: samples per pixel, the sample being rendered, TAA (gi_aa.h) */
 } gi_frame;
 
 /* What a frame is set up with (sokol style: zero means the default). */
@@ -212,6 +226,8 @@ typedef struct gi_frame_desc {
     uint32_t area_points;        /* rasterized area lights: K points (0: GI_AREA_DEFAULT_POINTS) */
     const gi_indirect_options *indirect; /* NULL: no indirect light (steps 3-9 off) */
     int indirect_only;           /* with indirect: no emission and direct light in the image */
+    uint32_t aa_samples;         /* jittered samples per pixel, 1..GI_AA_MAX_SAMPLES (0: 1, the pixel centres) */
+    uint32_t taa_frames;         /* temporal anti-aliasing over up to N frames, 2..GI_AA_MAX_TAA (0: off) */
 } gi_frame_desc;
 
 /* Sets up a frame from d: its buffers, the area-light sampling and, with
@@ -242,6 +258,10 @@ pf_result gi_frame_set_area_sampling(gi_frame *f, uint32_t strata, uint32_t poin
 /* The primary ray through the centre of pixel (x, y): dir is scaled so that
  * t along it equals view depth. */
 pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y);
+/* The same through the image point (x + 1/2 + jx, y + 1/2 + jy): an
+ * anti-aliasing sample (gi_aa.h); gi_camera_ray's bits for (0, 0). */
+pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y, float jx,
+                        float jy);
 
 /* Stages. */
 void gi_stage_gbuffer_raytrace(gi_frame *f);

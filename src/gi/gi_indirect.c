@@ -588,8 +588,12 @@ void gi_stage_accumulate(gi_frame *f)
     gi_indirect *ind = &f->ind;
     uint32_t T = ind->n * ind->m, rows = 0;
     /* with temporal accumulation, frame k's tiles shade with the groups
-     * rotated by k (gi_indirect_tile_group) */
-    ind->shift = ind->opt.temporal ? ind->temporal_frames % T : 0;
+     * rotated by k (gi_indirect_tile_group); with anti-aliasing samples
+     * (gi_aa.h), sample s of frame k by k N + s, and without temporal
+     * accumulation by the sample's pattern index (the TAA's frame included),
+     * so each sample sees other groups; 0 for one sample of a plain frame */
+    uint64_t rot = ind->opt.temporal ? (uint64_t)ind->temporal_frames * f->aa.samples + f->aa.sample : f->aa.index;
+    ind->shift = (uint32_t)(rot % T);
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
     pf_jobs_parallel_for(f->jobs, gi__accumulate_row, f, T * rows, 1);
 }
@@ -908,7 +912,10 @@ void gi_stage_upsample(gi_frame *f)
  *   E = H + (E_new - H) / min(n + 1, N),
  * so a static view converges like an average of N frames and a moving light
  * or changing VPLs are followed within N frames (the lag is the price; N is
- * the knob). Nearest-pixel reprojection, no clamping of the history. */
+ * the knob). Nearest-pixel reprojection, no clamping of the history.
+ * Anti-aliasing samples (--aa N, gi_aa.h): every sample blends with last
+ * frame's history; only the last one rendered, the centre sample, writes
+ * this frame's history and advances the frame count. */
 typedef struct gi__temporal_ctx {
     gi_frame *f;
     const float *hp[3], *hn[3], *h;
@@ -918,6 +925,7 @@ typedef struct gi__temporal_ctx {
     uint32_t *oprim;
     uint16_t *ocount;
     int have;  /* a history exists */
+    int write; /* this sample writes the history (o, oprim, ocount, op, on) */
     float th, ta; /* last camera: tan(fov / 2), and its aspect-scaled value */
 } gi__temporal_ctx;
 
@@ -935,9 +943,11 @@ static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
         size_t i = (size_t)y * W + x;
         float *e = ind->filtered + 3 * i;
         uint32_t prim = g->prim[i];
-        c->op[0][i] = g->pos_x[i], c->op[1][i] = g->pos_y[i], c->op[2][i] = g->pos_z[i];
-        c->on[0][i] = g->nrm_x[i], c->on[1][i] = g->nrm_y[i], c->on[2][i] = g->nrm_z[i];
-        c->oprim[i] = prim;
+        if (c->write) {
+            c->op[0][i] = g->pos_x[i], c->op[1][i] = g->pos_y[i], c->op[2][i] = g->pos_z[i];
+            c->on[0][i] = g->nrm_x[i], c->on[1][i] = g->nrm_y[i], c->on[2][i] = g->nrm_z[i];
+            c->oprim[i] = prim;
+        }
         uint32_t n = 0;
         size_t j = SIZE_MAX;
         if (c->have && prim != RS_GBUFFER_EMPTY) {
@@ -962,6 +972,7 @@ static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
             float inv = 1.0f / (float)m;
             for (int ch = 0; ch < 3; ch++) e[ch] = h[ch] + (e[ch] - h[ch]) * inv;
         }
+        if (!c->write) continue;
         memcpy(c->o + 3 * i, e, 3 * sizeof(float));
         c->ocount[i] = (uint16_t)(prim != RS_GBUFFER_EMPTY ? m : 0);
     }
@@ -982,9 +993,11 @@ void gi_stage_temporal(gi_frame *f)
     c.h = ind->hist[prev], c.hprim = ind->hist_prim[prev], c.hcount = ind->hist_n[prev];
     c.o = ind->hist[next], c.oprim = ind->hist_prim[next], c.ocount = ind->hist_n[next];
     c.have = ind->temporal_frames > 0;
+    c.write = f->aa.sample == 0;
     c.th = tanf(0.5f * ind->hist_camera.yfov);
     c.ta = c.th * (float)f->width / (float)f->height;
     pf_jobs_parallel_for(f->jobs, gi__temporal_row, &c, f->height, 8);
+    if (!c.write) return;
     ind->hist_cur = next;
     ind->hist_camera = f->camera;
     ind->temporal_frames++;

@@ -22,7 +22,9 @@ static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
         uint32_t n = f->width - x0 < PF_RT_WIDTH ? f->width - x0 : PF_RT_WIDTH;
         pf_ray rays[PF_RT_WIDTH];
         pf_hit hits[PF_RT_WIDTH];
-        for (uint32_t i = 0; i < n; i++) rays[i] = gi_camera_ray(&f->camera, f->width, f->height, x0 + i, y);
+        /* the anti-aliasing sample's offset (gi_aa.h; (0, 0): the pixel centres) */
+        for (uint32_t i = 0; i < n; i++)
+            rays[i] = gi_camera_ray_at(&f->camera, f->width, f->height, x0 + i, y, f->aa.jx, f->aa.jy);
         pf_rt_intersect(f->rt, rays, hits, n);
         for (uint32_t i = 0; i < n; i++) {
             size_t p = (size_t)y * f->width + x0 + i;
@@ -59,13 +61,16 @@ void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__
 /* Irradiance at a visible point from the area lights: S = strata^2
  * stratified emitter samples (see gi_frame.h), shadow rays in packets of 8,
  * summed in sample order. Random numbers: pf_random(pixel, sample,
- * GI__AREA_STREAM, dim), a hash of stable ids only. */
-#define GI__AREA_STREAM 0x41524541u /* "AREA": a vertex index no path reaches */
+ * GI__AREA_STREAM + j, dim), a hash of stable ids only; j is the
+ * anti-aliasing sample's pattern index (gi_aa.h), 0 for the pixel centre, so
+ * the samples of one pixel draw other emitter points. */
+#define GI__AREA_STREAM 0x41524541u /* "AREA": a vertex index no path reaches (nor does it plus j < 2^16) */
 static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm, pf_vec3 ng)
 {
     uint32_t sd = f->area_strata, S = sd * sd;
+    const uint32_t stream = GI__AREA_STREAM + f->aa.index;
     /* per-pixel rotation of the (u1, u2) points (Cranley-Patterson) */
-    float r1 = pf_random(pixel, 0, GI__AREA_STREAM, 1), r2 = pf_random(pixel, 0, GI__AREA_STREAM, 2);
+    float r1 = pf_random(pixel, 0, stream, 1), r2 = pf_random(pixel, 0, stream, 2);
     pf_vec3 sum = pf_v3(0, 0, 0);
     for (uint32_t k0 = 0; k0 < S; k0 += PF_RT_WIDTH) {
         uint32_t n = S - k0 < PF_RT_WIDTH ? S - k0 : PF_RT_WIDTH, m = 0;
@@ -73,7 +78,7 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
         pf_vec3 irr[PF_RT_WIDTH];
         for (uint32_t i = 0; i < n; i++) {
             uint32_t k = k0 + i;
-            double u0 = ((double)k + pf_random(pixel, k, GI__AREA_STREAM, 0)) / S;
+            double u0 = ((double)k + pf_random(pixel, k, stream, 0)) / S;
             float u1 = (float)gi_halton(k, 2) + r1, u2 = (float)gi_halton(k, 3) + r2;
             u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
             u2 -= u2 >= 1.0f ? 1.0f : 0.0f;

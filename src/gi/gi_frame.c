@@ -258,34 +258,41 @@ pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, u
 }
 
 /* Compose: emission of the visible surface + direct light + albedo / pi x
- * the filtered indirect irradiance. Misses are black. */
-typedef struct gi__compose_ctx {
-    gi_frame *f;
-} gi__compose_ctx;
+ * the filtered indirect irradiance. Misses are black. Its inputs and its
+ * output, explicitly (the stage table's reads and writes): */
+typedef struct gi__compose_io {
+    const pf_scene *scene;   /* emission, through the triangle's material */
+    const rs_gbuffer *gbuf;  /* VISIBILITY (prim) and GBUFFER (albedo) */
+    const float *direct;     /* DIRECT; NULL: not shown (emission neither) */
+    const float *filtered;   /* FILTERED; NULL: no indirect light */
+    float *final;            /* FINAL */
+    uint32_t width;
+} gi__compose_io;
 
 static void gi__compose_rows(void *ctx, uint32_t row, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = ((gi__compose_ctx *)ctx)->f;
-    for (uint32_t x = 0; x < f->width; x++) {
-        size_t i = (size_t)row * f->width + x;
-        uint32_t prim = f->gbuf.prim[i];
+    const gi__compose_io *io = ctx;
+    for (uint32_t x = 0; x < io->width; x++) {
+        size_t i = (size_t)row * io->width + x;
+        uint32_t prim = io->gbuf->prim[i];
         float e[3] = {0, 0, 0};
-        if (prim != RS_GBUFFER_EMPTY && f->show_direct)
-            memcpy(e, f->scene->materials[f->scene->tri_material[prim]].emission, sizeof e);
-        const float alb[3] = {f->gbuf.alb_r[i], f->gbuf.alb_g[i], f->gbuf.alb_b[i]};
+        if (prim != RS_GBUFFER_EMPTY && io->direct)
+            memcpy(e, io->scene->materials[io->scene->tri_material[prim]].emission, sizeof e);
+        const float alb[3] = {io->gbuf->alb_r[i], io->gbuf->alb_g[i], io->gbuf->alb_b[i]};
         for (int c = 0; c < 3; c++) {
-            float v = e[c] + (f->show_direct ? f->direct[3 * i + c] : 0.0f);
-            if (f->indirect) v += alb[c] * PF_INV_PI * f->ind.filtered[3 * i + c];
-            f->final[3 * i + c] = v;
+            float v = e[c] + (io->direct ? io->direct[3 * i + c] : 0.0f);
+            if (io->filtered) v += alb[c] * PF_INV_PI * io->filtered[3 * i + c];
+            io->final[3 * i + c] = v;
         }
     }
 }
 
 void gi_stage_compose(gi_frame *f)
 {
-    gi__compose_ctx ctx = {f};
-    pf_jobs_parallel_for(f->jobs, gi__compose_rows, &ctx, f->height, 8);
+    const gi__compose_io io = {f->scene, &f->gbuf, f->show_direct ? f->direct : NULL,
+                               f->indirect ? f->ind.filtered : NULL, f->final, f->width};
+    pf_jobs_parallel_for(f->jobs, gi__compose_rows, (void *)&io, f->height, 8);
 }
 
 /* Direct light is computed when the image shows it, and for the clamp

@@ -354,19 +354,40 @@ static const rs_gbuffer *gi__indirect_gbuffer(const gi_frame *f)
     return f->ind.scale > 1 ? &f->ind.low : &f->gbuf;
 }
 
+/* The interleave tiles' layout, as split and combine read it: tile column i
+ * of tile row j holds the pixels (a n + i, b m + j); tile t = j n + i starts
+ * at tile_x0[t] in the tile-layout planes and is tile_w[t] wide. */
+typedef struct gi__tiles {
+    uint32_t n, m, w;  /* tiles per row and column; the indirect image's width */
+    const uint32_t *x0; /* tile_x0 */
+    const uint32_t *tw; /* tile_w */
+} gi__tiles;
+
+static gi__tiles gi__tiles_of(const gi_indirect *ind) { return (gi__tiles){ind->n, ind->m, ind->w, ind->tile_x0, ind->tile_w}; }
+
+/* Split (step 5): its inputs and outputs, explicitly (the stage table's
+ * reads and writes). */
+typedef struct gi__split_io {
+    const rs_gbuffer *gbuf; /* GBUFFER: the frame's */
+    rs_gbuffer *low;        /* scale > 1: the reduced G-buffer, filled here first (NULL at scale 1) */
+    uint32_t scale, width;  /* opt.scale; the frame's width */
+    gi__tiles tiles;
+    float *px, *py, *pz, *nx, *ny, *nz; /* SPLIT: position and normal planes, tile layout */
+    uint32_t *valid;                    /* SPLIT: 1 where a surface was hit */
+} gi__split_io;
+
 /* Reduced resolution (opt.scale s > 1): row y of the indirect image takes
  * the G-buffer's pixels (s X, s y), the top-left pixel of each s x s block,
  * so sample X of the indirect image sits exactly on a frame pixel (the
  * upsampling below relies on it). Only what the indirect stages read is
  * copied: position, normal, triangle id. */
-static void gi__sample_row(gi_frame *f, uint32_t y)
+static void gi__sample_row(const gi__split_io *io, uint32_t y)
 {
-    gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    rs_gbuffer *lo = &ind->low;
-    const uint32_t s = ind->scale;
-    for (uint32_t x = 0; x < ind->w; x++) {
-        size_t i = (size_t)y * s * f->width + (size_t)x * s, k = (size_t)y * ind->w + x;
+    const rs_gbuffer *g = io->gbuf;
+    rs_gbuffer *lo = io->low;
+    const uint32_t s = io->scale;
+    for (uint32_t x = 0; x < io->tiles.w; x++) {
+        size_t i = (size_t)y * s * io->width + (size_t)x * s, k = (size_t)y * io->tiles.w + x;
         lo->pos_x[k] = g->pos_x[i], lo->pos_y[k] = g->pos_y[i], lo->pos_z[k] = g->pos_z[i];
         lo->nrm_x[k] = g->nrm_x[i], lo->nrm_y[k] = g->nrm_y[i], lo->nrm_z[k] = g->nrm_z[i];
         lo->prim[k] = g->prim[i];
@@ -379,24 +400,33 @@ static void gi__sample_row(gi_frame *f, uint32_t y)
 static void gi__split_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    gi_indirect *ind = &f->ind;
-    if (ind->scale > 1) gi__sample_row(f, y);
-    const rs_gbuffer *g = gi__indirect_gbuffer(f);
-    const size_t row = (size_t)y * ind->w;
-    for (uint32_t i = 0; i < ind->n && i < ind->w; i++) {
-        uint32_t t = (y % ind->m) * ind->n + i;
-        uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
-        for (uint32_t x = i; x < ind->w; x += ind->n, k++) {
+    const gi__split_io *io = p;
+    const gi__tiles *tl = &io->tiles;
+    if (io->low) gi__sample_row(io, y);
+    const rs_gbuffer *g = io->low ? io->low : io->gbuf;
+    const size_t row = (size_t)y * tl->w;
+    for (uint32_t i = 0; i < tl->n && i < tl->w; i++) {
+        uint32_t t = (y % tl->m) * tl->n + i;
+        uint32_t k = tl->x0[t] + (y / tl->m) * tl->tw[t];
+        for (uint32_t x = i; x < tl->w; x += tl->n, k++) {
             size_t s = row + x;
-            ind->split_px[k] = g->pos_x[s], ind->split_py[k] = g->pos_y[s], ind->split_pz[k] = g->pos_z[s];
-            ind->split_nx[k] = g->nrm_x[s], ind->split_ny[k] = g->nrm_y[s], ind->split_nz[k] = g->nrm_z[s];
-            ind->split_valid[k] = g->prim[s] != RS_GBUFFER_EMPTY;
+            io->px[k] = g->pos_x[s], io->py[k] = g->pos_y[s], io->pz[k] = g->pos_z[s];
+            io->nx[k] = g->nrm_x[s], io->ny[k] = g->nrm_y[s], io->nz[k] = g->nrm_z[s];
+            io->valid[k] = g->prim[s] != RS_GBUFFER_EMPTY;
         }
     }
 }
 
-void gi_stage_split(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__split_row, f, f->ind.h, 8); }
+void gi_stage_split(gi_frame *f)
+{
+    gi_indirect *ind = &f->ind;
+    const gi__split_io io = {&f->gbuf,     ind->scale > 1 ? &ind->low : NULL,
+                             ind->scale,   f->width,
+                             gi__tiles_of(ind),
+                             ind->split_px, ind->split_py, ind->split_pz, ind->split_nx, ind->split_ny, ind->split_nz,
+                             ind->split_valid};
+    pf_jobs_parallel_for(f->jobs, gi__split_row, (void *)&io, ind->h, 8);
+}
 
 /* ---------------------------------------------------------- 6. assign */
 
@@ -600,21 +630,33 @@ void gi_stage_accumulate(gi_frame *f)
 
 /* ---------------------------------------------------------- 8. combine */
 
+/* Combine (step 8): ACCUMULATED (split_e, tile layout) in, COMBINED (image
+ * layout) out. */
+typedef struct gi__combine_io {
+    gi__tiles tiles;
+    const float *split_e; /* ACCUMULATED */
+    float *combined;      /* COMBINED */
+} gi__combine_io;
+
 static void gi__combine_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    gi_indirect *ind = &f->ind;
-    const size_t row = (size_t)y * ind->w;
-    for (uint32_t i = 0; i < ind->n && i < ind->w; i++) { /* as gi__split_row */
-        uint32_t t = (y % ind->m) * ind->n + i;
-        uint32_t k = ind->tile_x0[t] + (y / ind->m) * ind->tile_w[t];
-        for (uint32_t x = i; x < ind->w; x += ind->n, k++)
-            memcpy(ind->combined + 3 * (row + x), ind->split_e + 3 * (size_t)k, 3 * sizeof(float));
+    const gi__combine_io *io = p;
+    const gi__tiles *tl = &io->tiles;
+    const size_t row = (size_t)y * tl->w;
+    for (uint32_t i = 0; i < tl->n && i < tl->w; i++) { /* as gi__split_row */
+        uint32_t t = (y % tl->m) * tl->n + i;
+        uint32_t k = tl->x0[t] + (y / tl->m) * tl->tw[t];
+        for (uint32_t x = i; x < tl->w; x += tl->n, k++)
+            memcpy(io->combined + 3 * (row + x), io->split_e + 3 * (size_t)k, 3 * sizeof(float));
     }
 }
 
-void gi_stage_combine(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__combine_row, f, f->ind.h, 8); }
+void gi_stage_combine(gi_frame *f)
+{
+    const gi__combine_io io = {gi__tiles_of(&f->ind), f->ind.split_e, f->ind.combined};
+    pf_jobs_parallel_for(f->jobs, gi__combine_row, (void *)&io, f->ind.h, 8);
+}
 
 /* ---------------------------------------------------------- 8b. compensate */
 

@@ -881,17 +881,26 @@ static inline int gi__up_ok(const gi__up_planes *lo, size_t k, pf_vec3 p, pf_vec
     return d2 < a2 && nd > beta ? 2 : 1;
 }
 
+/* Upsample's inputs and output, explicitly (the stage table's reads and
+ * writes): the frame's G-buffer, the reduced one and the reduced
+ * irradiance in, FILTERED at the frame's size out. */
+typedef struct gi__upsample_io {
+    const rs_gbuffer *gbuf; /* GBUFFER, the frame's */
+    gi__up_planes lo;       /* the reduced G-buffer and filtered_low */
+    float *filtered;        /* FILTERED */
+    uint32_t s, w, h, W;    /* scale, reduced size, frame width */
+    float a2, beta;         /* the filter's tests */
+} gi__upsample_io;
+
 static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    const gi__up_planes lo = {ind->low.pos_x, ind->low.pos_y, ind->low.pos_z, ind->low.nrm_x,
-                              ind->low.nrm_y, ind->low.nrm_z, ind->low.prim, ind->filtered_low};
-    float *restrict filtered = ind->filtered;
-    const uint32_t s = ind->scale, w = ind->w, h = ind->h, W = f->width;
-    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta, inv_s = 1.0f / (float)s;
+    const gi__upsample_io *io = p;
+    const rs_gbuffer *g = io->gbuf;
+    const gi__up_planes lo = io->lo;
+    float *restrict filtered = io->filtered;
+    const uint32_t s = io->s, w = io->w, h = io->h, W = io->W;
+    const float a2 = io->a2, beta = io->beta, inv_s = 1.0f / (float)s;
     const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0;
     const float ty = (float)(y - Y0 * s) * inv_s;
     for (uint32_t x = 0; x < W; x++) {
@@ -934,7 +943,19 @@ static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
 
 void gi_stage_upsample(gi_frame *f)
 {
-    if (f->ind.scale > 1) pf_jobs_parallel_for(f->jobs, gi__upsample_row, f, f->height, 8);
+    const gi_indirect *ind = &f->ind;
+    if (ind->scale <= 1) return;
+    const gi__upsample_io io = {&f->gbuf,
+                                {ind->low.pos_x, ind->low.pos_y, ind->low.pos_z, ind->low.nrm_x, ind->low.nrm_y,
+                                 ind->low.nrm_z, ind->low.prim, ind->filtered_low},
+                                ind->filtered,
+                                ind->scale,
+                                ind->w,
+                                ind->h,
+                                f->width,
+                                ind->alpha * ind->alpha,
+                                ind->opt.beta};
+    pf_jobs_parallel_for(f->jobs, gi__upsample_row, (void *)&io, f->height, 8);
 }
 
 /* ---------------------------------------------------------- 9c. temporal */
@@ -958,8 +979,15 @@ void gi_stage_upsample(gi_frame *f)
  * Anti-aliasing samples (--aa N, gi_aa.h): every sample blends with last
  * frame's history; only the last one rendered, the centre sample, writes
  * this frame's history and advances the frame count. */
+/* The temporal stage's inputs and outputs, explicitly (the stage table's
+ * reads and writes: GBUFFER and FILTERED in, FILTERED out, and the
+ * history, read from one buffer pair and written to the other). */
 typedef struct gi__temporal_ctx {
-    gi_frame *f;
+    const rs_gbuffer *gbuf;  /* GBUFFER */
+    float *filtered;         /* FILTERED, blended in place */
+    const pf_camera *pc;     /* last frame's camera */
+    uint32_t W, H, N;        /* frame size; opt.temporal */
+    float a2, beta;          /* the filter's tests */
     const float *hp[3], *hn[3], *h;
     const uint32_t *hprim;
     const uint16_t *hcount;
@@ -974,16 +1002,14 @@ typedef struct gi__temporal_ctx {
 static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi__temporal_ctx *c = p;
-    gi_frame *f = c->f;
-    gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = &f->gbuf;
-    const pf_camera *pc = &ind->hist_camera;
-    const uint32_t W = f->width, H = f->height, N = ind->opt.temporal;
-    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
+    const gi__temporal_ctx *c = p;
+    const rs_gbuffer *g = c->gbuf;
+    const pf_camera *pc = c->pc;
+    const uint32_t W = c->W, H = c->H, N = c->N;
+    const float a2 = c->a2, beta = c->beta;
     for (uint32_t x = 0; x < W; x++) {
         size_t i = (size_t)y * W + x;
-        float *e = ind->filtered + 3 * i;
+        float *e = c->filtered + 3 * i;
         uint32_t prim = g->prim[i];
         if (c->write) {
             c->op[0][i] = g->pos_x[i], c->op[1][i] = g->pos_y[i], c->op[2][i] = g->pos_z[i];
@@ -1027,7 +1053,11 @@ void gi_stage_temporal(gi_frame *f)
     const int prev = ind->hist_cur, next = 1 - prev;
     gi__temporal_ctx c;
     memset(&c, 0, sizeof c);
-    c.f = f;
+    c.gbuf = &f->gbuf;
+    c.filtered = ind->filtered;
+    c.pc = &ind->hist_camera;
+    c.W = f->width, c.H = f->height, c.N = ind->opt.temporal;
+    c.a2 = ind->alpha * ind->alpha, c.beta = ind->opt.beta;
     for (int k = 0; k < 3; k++) {
         c.hp[k] = ind->hist_p[prev][k], c.hn[k] = ind->hist_nrm[prev][k];
         c.op[k] = ind->hist_p[next][k], c.on[k] = ind->hist_nrm[next][k];

@@ -549,34 +549,48 @@ pf_vec3 gi_vpl_irradiance(const gi_vpl *v, pf_vec3 p, pf_vec3 n, float b, pf_vec
 }
 
 
+/* The accumulation's inputs and output, explicitly (the stage table's
+ * reads: SPLIT, VPLS, VPL_MAPS, ASSIGNMENT; writes: ACCUMULATED). */
+typedef struct gi__accumulate_io {
+    gi_accumulate_in in;              /* the VPLs, their lists and maps (the kernels' input) */
+    const pf_rt *rt;                  /* --visibility raytrace (no atlas): Embree's scene */
+    const gi_indirect_kernels *kt;    /* the SIMD path's kernels, NULL on the scalar path */
+    uint32_t T, rows;                 /* tiles; the tallest tile's rows */
+    const uint32_t *tile_x0, *tile_w, *tile_h; /* the tile layout */
+    const uint32_t *assign_start;     /* ASSIGNMENT: group g's VPLs at assign[assign_start[g]..[g + 1]) */
+    uint32_t shift;                   /* the tiles' group rotation (gi_indirect_tile_group) */
+    const float *px, *py, *pz, *nx, *ny, *nz; /* SPLIT */
+    const uint32_t *valid;            /* SPLIT */
+    float *split_e;                   /* ACCUMULATED */
+} gi__accumulate_io;
+
 static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    gi_indirect *ind = &f->ind;
-    uint32_t T = ind->n * ind->m, rows = 0;
-    for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
+    const gi__accumulate_io *io = p;
+    const gi_accumulate_in *in = &io->in;
+    uint32_t T = io->T, rows = io->rows;
     uint32_t t = item / rows, row = item % rows;
-    if (t >= T || row >= ind->tile_h[t]) return;
+    if (t >= T || row >= io->tile_h[t]) return;
     const float weight = (float)T; /* each tile sees 1/T of the VPLs */
-    const uint32_t grp = gi_indirect_tile_group(ind, t);
-    uint32_t a0 = ind->assign_start[grp], a1 = ind->assign_start[grp + 1];
-    const uint32_t R = ind->opt.para_res;
+    const uint32_t grp = (t + io->shift) % T; /* gi_indirect_tile_group */
+    uint32_t a0 = io->assign_start[grp], a1 = io->assign_start[grp + 1];
+    const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;
     uint32_t a = 0;
-    const gi_indirect_kernels *kt = gi__kernels(f);
-    if (ind->atlas && kt) {
+    const gi_indirect_kernels *kt = io->kt;
+    if (in->atlas && kt) {
         const uint32_t W = kt->width;
         float ew[3 * 16 * GI_ACC_GROUPS];
-        while (a + W <= ind->tile_w[t]) {
-            uint32_t groups = (ind->tile_w[t] - a) / W;
+        while (a + W <= io->tile_w[t]) {
+            uint32_t groups = (io->tile_w[t] - a) / W;
             if (groups > GI_ACC_GROUPS) groups = GI_ACC_GROUPS;
-            uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
-            kt->accumulate(ind, ind->split_px + k, ind->split_py + k, ind->split_pz + k, ind->split_nx + k,
-                           ind->split_ny + k, ind->split_nz + k, groups, a0, a1, ew);
+            uint32_t k = io->tile_x0[t] + row * io->tile_w[t] + a;
+            kt->accumulate(in, io->px + k, io->py + k, io->pz + k, io->nx + k, io->ny + k, io->nz + k, groups, a0, a1,
+                           ew);
             for (uint32_t i = 0; i < W * groups; i++) {
-                float *e = ind->split_e + 3 * (size_t)(k + i);
-                int valid = ind->split_valid[k + i] != 0;
+                float *e = io->split_e + 3 * (size_t)(k + i);
+                int valid = io->valid[k + i] != 0;
                 e[0] = valid ? ew[3 * i] * weight : 0.0f;
                 e[1] = valid ? ew[3 * i + 1] * weight : 0.0f;
                 e[2] = valid ? ew[3 * i + 2] * weight : 0.0f;
@@ -584,28 +598,28 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             a += W * groups;
         }
     }
-    for (; a < ind->tile_w[t]; a++) {
-        uint32_t k = ind->tile_x0[t] + row * ind->tile_w[t] + a;
-        float *e = ind->split_e + 3 * (size_t)k;
+    for (; a < io->tile_w[t]; a++) {
+        uint32_t k = io->tile_x0[t] + row * io->tile_w[t] + a;
+        float *e = io->split_e + 3 * (size_t)k;
         e[0] = e[1] = e[2] = 0.0f;
-        if (!ind->split_valid[k]) continue;
-        pf_vec3 pos = pf_v3(ind->split_px[k], ind->split_py[k], ind->split_pz[k]);
-        pf_vec3 nrm = pf_v3(ind->split_nx[k], ind->split_ny[k], ind->split_nz[k]);
+        if (!io->valid[k]) continue;
+        pf_vec3 pos = pf_v3(io->px[k], io->py[k], io->pz[k]);
+        pf_vec3 nrm = pf_v3(io->nx[k], io->ny[k], io->nz[k]);
         pf_vec3 sum = pf_v3(0, 0, 0);
         for (uint32_t q = a0; q < a1; q++) {
-            uint32_t vi = ind->assign[q];
-            const gi_vpl *v = &ind->vpls.v[vi];
+            uint32_t vi = in->assign[q];
+            const gi_vpl *v = &in->vpls[vi];
             pf_vec3 w;
             float r;
-            pf_vec3 c = gi_vpl_irradiance(v, pos, nrm, ind->b, &w, &r, NULL, NULL);
+            pf_vec3 c = gi_vpl_irradiance(v, pos, nrm, in->b, &w, &r, NULL, NULL);
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
-            if (ind->atlas) { /* exact maps (bias_scale 1) or ISMs: the one lookup */
-                visible = rs_para_visible_scaled(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
-                                                 pf_v3_dot(nrm, w), ind->bias_scale);
+            if (in->atlas) { /* exact maps (bias_scale 1) or ISMs: the one lookup */
+                visible = rs_para_visible_scaled(in->atlas + vi * map, R, in->range, &in->frames[vi], pos,
+                                                 pf_v3_dot(nrm, w), in->bias_scale);
             } else {
                 pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
-                visible = !pf_rt_occluded1(f->rt, ray);
+                visible = !pf_rt_occluded1(io->rt, ray);
             }
             if (visible) sum = pf_v3_add(sum, c);
         }
@@ -625,7 +639,26 @@ void gi_stage_accumulate(gi_frame *f)
     uint64_t rot = ind->opt.temporal ? (uint64_t)ind->temporal_frames * f->aa.samples + f->aa.sample : f->aa.index;
     ind->shift = (uint32_t)(rot % T);
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
-    pf_jobs_parallel_for(f->jobs, gi__accumulate_row, f, T * rows, 1);
+    const gi__accumulate_io io = {
+        {ind->vpls.v, ind->assign, ind->atlas, ind->frames, ind->opt.para_res, ind->range, ind->bias_scale, ind->b},
+        f->rt,
+        gi__kernels(f),
+        T,
+        rows,
+        ind->tile_x0,
+        ind->tile_w,
+        ind->tile_h,
+        ind->assign_start,
+        ind->shift,
+        ind->split_px,
+        ind->split_py,
+        ind->split_pz,
+        ind->split_nx,
+        ind->split_ny,
+        ind->split_nz,
+        ind->split_valid,
+        ind->split_e};
+    pf_jobs_parallel_for(f->jobs, gi__accumulate_row, (void *)&io, T * rows, 1);
 }
 
 /* ---------------------------------------------------------- 8. combine */
@@ -803,6 +836,7 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     const int W = (int)ind->w, H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
     /* SIMD for the interior of the row: windows [x - n/2, x + lanes - 1 + n - 1 - n/2] on screen */
     const gi_indirect_kernels *kt = gi__kernels(f);
+    const gi_filter_in fin = {ind->combined, g, ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta};
     int simd_x0 = W, simd_x1 = W, lanes = kt ? (int)kt->width : 1;
     if (ind->opt.filter == GI_FILTER_BOX && kt) {
         simd_x0 = n / 2;
@@ -810,7 +844,7 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     }
     for (int x = 0; x < W; x++) {
         if (x >= simd_x0 && x < simd_x1) {
-            kt->filter_box(ind, g, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
+            kt->filter_box(&fin, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
             x += lanes - 1;
             continue;
         }

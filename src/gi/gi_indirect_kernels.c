@@ -31,23 +31,23 @@ static simd_f gi__dot3(simd_f ax, simd_f ay, simd_f az, simd_f bx, simd_f by, si
     return simd_add_f(simd_add_f(simd_mul_f(ax, bx), simd_mul_f(ay, by)), simd_mul_f(az, bz));
 }
 
-static void gi__accumulate(const gi_indirect *ind, const float *px_, const float *py_, const float *pz_,
+static void gi__accumulate(const gi_accumulate_in *in, const float *px_, const float *py_, const float *pz_,
                            const float *nx_, const float *ny_, const float *nz_, uint32_t groups, uint32_t a0,
                            uint32_t a1, float *e)
 {
-    const uint32_t R = ind->opt.para_res;
+    const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;
-    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f), b = simd_set1_f(ind->b);
+    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f), b = simd_set1_f(in->b);
     simd_f acc[GI_ACC_GROUPS][3];
     for (uint32_t g = 0; g < groups; g++) acc[g][0] = acc[g][1] = acc[g][2] = zero;
     for (uint32_t q = a0; q < a1; q++) {
-        const uint32_t vi = ind->assign[q];
-        const gi_vpl *v = &ind->vpls.v[vi];
+        const uint32_t vi = in->assign[q];
+        const gi_vpl *v = &in->vpls[vi];
         const simd_f vx = simd_set1_f(v->pos.x), vy = simd_set1_f(v->pos.y), vz = simd_set1_f(v->pos.z);
         const simd_f mx = simd_set1_f(v->nrm.x), my = simd_set1_f(v->nrm.y), mz = simd_set1_f(v->nrm.z);
         const simd_f ir = simd_set1_f(v->intensity.x), ig = simd_set1_f(v->intensity.y);
         const simd_f ib = simd_set1_f(v->intensity.z);
-        const uint16_t *mp = ind->atlas + vi * map;
+        const uint16_t *mp = in->atlas + vi * map;
         for (uint32_t g = 0; g < groups; g++) {
             const size_t o = (size_t)SIMD_W * g;
             const simd_f Px = simd_loadu_f(px_ + o), Py = simd_loadu_f(py_ + o), Pz = simd_loadu_f(pz_ + o);
@@ -65,8 +65,8 @@ static void gi__accumulate(const gi_indirect *ind, const float *px_, const float
             simd_f G = simd_div_f(simd_mul_f(c1, c2), r2);
             G = simd_select_f(simd_gt_f(G, b), b, G); /* the bounded geometry term */
             /* the VPL's map (rs_para_visible_scaled lane-wise), receiver cosine n . w */
-            simd_mask vis = simd_mask_and(ok, rs_para_visible_lanes(mp, R, ind->range, ind->bias_scale,
-                                                                    &ind->frames[vi], Px, Py, Pz, c1));
+            simd_mask vis = simd_mask_and(ok, rs_para_visible_lanes(mp, R, in->range, in->bias_scale,
+                                                                    &in->frames[vi], Px, Py, Pz, c1));
             acc[g][0] = simd_add_f(acc[g][0], simd_select_f(vis, simd_mul_f(ir, G), zero));
             acc[g][1] = simd_add_f(acc[g][1], simd_select_f(vis, simd_mul_f(ig, G), zero));
             acc[g][2] = simd_add_f(acc[g][2], simd_select_f(vis, simd_mul_f(ib, G), zero));
@@ -80,12 +80,13 @@ static void gi__accumulate(const gi_indirect *ind, const float *px_, const float
     }
 }
 
-static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, int y, float *out)
+static void gi__filter_box(const gi_filter_in *in, int x, int y, float *out)
 {
-    const int H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
-    const size_t i0 = (size_t)y * ind->w + (size_t)x;
+    const rs_gbuffer *g = in->g;
+    const int H = (int)in->h, n = (int)in->n, m = (int)in->m;
+    const size_t i0 = (size_t)y * in->w + (size_t)x;
     const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);
-    const simd_f a2 = simd_set1_f(ind->alpha * ind->alpha), beta = simd_set1_f(ind->opt.beta);
+    const simd_f a2 = simd_set1_f(in->alpha2), beta = simd_set1_f(in->beta);
     const simd_f px = simd_loadu_f(g->pos_x + i0), py = simd_loadu_f(g->pos_y + i0), pz = simd_loadu_f(g->pos_z + i0);
     const simd_f nx = simd_loadu_f(g->nrm_x + i0), ny = simd_loadu_f(g->nrm_y + i0), nz = simd_loadu_f(g->nrm_z + i0);
     const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
@@ -94,7 +95,7 @@ static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, i
         int ty = y + dy - m / 2;
         if (ty < 0 || ty >= H) continue;
         for (int dx = 0; dx < n; dx++) {
-            size_t j = (size_t)ty * ind->w + (size_t)(x + dx - n / 2);
+            size_t j = (size_t)ty * in->w + (size_t)(x + dx - n / 2);
             simd_mask valid = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + j)), empty));
             simd_f ddx = simd_sub_f(simd_loadu_f(g->pos_x + j), px);
             simd_f ddy = simd_sub_f(simd_loadu_f(g->pos_y + j), py);
@@ -104,7 +105,7 @@ static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, i
                                  simd_loadu_f(g->nrm_z + j));
             simd_mask take = simd_mask_and(valid, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
             simd_f er, eg, eb; /* the run's RGB triples, de-interleaved */
-            simd_load3_f(ind->combined + 3 * j, &er, &eg, &eb);
+            simd_load3_f(in->combined + 3 * j, &er, &eg, &eb);
             ar = simd_add_f(ar, simd_select_f(take, er, zero));
             ag = simd_add_f(ag, simd_select_f(take, eg, zero));
             ab = simd_add_f(ab, simd_select_f(take, eb, zero));
@@ -116,7 +117,7 @@ static void gi__filter_box(const gi_indirect *ind, const rs_gbuffer *g, int x, i
     for (int k = 0; k < SIMD_W; k++) {
         size_t i = i0 + (size_t)k;
         float *o = out + 3 * (size_t)k;
-        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, ind->combined + 3 * i, 3 * sizeof(float));
+        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, in->combined + 3 * i, 3 * sizeof(float));
         else o[0] = r[k] / w[k], o[1] = gg[k] / w[k], o[2] = bb[k] / w[k];
     }
 }

@@ -12,6 +12,27 @@
 /* Runs of `width` pixels processed together: at most this many per call. */
 #define GI_ACC_GROUPS 32
 
+/* What the accumulation (step 7) reads: the VPLs, the tiles' VPL lists and
+ * the VPLs' maps (exact paraboloid maps or ISMs), explicitly. */
+typedef struct gi_accumulate_in {
+    const gi_vpl *vpls;            /* VPLS: the set's VPLs */
+    const uint32_t *assign;        /* ASSIGNMENT: VPL indices, grouped by tile */
+    const uint16_t *atlas;         /* VPL_MAPS: map k at atlas + k R^2 */
+    const rs_para_frame *frames;   /* each map's VPL frame */
+    uint32_t para_res;             /* R */
+    float range, bias_scale;       /* the maps' quantisation range; the lookup's bias scale */
+    float b;                       /* the bounded geometry term's bound */
+} gi_accumulate_in;
+
+/* What Laine's box filter (step 9) reads: COMBINED and the indirect image's
+ * G-buffer, explicitly. */
+typedef struct gi_filter_in {
+    const float *combined;   /* COMBINED, 3 floats a pixel */
+    const rs_gbuffer *g;     /* GBUFFER (the reduced one with --indirect-scale) */
+    uint32_t w, h, n, m;     /* the indirect image's size; the tiles (the window is n x m) */
+    float alpha2, beta;      /* the tests: |p_j - p|^2 < alpha2, n_j . n > beta */
+} gi_filter_in;
+
 typedef struct gi_indirect_kernels {
     const char *isa;  /* SIMD_NAME of the vocabulary it was compiled with */
     uint32_t width;   /* SIMD_W: pixels per run */
@@ -19,12 +40,13 @@ typedef struct gi_indirect_kernels {
      * against the VPLs assign[a0..a1) with their paraboloid maps (exact or
      * ISMs): e[3 width g + 3 i + c] gets the unweighted sum of run g, lane i,
      * colour c, each pixel adding its VPLs in the tile's order. */
-    void (*accumulate)(const gi_indirect *ind, const float *px, const float *py, const float *pz, const float *nx,
-                       const float *ny, const float *nz, uint32_t groups, uint32_t a0, uint32_t a1, float *e);
+    void (*accumulate)(const gi_accumulate_in *in, const float *px, const float *py, const float *pz,
+                       const float *nx, const float *ny, const float *nz, uint32_t groups, uint32_t a0, uint32_t a1,
+                       float *e);
     /* Laine's box filter for `width` interior pixels x.. of row y of the
-     * indirect image (every window pixel on screen horizontally), reading
-     * the G-buffer g and combined; out gets 3 floats a pixel. */
-    void (*filter_box)(const gi_indirect *ind, const rs_gbuffer *g, int x, int y, float *out);
+     * indirect image (every window pixel on screen horizontally); out gets 3
+     * floats a pixel. */
+    void (*filter_box)(const gi_filter_in *in, int x, int y, float *out);
 } gi_indirect_kernels;
 
 extern const gi_indirect_kernels gi_indirect_kernels_scalar;

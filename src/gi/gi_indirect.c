@@ -811,12 +811,12 @@ void gi_stage_compensate(gi_frame *f)
  *   bilateral (Hedman 2017 Sec. 4): a Gaussian of sigma = max(n, m) / 2
  *     pixels times a Gaussian in position (sigma = alpha / 2) times
  *     (n2 . n)^8. */
-static float gi__filter_weight(const gi_indirect *ind, int dx, int dy, float d2, float nd)
+static float gi__filter_weight(const gi_filter_in *in, gi_filter_kind kind, int dx, int dy, float d2, float nd)
 {
-    const int n = (int)ind->n, m = (int)ind->m;
-    const float a2 = ind->alpha * ind->alpha, beta = ind->opt.beta;
-    if (ind->opt.filter == GI_FILTER_BOX) return d2 < a2 && nd > beta ? 1.0f : 0.0f;
-    if (ind->opt.filter == GI_FILTER_GAUSSIAN) {
+    const int n = (int)in->n, m = (int)in->m;
+    const float a2 = in->alpha2, beta = in->beta;
+    if (kind == GI_FILTER_BOX) return d2 < a2 && nd > beta ? 1.0f : 0.0f;
+    if (kind == GI_FILTER_GAUSSIAN) {
         float sg = 0.5f * (float)(n > m ? n : m);
         return d2 < a2 && nd > beta ? expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg)) : 0.0f;
     }
@@ -826,32 +826,40 @@ static float gi__filter_weight(const gi_indirect *ind, int dx, int dy, float d2,
     return expf(-(float)(dx * dx + dy * dy) / (2.0f * ss * ss)) * expf(-d2 / (2.0f * sp2)) * nd4 * nd4;
 }
 
+/* The filter's inputs and output, explicitly (the stage table's reads:
+ * GBUFFER, COMBINED; writes: FILTERED, or the reduced filtered_low). */
+typedef struct gi__filter_io {
+    gi_filter_in in;               /* combined, the G-buffer, sizes and tests */
+    gi_filter_kind kind;           /* opt.filter */
+    const gi_indirect_kernels *kt; /* the SIMD path's kernels, NULL on the scalar path */
+    float *filtered;               /* FILTERED */
+} gi__filter_io;
+
 static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = gi__indirect_gbuffer(f);
-    float *filtered = ind->scale > 1 ? ind->filtered_low : ind->filtered;
-    const int W = (int)ind->w, H = (int)ind->h, n = (int)ind->n, m = (int)ind->m;
+    const gi__filter_io *io = p;
+    const gi_filter_in *in = &io->in;
+    const rs_gbuffer *g = in->g;
+    float *filtered = io->filtered;
+    const int W = (int)in->w, H = (int)in->h, n = (int)in->n, m = (int)in->m;
     /* SIMD for the interior of the row: windows [x - n/2, x + lanes - 1 + n - 1 - n/2] on screen */
-    const gi_indirect_kernels *kt = gi__kernels(f);
-    const gi_filter_in fin = {ind->combined, g, ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta};
+    const gi_indirect_kernels *kt = io->kt;
     int simd_x0 = W, simd_x1 = W, lanes = kt ? (int)kt->width : 1;
-    if (ind->opt.filter == GI_FILTER_BOX && kt) {
+    if (io->kind == GI_FILTER_BOX && kt) {
         simd_x0 = n / 2;
         simd_x1 = W - (n - 1 - n / 2) - (lanes - 1); /* last x with x + lanes - 1 + (n - 1 - n/2) < W */
     }
     for (int x = 0; x < W; x++) {
         if (x >= simd_x0 && x < simd_x1) {
-            kt->filter_box(&fin, x, (int)y, filtered + 3 * ((size_t)y * ind->w + (size_t)x));
+            kt->filter_box(in, x, (int)y, filtered + 3 * ((size_t)y * in->w + (size_t)x));
             x += lanes - 1;
             continue;
         }
-        size_t i = (size_t)y * ind->w + (size_t)x;
+        size_t i = (size_t)y * in->w + (size_t)x;
         float *out = filtered + 3 * i;
-        if (g->prim[i] == RS_GBUFFER_EMPTY || ind->opt.filter == GI_FILTER_NONE) {
-            memcpy(out, ind->combined + 3 * i, 3 * sizeof(float));
+        if (g->prim[i] == RS_GBUFFER_EMPTY || io->kind == GI_FILTER_NONE) {
+            memcpy(out, in->combined + 3 * i, 3 * sizeof(float));
             continue;
         }
         pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]);
@@ -859,29 +867,38 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
         float acc[3] = {0, 0, 0}, wsum = 0.0f;
         /* the window: Laine's n x m box (Fig. 5), or (2n+1) x (2m+1) for the
          * Gaussian and the cross-bilateral filter */
-        int box = ind->opt.filter == GI_FILTER_BOX;
+        int box = io->kind == GI_FILTER_BOX;
         int x0 = box ? -(n / 2) : -n, x1 = box ? n - 1 - n / 2 : n;
         int y0 = box ? -(m / 2) : -m, y1 = box ? m - 1 - m / 2 : m;
         for (int dy = y0; dy <= y1; dy++)
             for (int dx = x0; dx <= x1; dx++) {
                 int tx = x + dx, ty = (int)y + dy;
                 if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
-                size_t j = (size_t)ty * ind->w + (size_t)tx;
+                size_t j = (size_t)ty * in->w + (size_t)tx;
                 if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
                 pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
                 float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
-                float w = gi__filter_weight(ind, dx, dy, pf_v3_dot(d, d), nd);
+                float w = gi__filter_weight(in, io->kind, dx, dy, pf_v3_dot(d, d), nd);
                 if (!(w > 0.0f)) continue;
-                const float *e = ind->combined + 3 * j;
+                const float *e = in->combined + 3 * j;
                 acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
                 wsum += w;
             }
         if (wsum > 0.0f) out[0] = acc[0] / wsum, out[1] = acc[1] / wsum, out[2] = acc[2] / wsum;
-        else memcpy(out, ind->combined + 3 * i, 3 * sizeof(float));
+        else memcpy(out, in->combined + 3 * i, 3 * sizeof(float));
     }
 }
 
-void gi_stage_filter(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__filter_row, f, f->ind.h, 4); }
+void gi_stage_filter(gi_frame *f)
+{
+    const gi_indirect *ind = &f->ind;
+    const gi__filter_io io = {
+        {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta},
+        ind->opt.filter,
+        gi__kernels(f),
+        ind->scale > 1 ? ind->filtered_low : ind->filtered};
+    pf_jobs_parallel_for(f->jobs, gi__filter_row, (void *)&io, ind->h, 4);
+}
 
 /* ---------------------------------------------------------- 9b. upsample */
 

@@ -712,8 +712,17 @@ void gi_stage_combine(gi_frame *f)
  * K taps is left to the filter that follows. The residual is written to
  * `comp` and then added to `combined`, so every tap reads the bounded
  * image. */
+/* The compensation's inputs and outputs, explicitly (the stage table's
+ * reads: GBUFFER, DIRECT, COMBINED; writes: COMBINED, through comp). */
 typedef struct gi__comp_ctx {
-    gi_frame *f;
+    const rs_gbuffer *g;     /* GBUFFER of the indirect image (the reduced one at scale > 1) */
+    const rs_gbuffer *fg;    /* GBUFFER of the frame: the albedo at a sample's frame pixel */
+    const float *direct;     /* DIRECT */
+    const pf_camera *cam;
+    uint32_t w, h, s, K, fw; /* indirect size, scale, taps, the frame's width */
+    float b;                 /* the clamp's bound */
+    float *combined;         /* COMBINED: read by the taps, then the residual added */
+    float *comp;             /* the residual, per pixel */
     float th;   /* tan(fov / 2) */
     float rb;   /* 1 / sqrt(b), world units */
     float (*spiral)[2]; /* the K taps of the unit disc: sqrt((k + 1/2) / K) (cos, sin)(golden angle k) */
@@ -723,15 +732,13 @@ static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
     const gi__comp_ctx *c = p;
-    gi_frame *f = c->f;
-    gi_indirect *ind = &f->ind;
-    const rs_gbuffer *g = gi__indirect_gbuffer(f), *fg = &f->gbuf;
-    const uint32_t w = ind->w, h = ind->h, s = ind->scale, K = ind->opt.compensate_taps;
-    const pf_camera *cam = &f->camera;
-    const float b = ind->b, pix = 2.0f * c->th / (float)h; /* a pixel's size at depth 1 */
+    const rs_gbuffer *g = c->g, *fg = c->fg;
+    const uint32_t w = c->w, h = c->h, s = c->s, K = c->K;
+    const pf_camera *cam = c->cam;
+    const float b = c->b, pix = 2.0f * c->th / (float)h; /* a pixel's size at depth 1 */
     for (uint32_t x = 0; x < w; x++) {
         size_t i = (size_t)y * w + x;
-        float *out = ind->comp + 3 * i;
+        float *out = c->comp + 3 * i;
         out[0] = out[1] = out[2] = 0.0f;
         if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
         pf_vec3 px = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nx = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
@@ -764,11 +771,11 @@ static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
             if (cv < 0.1f) cv = 0.1f;
             float a = (zy * pix) * (zy * pix) / cv;
             /* L(y): the frame pixel the sample is (s X, s Y) */
-            size_t fj = (size_t)ty * s * f->width + (size_t)tx * s;
+            size_t fj = (size_t)ty * s * c->fw + (size_t)tx * s;
             float wgt = (G - b) * a;
             for (int ch = 0; ch < 3; ch++) {
                 const float *alb = ch == 0 ? fg->alb_r : ch == 1 ? fg->alb_g : fg->alb_b;
-                float L = f->direct[3 * fj + ch] + alb[fj] * PF_INV_PI * ind->combined[3 * j + ch];
+                float L = c->direct[3 * fj + ch] + alb[fj] * PF_INV_PI * c->combined[3 * j + ch];
                 acc[ch] += L * wgt;
             }
         }
@@ -780,8 +787,8 @@ static void gi__compensate_row(void *p, uint32_t y, uint32_t worker)
 static void gi__compensate_add(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_indirect *ind = &((gi_frame *)p)->ind;
-    for (size_t i = (size_t)y * ind->w * 3; i < (size_t)(y + 1) * ind->w * 3; i++) ind->combined[i] += ind->comp[i];
+    const gi__comp_ctx *c = p;
+    for (size_t i = (size_t)y * c->w * 3; i < (size_t)(y + 1) * c->w * 3; i++) c->combined[i] += c->comp[i];
 }
 
 void gi_stage_compensate(gi_frame *f)
@@ -794,9 +801,23 @@ void gi_stage_compensate(gi_frame *f)
         float rr = sqrtf(((float)k + 0.5f) / (float)K), ang = 2.39996323f * (float)k; /* the golden angle */
         spiral[k][0] = rr * cosf(ang), spiral[k][1] = rr * sinf(ang);
     }
-    gi__comp_ctx c = {f, tanf(0.5f * f->camera.yfov), 1.0f / sqrtf(ind->b), spiral};
-    pf_jobs_parallel_for(f->jobs, gi__compensate_row, &c, ind->h, 4);
-    pf_jobs_parallel_for(f->jobs, gi__compensate_add, f, ind->h, 16);
+    const gi__comp_ctx c = {gi__indirect_gbuffer(f),
+                            &f->gbuf,
+                            f->direct,
+                            &f->camera,
+                            ind->w,
+                            ind->h,
+                            ind->scale,
+                            K,
+                            f->width,
+                            ind->b,
+                            ind->combined,
+                            ind->comp,
+                            tanf(0.5f * f->camera.yfov),
+                            1.0f / sqrtf(ind->b),
+                            spiral};
+    pf_jobs_parallel_for(f->jobs, gi__compensate_row, (void *)&c, ind->h, 4);
+    pf_jobs_parallel_for(f->jobs, gi__compensate_add, (void *)&c, ind->h, 16);
 }
 
 /* ---------------------------------------------------------- 9. filter */

@@ -115,5 +115,7 @@ void gi_stage_direct_shadowmap(gi_frame *f)
     if (simd == RS_SIMD_AVX512) k = &gi_direct_kernels_avx512;
     if (simd == RS_SIMD_AVX2) k = &gi_direct_kernels_avx2;
 #endif
-    pf_jobs_parallel_for(f->jobs, k->row, f, f->height, 1);
+    const gi_direct_io io = {f->scene,        &f->gbuf,    f->shadows.maps, f->shadows.count,
+                             f->area_maps.rendered ? &f->area_maps : NULL, f->width, f->direct};
+    pf_jobs_parallel_for(f->jobs, k->row, (void *)&io, f->height, 1);
 }

@@ -66,26 +66,27 @@ static simd_mask gi__light_irradiance_w(const pf_light *L, simd_f px, simd_f py,
     return ok;
 }
 
-/* One row of the direct light (stage 2b): f->direct = irradiance x PCF
+/* One row of the direct light (stage 2b): io->direct = irradiance x PCF
  * visibility x albedo / pi, emission added later by compose. */
 static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = ctx;
-    const rs_gbuffer *g = &f->gbuf;
-    const pf_scene *s = f->scene;
-    float *out = f->direct + (size_t)y * f->width * 3;
-    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
+    const gi_direct_io *io = ctx;
+    const rs_gbuffer *g = io->gbuf;
+    const pf_scene *s = io->scene;
+    const uint32_t width = io->width;
+    float *out = io->direct + (size_t)y * width * 3;
+    memset(out, 0, (size_t)width * 3 * sizeof(float));
     uint32_t ng_prim = RS_GBUFFER_EMPTY;
     pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
-    for (uint32_t x0 = 0; x0 < f->width; x0 += SIMD_W) {
+    for (uint32_t x0 = 0; x0 < width; x0 += SIMD_W) {
         /* the pixels' G-buffer values (zeros past the row's end) */
         float in[6][SIMD_W], ngv[3][SIMD_W], ev[3][SIMD_W];
         uint32_t live = 0;
         const float *planes[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
         for (uint32_t i = 0; i < SIMD_W; i++) {
-            size_t p = (size_t)y * f->width + x0 + i;
-            int on = x0 + i < f->width && g->prim[p] != RS_GBUFFER_EMPTY;
+            size_t p = (size_t)y * width + x0 + i;
+            int on = x0 + i < width && g->prim[p] != RS_GBUFFER_EMPTY;
             for (int c = 0; c < 6; c++) in[c][i] = on ? planes[c][p] : 0.0f;
             if (on && g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
                 ng_prim = g->prim[p];
@@ -102,12 +103,12 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
         const simd_f gx = simd_loadu_f(ngv[0]), gy = simd_loadu_f(ngv[1]), gz = simd_loadu_f(ngv[2]);
         const simd_mask live_lanes = simd_mask_from_bits(live);
         simd_f e[3] = {simd_zero_f(), simd_zero_f(), simd_zero_f()};
-        for (uint32_t l = 0; l < s->light_count && l < f->shadows.count; l++) {
+        for (uint32_t l = 0; l < s->light_count && l < io->shadow_count; l++) {
             simd_f irr[3];
             simd_mask reached =
                 simd_mask_and(gi__light_irradiance_w(&s->lights[l], px, py, pz, nx, ny, nz, irr), live_lanes);
             if (!simd_mask_any(reached)) continue;
-            const rs_shadow_map *m = &f->shadows.maps[l];
+            const rs_shadow_map *m = &io->shadows[l];
             simd_f v;
             if (rs_shadow_lookup_eligible(m)) {
                 v = rs_shadow_visibility_lanes(m, px, py, pz, gx, gy, gz, reached);
@@ -127,10 +128,10 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
         for (int c = 0; c < 3; c++) simd_storeu_f(ev[c], e[c]);
         for (uint32_t i = 0; i < SIMD_W; i++) {
             if (!((live >> i) & 1u)) continue;
-            size_t p = (size_t)y * f->width + x0 + i;
+            size_t p = (size_t)y * width + x0 + i;
             float ex = ev[0][i], ey = ev[1][i], ez = ev[2][i];
-            if (f->area_maps.rendered) {
-                pf_vec3 ea = gi__direct_area_irradiance(&f->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
+            if (io->area_maps) {
+                pf_vec3 ea = gi__direct_area_irradiance(io->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
                                                         pf_v3(in[3][i], in[4][i], in[5][i]));
                 ex += ea.x;
                 ey += ea.y;

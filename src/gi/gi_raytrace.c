@@ -13,21 +13,31 @@
 #include "gi_light.h"
 #include "pf_random.h"
 
+/* The ray-traced G-buffer's inputs and output, explicitly (the stage
+ * table's writes: VISIBILITY and GBUFFER). */
+typedef struct gi__gbuffer_io {
+    const pf_rt *rt;
+    const pf_camera *camera;
+    uint32_t width, height;
+    float jx, jy;     /* the anti-aliasing sample's offset (gi_aa.h; (0, 0): the pixel centres) */
+    rs_gbuffer *gbuf; /* VISIBILITY, GBUFFER */
+} gi__gbuffer_io;
+
 static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = ctx;
-    rs_gbuffer *g = &f->gbuf;
-    for (uint32_t x0 = 0; x0 < f->width; x0 += PF_RT_WIDTH) {
-        uint32_t n = f->width - x0 < PF_RT_WIDTH ? f->width - x0 : PF_RT_WIDTH;
+    const gi__gbuffer_io *io = ctx;
+    rs_gbuffer *g = io->gbuf;
+    const uint32_t width = io->width;
+    for (uint32_t x0 = 0; x0 < width; x0 += PF_RT_WIDTH) {
+        uint32_t n = width - x0 < PF_RT_WIDTH ? width - x0 : PF_RT_WIDTH;
         pf_ray rays[PF_RT_WIDTH];
         pf_hit hits[PF_RT_WIDTH];
-        /* the anti-aliasing sample's offset (gi_aa.h; (0, 0): the pixel centres) */
         for (uint32_t i = 0; i < n; i++)
-            rays[i] = gi_camera_ray_at(&f->camera, f->width, f->height, x0 + i, y, f->aa.jx, f->aa.jy);
-        pf_rt_intersect(f->rt, rays, hits, n);
+            rays[i] = gi_camera_ray_at(io->camera, width, io->height, x0 + i, y, io->jx, io->jy);
+        pf_rt_intersect(io->rt, rays, hits, n);
         for (uint32_t i = 0; i < n; i++) {
-            size_t p = (size_t)y * f->width + x0 + i;
+            size_t p = (size_t)y * width + x0 + i;
             if (hits[i].prim == PF_RT_MISS) {
                 g->depth[p] = INFINITY;
                 g->prim[p] = RS_GBUFFER_EMPTY;
@@ -37,7 +47,7 @@ static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
                 continue;
             }
             pf_surface s;
-            pf_rt_surface(f->rt, &hits[i], 0.0f, &s);
+            pf_rt_surface(io->rt, &hits[i], 0.0f, &s);
             /* Two-sided shading: turn the normal to face the camera. */
             pf_vec3 ns = s.ns;
             if (pf_v3_dot(s.ng, rays[i].dir) > 0.0f) ns = pf_v3_scale(ns, -1.0f);
@@ -56,7 +66,24 @@ static void gi__gbuffer_row(void *ctx, uint32_t y, uint32_t worker)
     }
 }
 
-void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__gbuffer_row, f, f->height, 1); }
+void gi_stage_gbuffer_raytrace(gi_frame *f)
+{
+    const gi__gbuffer_io io = {f->rt, &f->camera, f->width, f->height, f->aa.jx, f->aa.jy, &f->gbuf};
+    pf_jobs_parallel_for(f->jobs, gi__gbuffer_row, (void *)&io, f->height, 1);
+}
+
+/* The ray-traced direct light's inputs and output, explicitly (the stage
+ * table's reads: GBUFFER; writes: DIRECT). */
+typedef struct gi__direct_rt_io {
+    const pf_scene *scene;   /* the punctual lights, face normals */
+    const pf_rt *rt;
+    const gi_area_lights *area; /* the emissive triangles */
+    uint32_t strata;         /* area samples per side */
+    uint32_t aa_index;       /* the anti-aliasing sample's pattern index (gi_aa.h) */
+    const rs_gbuffer *gbuf;  /* GBUFFER */
+    uint32_t width;
+    float *direct;           /* DIRECT */
+} gi__direct_rt_io;
 
 /* Irradiance at a visible point from the area lights: S = strata^2
  * stratified emitter samples (see gi_frame.h), shadow rays in packets of 8,
@@ -65,10 +92,11 @@ void gi_stage_gbuffer_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__
  * anti-aliasing sample's pattern index (gi_aa.h), 0 for the pixel centre, so
  * the samples of one pixel draw other emitter points. */
 #define GI__AREA_STREAM 0x41524541u /* "AREA": a vertex index no path reaches (nor does it plus j < 2^16) */
-static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm, pf_vec3 ng)
+static pf_vec3 gi__area_irradiance_rays(const gi__direct_rt_io *io, uint32_t pixel, pf_vec3 pos, pf_vec3 nrm,
+                                        pf_vec3 ng)
 {
-    uint32_t sd = f->area_strata, S = sd * sd;
-    const uint32_t stream = GI__AREA_STREAM + f->aa.index;
+    uint32_t sd = io->strata, S = sd * sd;
+    const uint32_t stream = GI__AREA_STREAM + io->aa_index;
     /* per-pixel rotation of the (u1, u2) points (Cranley-Patterson) */
     float r1 = pf_random(pixel, 0, stream, 1), r2 = pf_random(pixel, 0, stream, 2);
     pf_vec3 sum = pf_v3(0, 0, 0);
@@ -83,7 +111,7 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
             u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
             u2 -= u2 >= 1.0f ? 1.0f : 0.0f;
             gi_area_sample as;
-            gi_area_sample_point(&f->area, u0, fminf(u1, 0x1.fffffep-1f), fminf(u2, 0x1.fffffep-1f), &as);
+            gi_area_sample_point(io->area, u0, fminf(u1, 0x1.fffffep-1f), fminf(u2, 0x1.fffffep-1f), &as);
             gi_light_sample ls;
             if (!gi_area_sample_irradiance(&as, pos, nrm, &ls.irradiance, &ls.wi, &ls.distance)) continue;
             irr[m] = ls.irradiance;
@@ -91,7 +119,7 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
         }
         if (m == 0) continue;
         uint8_t occ[PF_RT_WIDTH];
-        pf_rt_occluded(f->rt, rays, occ, m);
+        pf_rt_occluded(io->rt, rays, occ, m);
         for (uint32_t j = 0; j < m; j++)
             if (!occ[j]) sum = pf_v3_add(sum, irr[j]);
     }
@@ -103,19 +131,20 @@ static pf_vec3 gi__area_irradiance_rays(const gi_frame *f, uint32_t pixel, pf_ve
 static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = ctx;
-    const rs_gbuffer *g = &f->gbuf;
-    const pf_scene *s = f->scene;
-    float *out = f->direct + (size_t)y * f->width * 3;
-    memset(out, 0, (size_t)f->width * 3 * sizeof(float));
-    for (uint32_t x0 = 0; x0 < f->width; x0 += PF_RT_WIDTH) {
-        uint32_t n = f->width - x0 < PF_RT_WIDTH ? f->width - x0 : PF_RT_WIDTH;
+    const gi__direct_rt_io *io = ctx;
+    const rs_gbuffer *g = io->gbuf;
+    const pf_scene *s = io->scene;
+    const uint32_t width = io->width;
+    float *out = io->direct + (size_t)y * width * 3;
+    memset(out, 0, (size_t)width * 3 * sizeof(float));
+    for (uint32_t x0 = 0; x0 < width; x0 += PF_RT_WIDTH) {
+        uint32_t n = width - x0 < PF_RT_WIDTH ? width - x0 : PF_RT_WIDTH;
         for (uint32_t l = 0; l < s->light_count; l++) {
             pf_ray rays[PF_RT_WIDTH];
             gi_light_sample ls[PF_RT_WIDTH];
             uint32_t pix[PF_RT_WIDTH], m = 0;
             for (uint32_t i = 0; i < n; i++) {
-                size_t p = (size_t)y * f->width + x0 + i;
+                size_t p = (size_t)y * width + x0 + i;
                 if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
                 pf_vec3 pos = pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]);
                 pf_vec3 nrm = pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]);
@@ -127,7 +156,7 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
             }
             if (m == 0) continue;
             uint8_t occ[PF_RT_WIDTH];
-            pf_rt_occluded(f->rt, rays, occ, m);
+            pf_rt_occluded(io->rt, rays, occ, m);
             for (uint32_t k = 0; k < m; k++) {
                 if (occ[k]) continue;
                 float *o = out + 3 * pix[k];
@@ -136,11 +165,11 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
                 o[2] += ls[k].irradiance.z;
             }
         }
-        if (f->area.count > 0)
+        if (io->area->count > 0)
             for (uint32_t i = 0; i < n; i++) {
-                size_t p = (size_t)y * f->width + x0 + i;
+                size_t p = (size_t)y * width + x0 + i;
                 if (g->prim[p] == RS_GBUFFER_EMPTY) continue;
-                pf_vec3 e = gi__area_irradiance_rays(f, (uint32_t)p, pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]),
+                pf_vec3 e = gi__area_irradiance_rays(io, (uint32_t)p, pf_v3(g->pos_x[p], g->pos_y[p], g->pos_z[p]),
                                                      pf_v3(g->nrm_x[p], g->nrm_y[p], g->nrm_z[p]),
                                                      pf_scene_face_normal(s, g->prim[p]));
                 float *o = out + 3 * (x0 + i);
@@ -149,7 +178,7 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
                 o[2] += e.z;
             }
         for (uint32_t i = 0; i < n; i++) {
-            size_t p = (size_t)y * f->width + x0 + i;
+            size_t p = (size_t)y * width + x0 + i;
             float *o = out + 3 * (x0 + i);
             o[0] *= g->alb_r[p] * PF_INV_PI;
             o[1] *= g->alb_g[p] * PF_INV_PI;
@@ -158,4 +187,9 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
     }
 }
 
-void gi_stage_direct_raytrace(gi_frame *f) { pf_jobs_parallel_for(f->jobs, gi__direct_row, f, f->height, 1); }
+void gi_stage_direct_raytrace(gi_frame *f)
+{
+    const gi__direct_rt_io io = {f->scene,  f->rt,    &f->area, f->area_strata, f->aa.index,
+                                 &f->gbuf,  f->width, f->direct};
+    pf_jobs_parallel_for(f->jobs, gi__direct_row, (void *)&io, f->height, 1);
+}

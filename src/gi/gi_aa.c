@@ -136,8 +136,13 @@ void gi_aa_sample_begin(gi_frame *f, uint32_t k)
 
 /* ---------------------------------------------------------------- supersampling */
 
+/* The average's inputs and outputs, explicitly (the stage table's reads
+ * and writes: FINAL; the running sum). */
 typedef struct gi__resolve_ctx {
-    gi_frame *f;
+    float *final;    /* FINAL: this sample's, then the mean after the last */
+    float *sum;      /* the running sum of the samples */
+    uint32_t width;
+    float samples;   /* N */
     int first, last; /* the frame's first and last sample */
 } gi__resolve_ctx;
 
@@ -145,14 +150,13 @@ static void gi__resolve_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
     const gi__resolve_ctx *c = p;
-    gi_frame *f = c->f;
-    const size_t row = (size_t)y * f->width * 3, n = (size_t)f->width * 3;
-    float *fin = f->final + row, *sum = f->aa.sum + row;
+    const size_t row = (size_t)y * c->width * 3, n = (size_t)c->width * 3;
+    float *fin = c->final + row, *sum = c->sum + row;
     if (c->first) memcpy(sum, fin, n * sizeof(float));
     else
         for (size_t i = 0; i < n; i++) sum[i] += fin[i]; /* in sample order: the same bits for any thread count */
     if (c->last) {
-        const float N = (float)f->aa.samples;
+        const float N = c->samples;
         for (size_t i = 0; i < n; i++) fin[i] = sum[i] / N;
     }
 }
@@ -162,8 +166,9 @@ void gi_stage_aa_resolve(gi_frame *f)
     if (f->aa.samples <= 1) return;
     /* the k-th sample rendered is sample (k + 1) mod N: sample 1 is the
      * first, sample 0 (the centre) the last */
-    gi__resolve_ctx c = {f, f->aa.sample == 1 % f->aa.samples, f->aa.sample == 0};
-    pf_jobs_parallel_for(f->jobs, gi__resolve_row, &c, f->height, 8);
+    const gi__resolve_ctx c = {f->final, f->aa.sum, f->width, (float)f->aa.samples, f->aa.sample == 1 % f->aa.samples,
+                               f->aa.sample == 0};
+    pf_jobs_parallel_for(f->jobs, gi__resolve_row, (void *)&c, f->height, 8);
 }
 
 /* ---------------------------------------------------------------- temporal anti-aliasing */
@@ -214,8 +219,16 @@ static int gi__project(const gi__proj *pr, pf_vec3 p, int point, float *px, floa
     return 1;
 }
 
+/* The temporal anti-aliasing's inputs and outputs, explicitly (the stage
+ * table's reads: VISIBILITY, GBUFFER, FINAL; writes: FINAL, through this
+ * frame's history). */
 typedef struct gi__taa_ctx {
-    gi_frame *f;
+    const rs_gbuffer *gbuf;     /* VISIBILITY (prim, depth) and GBUFFER (position) */
+    float *final;               /* FINAL: this frame's sample in, the blend out (after every row is read) */
+    const pf_camera *camera;    /* this frame's (unjittered) camera */
+    float jx, jy;               /* this frame's jitter */
+    uint32_t W, H, N;           /* size; --taa N */
+    gi__taa_scratch *scratch;   /* per worker */
     const float *h;     /* last frame's history */
     const uint16_t *hn;
     float *o;           /* this frame's */
@@ -235,7 +248,7 @@ typedef struct gi__taa_ctx {
  * (every frame that fetches here is a moved, hence changed, frame). */
 static void gi__taa_fetch(const gi__taa_ctx *c, float hx, float hy, float out[3], uint32_t *n)
 {
-    const uint32_t W = c->f->width, H = c->f->height;
+    const uint32_t W = c->W, H = c->H;
     float u = hx - 0.5f, v = hy - 0.5f; /* >= -1/2 */
     int x0 = (int)u, y0 = (int)v;       /* floor, without a libm call */
     x0 -= (float)x0 > u, y0 -= (float)y0 > v;
@@ -273,16 +286,15 @@ static void gi__taa_fetch(const gi__taa_ctx *c, float hx, float hy, float out[3]
  * of the image alone. */
 static void gi__taa_columns(const gi__taa_ctx *c, uint32_t y, gi__taa_scratch *s)
 {
-    const gi_frame *f = c->f;
-    const rs_gbuffer *g = &f->gbuf;
-    const uint32_t W = f->width, H = f->height;
+    const rs_gbuffer *g = c->gbuf;
+    const uint32_t W = c->W, H = c->H;
     const uint32_t y0 = y > 0 ? y - 1 : 0, y1 = y + 1 < H ? y + 1 : H - 1;
     for (uint32_t x = 0; x < W; x++) {
         if (c->changed) {
-            const float *a = f->final + 3 * ((size_t)y0 * W + x);
+            const float *a = c->final + 3 * ((size_t)y0 * W + x);
             float lo[3] = {a[0], a[1], a[2]}, hi[3] = {a[0], a[1], a[2]};
             for (uint32_t Y = y0 + 1; Y <= y1; Y++) {
-                const float *b = f->final + 3 * ((size_t)Y * W + x);
+                const float *b = c->final + 3 * ((size_t)Y * W + x);
                 for (int ch = 0; ch < 3; ch++) { /* (fminf and fmaxf are libm calls here) */
                     lo[ch] = b[ch] < lo[ch] ? b[ch] : lo[ch];
                     hi[ch] = b[ch] > hi[ch] ? b[ch] : hi[ch];
@@ -307,15 +319,13 @@ static void gi__taa_columns(const gi__taa_ctx *c, uint32_t y, gi__taa_scratch *s
 static void gi__taa_row(void *p, uint32_t y, uint32_t worker)
 {
     const gi__taa_ctx *c = p;
-    gi_frame *f = c->f;
-    const gi_taa *t = &f->aa.taa;
-    const rs_gbuffer *g = &f->gbuf;
-    const uint32_t W = f->width, H = f->height, N = t->frames;
-    gi__taa_scratch *s = &t->scratch[worker];
+    const rs_gbuffer *g = c->gbuf;
+    const uint32_t W = c->W, H = c->H, N = c->N;
+    gi__taa_scratch *s = &c->scratch[worker];
     if (c->have && (c->changed || c->moved)) gi__taa_columns(c, y, s);
     for (uint32_t x = 0; x < W; x++) {
         const size_t i = (size_t)y * W + x;
-        const float *cur = f->final + 3 * i;
+        const float *cur = c->final + 3 * i;
         const uint32_t x0 = x > 0 ? x - 1 : 0, x1 = x + 1 < W ? x + 1 : W - 1;
         float h[3];
         uint32_t n = 0;
@@ -335,8 +345,8 @@ static void gi__taa_row(void *p, uint32_t y, uint32_t worker)
                     if (s->nd[X] < nd) nd = s->nd[X], near = s->near[X];
                 int point = near != SIZE_MAX;
                 pf_vec3 q = point ? pf_v3(g->pos_x[near], g->pos_y[near], g->pos_z[near])
-                                  : pf_camera_ray_dir(&f->camera, W, H, (float)x + 0.5f + f->aa.jx,
-                                                      (float)y + 0.5f + f->aa.jy);
+                                  : pf_camera_ray_dir(c->camera, W, H, (float)x + 0.5f + c->jx,
+                                                      (float)y + 0.5f + c->jy);
                 float px, py, cx, cy;
                 ok = gi__project(&c->prev, q, point, &px, &py) && gi__project(&c->cur, q, point, &cx, &cy);
                 if (ok) hx += px - cx, hy += py - cy;
@@ -374,13 +384,13 @@ static void gi__taa_row(void *p, uint32_t y, uint32_t worker)
     }
 }
 
-/* Row y of the blended image (this frame's history) into `final`. */
+/* Row y of the blended image (this frame's history, c->o) into `final`. */
 static void gi__taa_copy_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    const size_t n = (size_t)f->width * 3, row = (size_t)y * n;
-    memcpy(f->final + row, f->aa.taa.hist[1 - f->aa.taa.cur] + row, n * sizeof(float));
+    const gi__taa_ctx *c = p;
+    const size_t n = (size_t)c->W * 3, row = (size_t)y * n;
+    memcpy(c->final + row, c->o + row, n * sizeof(float));
 }
 
 void gi_stage_taa(gi_frame *f)
@@ -390,7 +400,8 @@ void gi_stage_taa(gi_frame *f)
     const int prev = t->cur, next = 1 - prev;
     gi__taa_ctx c;
     memset(&c, 0, sizeof c);
-    c.f = f;
+    c.gbuf = &f->gbuf, c.final = f->final, c.camera = &f->camera, c.jx = f->aa.jx, c.jy = f->aa.jy;
+    c.W = f->width, c.H = f->height, c.N = t->frames, c.scratch = t->scratch;
     c.h = t->hist[prev], c.hn = t->count[prev];
     c.o = t->hist[next], c.on = t->count[next];
     c.have = t->frame > 0;
@@ -403,7 +414,7 @@ void gi_stage_taa(gi_frame *f)
     c.cur = gi__proj_make(&f->camera, f->width, f->height);
     c.prev = gi__proj_make(&t->camera, f->width, f->height);
     pf_jobs_parallel_for(f->jobs, gi__taa_row, &c, f->height, 8);
-    pf_jobs_parallel_for(f->jobs, gi__taa_copy_row, f, f->height, 16); /* the blend read `final`'s neighbours */
+    pf_jobs_parallel_for(f->jobs, gi__taa_copy_row, &c, f->height, 16); /* the blend read `final`'s neighbours */
     /* this frame becomes the history */
     t->cur = next;
     t->camera = f->camera;
@@ -419,14 +430,22 @@ void gi_stage_taa(gi_frame *f)
 
 /* ---------------------------------------------------------------- the resolve's depth */
 
+/* The view depth along the true axis: GBUFFER's positions in, VISIBILITY's
+ * depth out. */
+typedef struct gi__depth_ctx {
+    rs_gbuffer *gbuf;
+    const pf_camera *cam;
+    uint32_t width;
+} gi__depth_ctx;
+
 static void gi__depth_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
-    gi_frame *f = p;
-    rs_gbuffer *g = &f->gbuf;
-    const pf_camera *cam = &f->camera;
-    for (uint32_t x = 0; x < f->width; x++) {
-        size_t i = (size_t)y * f->width + x;
+    const gi__depth_ctx *c = p;
+    rs_gbuffer *g = c->gbuf;
+    const pf_camera *cam = c->cam;
+    for (uint32_t x = 0; x < c->width; x++) {
+        size_t i = (size_t)y * c->width + x;
         if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
         pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), cam->eye);
         g->depth[i] = pf_v3_dot(d, cam->forward);
@@ -436,5 +455,6 @@ static void gi__depth_row(void *p, uint32_t y, uint32_t worker)
 void gi_aa_resolve_depth(gi_frame *f)
 {
     if (f->aa.jx == 0.0f && f->aa.jy == 0.0f) return;
-    pf_jobs_parallel_for(f->jobs, gi__depth_row, f, f->height, 8);
+    const gi__depth_ctx c = {&f->gbuf, &f->camera, f->width};
+    pf_jobs_parallel_for(f->jobs, gi__depth_row, (void *)&c, f->height, 8);
 }

@@ -444,21 +444,38 @@ static int gi__by_lum(const void *a, const void *b)
  * free slots) go to no tile: they would add exactly zero. Their key -1 sorts
  * them after every other, so the others are dealt exactly as if they were
  * not there. */
-static void gi__assign_deal(gi_indirect *ind, uint32_t T, uint32_t N)
+/* The assignment's inputs, state and outputs, explicitly (the stage
+ * table's reads: VPLS; writes: ASSIGNMENT; its own state: the tiles and ids
+ * of the last assignment). */
+typedef struct gi__assign_io {
+    const gi_vpl *v;              /* VPLS */
+    uint32_t N, T;                /* VPL slots; tiles */
+    uint32_t *tile_of;            /* state: each slot's tile (UINT32_MAX: none) */
+    uint32_t *assigned_id;        /* state: the id each slot had when assigned */
+    uint32_t *assigned_count;     /* state: slots assigned last time */
+    gi__lumkey *keys;             /* scratch, N */
+    double *load;                 /* scratch, T */
+    uint32_t *cursor;             /* scratch, T */
+    uint32_t *assign, *assign_start; /* ASSIGNMENT */
+    uint32_t *kept;               /* survivors kept in their tile (statistic) */
+} gi__assign_io;
+
+static void gi__assign_deal(const gi__assign_io *io)
 {
-    gi__lumkey *keys = ind->sort_keys;
+    const uint32_t T = io->T, N = io->N;
+    gi__lumkey *keys = io->keys;
     uint32_t live = 0;
     for (uint32_t i = 0; i < N; i++) {
-        pf_vec3 c = ind->vpls.v[i].intensity;
+        pf_vec3 c = io->v[i].intensity;
         int emits = c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
         keys[i] = (gi__lumkey){emits ? pf_luminance(c) : -1.0f, i};
-        ind->tile_of[i] = UINT32_MAX;
+        io->tile_of[i] = UINT32_MAX;
         live += (uint32_t)emits;
     }
     qsort(keys, N, sizeof *keys, gi__by_lum);
     for (uint32_t r = 0; r < live; r++) {
         uint32_t round = r / T, pos = r % T;
-        ind->tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
+        io->tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
     }
 }
 
@@ -467,23 +484,24 @@ static void gi__assign_deal(gi_indirect *ind, uint32_t T, uint32_t N)
  * VPLs, then the lower tile). A survivor is a slot that emits, is not
  * moved, carries the id it had when last assigned and had a tile then.
  * Returns 0 (and changes nothing) when there is no survivor. */
-static int gi__assign_keep(gi_indirect *ind, uint32_t T, uint32_t N)
+static int gi__assign_keep(const gi__assign_io *io)
 {
-    gi__lumkey *keys = ind->sort_keys;
-    double *load = ind->tile_load;
-    uint32_t *count = ind->cursor, fresh = 0, kept = 0;
+    const uint32_t T = io->T, N = io->N;
+    gi__lumkey *keys = io->keys;
+    double *load = io->load;
+    uint32_t *count = io->cursor, *tile_of = io->tile_of, fresh = 0, kept = 0;
     for (uint32_t t = 0; t < T; t++) load[t] = 0.0, count[t] = 0;
     for (uint32_t i = 0; i < N; i++) {
-        const gi_vpl *v = &ind->vpls.v[i];
+        const gi_vpl *v = &io->v[i];
         int emits = v->intensity.x > 0.0f || v->intensity.y > 0.0f || v->intensity.z > 0.0f;
-        int survives = emits && !v->moved && i < ind->assigned_count && ind->assigned_id[i] == v->id &&
-                       ind->tile_of[i] != UINT32_MAX;
+        int survives = emits && !v->moved && i < *io->assigned_count && io->assigned_id[i] == v->id &&
+                       tile_of[i] != UINT32_MAX;
         if (survives) {
-            load[ind->tile_of[i]] += pf_luminance(v->intensity);
-            count[ind->tile_of[i]]++;
+            load[tile_of[i]] += pf_luminance(v->intensity);
+            count[tile_of[i]]++;
             kept++;
         } else {
-            ind->tile_of[i] = UINT32_MAX;
+            tile_of[i] = UINT32_MAX;
             if (emits) keys[fresh++] = (gi__lumkey){pf_luminance(v->intensity), i};
         }
     }
@@ -493,11 +511,11 @@ static int gi__assign_keep(gi_indirect *ind, uint32_t T, uint32_t N)
         uint32_t best = 0;
         for (uint32_t t = 1; t < T; t++)
             if (load[t] < load[best] || (load[t] == load[best] && count[t] < count[best])) best = t;
-        ind->tile_of[keys[r].index] = best;
+        tile_of[keys[r].index] = best;
         load[best] += keys[r].lum;
         count[best]++;
     }
-    ind->assign_kept = kept;
+    *io->kept = kept;
     return 1;
 }
 
@@ -512,19 +530,22 @@ static int gi__assign_keep(gi_indirect *ind, uint32_t T, uint32_t N)
 void gi_stage_assign(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    uint32_t T = ind->n * ind->m, N = ind->vpls.count;
-    ind->assign_kept = 0;
-    if (!gi__assign_keep(ind, T, N)) gi__assign_deal(ind, T, N);
-    uint32_t *tile_of = ind->tile_of;
-    for (uint32_t i = 0; i < N; i++) ind->assigned_id[i] = ind->vpls.v[i].id;
-    ind->assigned_count = N;
-    memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
+    const gi__assign_io io = {ind->vpls.v,      ind->vpls.count,   ind->n * ind->m, ind->tile_of,
+                              ind->assigned_id, &ind->assigned_count, ind->sort_keys, ind->tile_load,
+                              ind->cursor,      ind->assign,       ind->assign_start, &ind->assign_kept};
+    const uint32_t T = io.T, N = io.N;
+    *io.kept = 0;
+    if (!gi__assign_keep(&io)) gi__assign_deal(&io);
+    const uint32_t *tile_of = io.tile_of;
+    for (uint32_t i = 0; i < N; i++) io.assigned_id[i] = io.v[i].id;
+    *io.assigned_count = N;
+    memset(io.assign_start, 0, sizeof(uint32_t) * (T + 1));
     for (uint32_t i = 0; i < N; i++)
-        if (tile_of[i] != UINT32_MAX) ind->assign_start[tile_of[i] + 1]++;
-    for (uint32_t t = 0; t < T; t++) ind->assign_start[t + 1] += ind->assign_start[t];
-    memcpy(ind->cursor, ind->assign_start, sizeof(uint32_t) * T);
+        if (tile_of[i] != UINT32_MAX) io.assign_start[tile_of[i] + 1]++;
+    for (uint32_t t = 0; t < T; t++) io.assign_start[t + 1] += io.assign_start[t];
+    memcpy(io.cursor, io.assign_start, sizeof(uint32_t) * T);
     for (uint32_t i = 0; i < N; i++) /* VPL order within a tile */
-        if (tile_of[i] != UINT32_MAX) ind->assign[ind->cursor[tile_of[i]]++] = i;
+        if (tile_of[i] != UINT32_MAX) io.assign[io.cursor[tile_of[i]]++] = i;
 }
 
 /* ---------------------------------------------------------- 7. accumulate */

@@ -1,13 +1,16 @@
 /* render_frame: one frame through softgi's C API (include/softgi/softgi.h).
  *
- *   render_frame [SCENE.gltf|SCENE.glb] [-o OUT.ppm] [--size WxH] [--method NAME] [--hash]
+ *   render_frame [SCENE.gltf|SCENE.glb] [-o OUT.ppm] [--size WxH] [--method NAME] [--aa N]
+ *                [--dump-stages DIR] [--hash]
  *
  * Loads SCENE (default: the Cornell box built into the library), renders
  * one frame with indirect light and writes it as a binary PPM (8-bit sRGB,
  * tone mapped at exposure 0, the PNG `softgi render` writes, without the
  * PNG encoder) and prints the time of every stage. --hash prints the
  * linear image's hash, which equals `softgi render --hash` with the same
- * scene, size and method.
+ * scene, size, method and --aa. --dump-stages writes every stage of the
+ * frame as a captioned picture (softgi_dump_stages), as `softgi render
+ * --dump-stages DIR` does.
  *
  * Build against an installed softgi (docs/api.md):
  *   cc examples/render_frame.c -o render_frame \
@@ -21,7 +24,8 @@
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: render_frame [SCENE.gltf|SCENE.glb] [-o OUT.ppm] [--size WxH] [--method NAME] [--hash]\n");
+    fprintf(stderr, "usage: render_frame [SCENE.gltf|SCENE.glb] [-o OUT.ppm] [--size WxH] [--method NAME] [--aa N] "
+                    "[--dump-stages DIR] [--hash]\n");
     return 2;
 }
 
@@ -37,7 +41,7 @@ static int write_ppm(const char *path, const uint8_t *rgba, uint32_t w, uint32_t
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL, *out = "render_frame.ppm";
+    const char *scene = NULL, *out = "render_frame.ppm", *dump = NULL;
     softgi_desc desc = {0}; /* zero: the defaults of `softgi render` */
     int print_hash = 0;
     for (int i = 1; i < argc; i++) {
@@ -45,6 +49,9 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--size") && i + 1 < argc) {
             if (sscanf(argv[++i], "%ux%u", &desc.width, &desc.height) != 2) return usage();
         } else if (!strcmp(argv[i], "--method") && i + 1 < argc) desc.method = argv[++i];
+        else if (!strcmp(argv[i], "--aa") && i + 1 < argc) {
+            if (sscanf(argv[++i], "%u", &desc.aa) != 1) return usage(); /* jittered samples a pixel */
+        } else if (!strcmp(argv[i], "--dump-stages") && i + 1 < argc) dump = argv[++i];
         else if (!strcmp(argv[i], "--hash")) print_hash = 1;
         else if (argv[i][0] == '-' || scene) return usage();
         else scene = argv[i];
@@ -79,6 +86,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "render_frame: cannot write %s\n", out);
         goto done;
     }
+
+    if (dump && softgi_dump_stages(ctx, dump, 0.0f, SOFTGI_DUMP_PNG, &err) != SOFTGI_OK) goto fail;
 
     softgi_get_info(ctx, &info, NULL);
     printf("render_frame: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, method %s, %u VPLs\n",

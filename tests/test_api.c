@@ -11,7 +11,16 @@
  *   (its PFM, and its --hash): the default Cornell box (built in, 640x480,
  *   every default), the file at 160x120, a ray-traced indirect-only TCAS
  *   frame, --camera / --light against softgi_set_camera / softgi_set_lights,
- *   and the automatic camera and light of a scene that has neither;
+ *   and the automatic camera and light of a scene that has neither; every
+ *   frame field of softgi_desc (shadow size, area sampling, tiles, clamp,
+ *   filter, visibility and the ISM settings, indirect scale, temporal,
+ *   compensate, pipeline, anti-aliasing) against its option, and whole
+ *   option sets (`softgi render` is itself built on the API, so these check
+ *   its option mapping; the goldens elsewhere check the frame), bad values
+ *   of each refused with the program's limits;
+ * - softgi_dump_stages against --dump-stages (the same bytes), the progress
+ *   callback (every stage once, the image unchanged), temporal
+ *   anti-aliasing over successive frames (deterministic);
  * - the stages read back (final = the rendered image, depth one channel,
  *   no irradiance without VPLs), the timings, two contexts rendering at
  *   once on two threads, and the caller's MXCSR left as it was. */
@@ -139,6 +148,30 @@ static void test_bad_desc(void **state)
         {{.params = not_kv, .param_count = 1}, SOFTGI_ERR_ARGUMENT, "expected KEY=VALUE"},
         {{.params = null_param, .param_count = 1}, SOFTGI_ERR_ARGUMENT, "params[0] is NULL"},
         {{.params = NULL, .param_count = 2}, SOFTGI_ERR_ARGUMENT, "param_count 2"},
+        /* the frame's options, with the limits of their command-line options (pf_cli.c) */
+        {{.shadow_size = 8}, SOFTGI_ERR_ARGUMENT, "shadow_size 8: must be 16..8192"},
+        {{.shadow_size = 8193}, SOFTGI_ERR_ARGUMENT, "shadow_size 8193"},
+        {{.area_strata = 17}, SOFTGI_ERR_ARGUMENT, "area_strata 17: must be 1..16"},
+        {{.area_points = 1025}, SOFTGI_ERR_ARGUMENT, "area_points 1025: must be 1..1024"},
+        {{.tiles_n = 4}, SOFTGI_ERR_ARGUMENT, "tiles_n 4 x tiles_m 0: give both"},
+        {{.tiles_n = 17, .tiles_m = 4}, SOFTGI_ERR_ARGUMENT, "tiles_n 17"},
+        {{.clamp = -2.0f}, SOFTGI_ERR_ARGUMENT, "clamp -2"},
+        {{.clamp = INFINITY}, SOFTGI_ERR_ARGUMENT, "clamp inf"},
+        {{.clamp = NAN}, SOFTGI_ERR_ARGUMENT, "clamp nan"},
+        {{.filter = "median"}, SOFTGI_ERR_ARGUMENT, "filter 'median': expected box, bilateral, gaussian or none"},
+        {{.visibility = "cones"}, SOFTGI_ERR_ARGUMENT, "visibility 'cones': expected paraboloid, ism or raytrace"},
+        {{.visibility = "ism", .ism_res = 48}, SOFTGI_ERR_ARGUMENT, "ism_res 48: must be a power of two in 8..512"},
+        {{.visibility = "ism", .ism_res = 1024}, SOFTGI_ERR_ARGUMENT, "ism_res 1024"},
+        {{.visibility = "ism", .ism_points = 999}, SOFTGI_ERR_ARGUMENT, "ism_points 999"},
+        {{.visibility = "ism", .ism_bias = 0.5f}, SOFTGI_ERR_ARGUMENT, "ism_bias 0.5: must be 1..64"},
+        {{.ism_res = 64}, SOFTGI_ERR_ARGUMENT, "need --visibility ism"},
+        {{.visibility = "raytrace", .ism_bias = 2}, SOFTGI_ERR_ARGUMENT, "need --visibility ism"},
+        {{.indirect_scale = 5}, SOFTGI_ERR_ARGUMENT, "indirect_scale 5: must be 1..4"},
+        {{.temporal = 1}, SOFTGI_ERR_ARGUMENT, "temporal 1: must be 2..256"},
+        {{.temporal = 257}, SOFTGI_ERR_ARGUMENT, "temporal 257"},
+        {{.aa = 257}, SOFTGI_ERR_ARGUMENT, "aa 257: must be 1..256"},
+        {{.taa = 1}, SOFTGI_ERR_ARGUMENT, "taa 1: must be 2..256"},
+        {{.flags = 64}, SOFTGI_ERR_ARGUMENT, "flags 0x40"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         softgi_error err;
@@ -348,6 +381,221 @@ static void test_same_as_cli_camera_lights(void **state)
     expect_same_as_cli(&d, NULL, NULL, &sun, 1, "--size 120x90 --threads 2 --light dir:0.3,-1,-0.2:1,1,1:3 -q");
 }
 
+/* Every frame option of softgi_desc against its command-line option, one
+ * or two at a time (small images: each is one run of the program). */
+static void test_same_as_cli_frame_options(void **state)
+{
+    (void)state;
+    const struct {
+        softgi_desc d;
+        const char *args;
+    } cases[] = {
+        {{.shadow_size = 64}, "--shadow-size 64"},
+        {{.tiles_n = 2, .tiles_m = 3}, "--tiles 2x3"},
+        {{.flags = SOFTGI_NO_INTERLEAVE, .vpls = 32}, "--no-interleave --vpls 32"},
+        {{.clamp = 40.0f}, "--clamp 40"},
+        {{.clamp = SOFTGI_CLAMP_OFF}, "--clamp 0"},
+        {{.filter = "bilateral"}, "--filter bilateral"},
+        {{.filter = "gaussian"}, "--filter gaussian"},
+        {{.filter = "none"}, "--filter none"},
+        {{.visibility = "raytrace", .vpls = 64}, "--visibility raytrace --vpls 64"},
+        {{.visibility = "ism", .ism_res = 32, .ism_points = 20000, .ism_bias = 3}, 
+         "--visibility ism --ism-res 32 --ism-points 20000 --ism-bias 3"},
+        {{.visibility = "paraboloid", .vpls = 16}, "--visibility paraboloid --vpls 16"},
+        {{.indirect_scale = 2}, "--indirect-scale 2"},
+        {{.temporal = 4}, "--temporal 4"},
+        {{.flags = SOFTGI_COMPENSATE}, "--compensate on"},
+        {{.flags = SOFTGI_PIPELINE, .method = "iir"}, "--pipeline on --method iir"},
+        {{.aa = 4}, "--aa 4"},
+        {{.aa = 2, .flags = SOFTGI_RAYTRACE}, "--aa 2 --raytrace"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        softgi_desc d = cases[i].d;
+        d.width = 64, d.height = 48, d.threads = 2;
+        char args[1024];
+        snprintf(args, sizeof args, "%s --size 64x48 --threads 2 %s -q", CORNELL, cases[i].args);
+        expect_same_as_cli(&d, CORNELL, NULL, NULL, 0, args);
+    }
+    /* area lights: a scene whose emissive triangles are its light */
+    const char *sphere = SOFTGI_SOURCE_DIR "/scenes/closed-sphere/closed-sphere.gltf";
+    softgi_desc area = {.width = 64, .height = 48, .threads = 2, .area_points = 8};
+    char args[1024];
+    snprintf(args, sizeof args, "%s --size 64x48 --threads 2 --area-points 8 -q", sphere);
+    expect_same_as_cli(&area, sphere, NULL, NULL, 0, args);
+    softgi_desc strata = {.width = 64, .height = 48, .threads = 2, .area_strata = 2, .flags = SOFTGI_RAYTRACE};
+    snprintf(args, sizeof args, "%s --size 64x48 --threads 2 --area-strata 2 --raytrace -q", sphere);
+    expect_same_as_cli(&strata, sphere, NULL, NULL, 0, args);
+}
+
+/* The program built on the API: a handful of whole option sets, each the
+ * same bytes through the program and through an API program. */
+static void test_same_as_cli_option_sets(void **state)
+{
+    (void)state;
+    const char *params[] = {"k=4"};
+    softgi_desc smc = {.width = 80, .height = 60, .threads = 2, .method = "smc", .vpls = 48, .bounces = 2,
+                       .params = params, .param_count = 1, .tiles_n = 2, .tiles_m = 2, .clamp = 100.0f,
+                       .filter = "bilateral", .shadow_size = 256, .aa = 2};
+    expect_same_as_cli(&smc, CORNELL, NULL, NULL, 0,
+                       CORNELL " --size 80x60 --threads 2 --method smc --vpls 48 --bounces 2 --param k=4 --tiles 2x2 "
+                               "--clamp 100 --filter bilateral --shadow-size 256 --aa 2 -q");
+    softgi_desc ism = {.width = 80, .height = 60, .threads = 1, .method = "ssvp", .visibility = "ism",
+                       .ism_res = 16, .flags = SOFTGI_INDIRECT_ONLY | SOFTGI_COMPENSATE, .indirect_scale = 2};
+    expect_same_as_cli(&ism, CORNELL, NULL, NULL, 0,
+                       CORNELL " --size 80x60 --threads 2 --method ssvp --visibility ism --ism-res 16 "
+                               "--indirect-only --compensate on --indirect-scale 2 -q");
+    softgi_desc rt = {.width = 80, .height = 60, .threads = 2, .method = "invtm", .visibility = "raytrace",
+                      .flags = SOFTGI_RAYTRACE | SOFTGI_NO_INTERLEAVE, .vpls = 32, .filter = "none"};
+    const softgi_camera cam = {{0.2f, 0.3f, -0.7f}, {0.278f, 0.27f, 0.3f}, 45.0f};
+    expect_same_as_cli(&rt, CORNELL, &cam, NULL, 0,
+                       CORNELL " --size 80x60 --threads 2 --method invtm --visibility raytrace --raytrace "
+                               "--no-interleave --vpls 32 --filter none --camera 0.2,0.3,-0.7:0.278,0.27,0.3:45 -q");
+    softgi_desc direct = {.width = 80, .height = 60, .threads = 2, .flags = SOFTGI_DIRECT_ONLY, .shadow_size = 128,
+                          .aa = 3};
+    expect_same_as_cli(&direct, NULL, NULL, NULL, 0, "--size 80x60 --threads 2 --direct-only --shadow-size 128 "
+                                                     "--aa 3 -q");
+}
+
+/* softgi_desc.progress: every stage reported once, in the timings' order,
+ * on the calling thread; the image unchanged. */
+typedef struct progress_log {
+    uint32_t stages, work;
+    const char *names[64];
+} progress_log;
+
+static void on_progress(void *user, const char *what, uint32_t done, uint32_t total)
+{
+    progress_log *p = user;
+    if (!total) {
+        if (p->stages < 64) p->names[p->stages] = what;
+        p->stages++;
+    } else {
+        assert_true(done <= total);
+        p->work++;
+    }
+}
+
+static void test_progress(void **state)
+{
+    (void)state;
+    progress_log log;
+    memset(&log, 0, sizeof log);
+    softgi_desc d = {.width = 64, .height = 48, .threads = 2, .progress = on_progress, .progress_user = &log};
+    softgi_context *c = create_or_fail(&d);
+    softgi_error err;
+    ok_or_fail(softgi_load_scene(c, CORNELL, &err), &err);
+    float *rgb = malloc(64 * 48 * 3 * sizeof *rgb), *plain = malloc(64 * 48 * 3 * sizeof *plain);
+    assert_non_null(rgb);
+    assert_non_null(plain);
+    softgi_target t = {.rgb = rgb};
+    ok_or_fail(softgi_render(c, &t, &err), &err);
+    softgi_timing timing[64];
+    uint32_t n = softgi_get_timings(c, timing, 64);
+    uint32_t load = 3; /* load scene, embree build, raster setup */
+    assert_true(n > load);
+    assert_int_equal(log.stages, n - load);
+    for (uint32_t i = 0; i < log.stages && i < 64; i++) assert_string_equal(log.names[i], timing[load + i].name);
+    softgi_destroy(c);
+    d.progress = NULL, d.progress_user = NULL;
+    c = create_or_fail(&d);
+    ok_or_fail(softgi_load_scene(c, CORNELL, &err), &err);
+    t.rgb = plain;
+    ok_or_fail(softgi_render(c, &t, &err), &err);
+    assert_memory_equal(rgb, plain, 64 * 48 * 3 * sizeof *rgb);
+    softgi_destroy(c);
+    free(rgb);
+    free(plain);
+}
+
+/* softgi_desc.taa (`softgi sequence --taa`, not a render option): the
+ * frames blend, so the second differs from the first, and the same
+ * description gives the same frames again. */
+static void test_taa_frames(void **state)
+{
+    (void)state;
+    softgi_desc d = {.width = 48, .height = 36, .threads = 2, .taa = 4, .vpls = 32};
+    float *a[2], *b[2];
+    for (int run = 0; run < 2; run++) {
+        softgi_context *c = create_or_fail(&d);
+        softgi_error err;
+        ok_or_fail(softgi_load_scene(c, CORNELL, &err), &err);
+        float **out = run ? b : a;
+        for (int f = 0; f < 2; f++) {
+            out[f] = malloc(48 * 36 * 3 * sizeof(float));
+            assert_non_null(out[f]);
+            softgi_target t = {.rgb = out[f]};
+            ok_or_fail(softgi_render(c, &t, &err), &err);
+        }
+        softgi_info info;
+        ok_or_fail(softgi_get_info(c, &info, &err), &err);
+        assert_int_equal(info.frames, 2);
+        softgi_destroy(c);
+    }
+    assert_memory_not_equal(a[0], a[1], 48 * 36 * 3 * sizeof(float));
+    for (int f = 0; f < 2; f++) {
+        assert_memory_equal(a[f], b[f], 48 * 36 * 3 * sizeof(float));
+        free(a[f]);
+        free(b[f]);
+    }
+}
+
+/* Reads a whole file (malloc'ed) into *data; its size, 0 if unreadable. */
+static size_t read_all(const char *path, unsigned char **data)
+{
+    *data = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    *data = malloc(n > 0 ? (size_t)n : 1);
+    size_t got = *data ? fread(*data, 1, (size_t)n, f) : 0;
+    fclose(f);
+    return got;
+}
+
+/* softgi_dump_stages writes what `softgi render --dump-stages` writes:
+ * the same captions and the same bytes in a picture and a float file. */
+static void test_dump_stages(void **state)
+{
+    (void)state;
+    char cli_dir[512], api_dir[512], cmd[2048], out[16384];
+    snprintf(cli_dir, sizeof cli_dir, "%s/dump-cli", g_tmp);
+    snprintf(api_dir, sizeof api_dir, "%s/dump-api", g_tmp);
+    snprintf(cmd, sizeof cmd, "render %s --size 64x48 --threads 2 --exposure 1 --dump-stages %s --dump-format both "
+             "-o %s/dump.pfm -q", CORNELL, cli_dir, g_tmp);
+    int st = tu_softgi_run(cmd, out, sizeof out);
+    if (st != 0) fail_msg("softgi %s: exit %d\n%s", cmd, st, out);
+    softgi_desc d = {.width = 64, .height = 48, .threads = 2};
+    softgi_context *c = create_or_fail(&d);
+    softgi_error err;
+    expect_error(softgi_dump_stages(c, api_dir, 0, SOFTGI_DUMP_PNG, &err), &err, SOFTGI_ERR_ARGUMENT,
+                 "no frame rendered yet");
+    ok_or_fail(softgi_load_scene(c, CORNELL, &err), &err);
+    float *rgb = malloc(64 * 48 * 3 * sizeof *rgb);
+    assert_non_null(rgb);
+    softgi_target t = {.rgb = rgb};
+    ok_or_fail(softgi_render(c, &t, &err), &err);
+    expect_error(softgi_dump_stages(c, api_dir, 0, (softgi_dump_format)4, &err), &err, SOFTGI_ERR_ARGUMENT,
+                 "format 4");
+    expect_error(softgi_dump_stages(c, api_dir, NAN, SOFTGI_DUMP_PNG, &err), &err, SOFTGI_ERR_ARGUMENT,
+                 "exposure nan");
+    ok_or_fail(softgi_dump_stages(c, api_dir, 1.0f, SOFTGI_DUMP_BOTH, &err), &err);
+    const char *files[] = {"captions.txt", "00-depth.png", "00-depth.exr"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char a[1024], b[1024];
+        snprintf(a, sizeof a, "%s/%s", cli_dir, files[i]);
+        snprintf(b, sizeof b, "%s/%s", api_dir, files[i]);
+        unsigned char *da, *db;
+        size_t na = read_all(a, &da), nb = read_all(b, &db);
+        if (!na || na != nb || memcmp(da, db, na)) fail_msg("%s: %zu bytes, %s: %zu bytes, or they differ", a, na, b, nb);
+        free(da);
+        free(db);
+    }
+    free(rgb);
+    softgi_destroy(c);
+}
+
 /* A scene with neither camera nor light: the automatic camera and light
  * (pf_defaults.h), rounded as the program prints them; and with a camera
  * given, the automatic light placed at that camera, as --camera does. */
@@ -541,6 +789,11 @@ int main(void)
         cmocka_unit_test(test_same_as_cli_options),
         cmocka_unit_test(test_same_as_cli_camera_lights),
         cmocka_unit_test(test_same_as_cli_automatic),
+        cmocka_unit_test(test_same_as_cli_frame_options),
+        cmocka_unit_test(test_same_as_cli_option_sets),
+        cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_taa_frames),
+        cmocka_unit_test(test_dump_stages),
         cmocka_unit_test(test_stages_and_timings),
         cmocka_unit_test(test_two_contexts),
         cmocka_unit_test(test_fpenv_restored),

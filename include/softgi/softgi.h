@@ -89,6 +89,21 @@ const char *softgi_method_names(void);
 #define SOFTGI_DIRECT_ONLY 1u   /* no VPLs: emission + direct light (--direct-only) */
 #define SOFTGI_INDIRECT_ONLY 2u /* the VPLs' light alone (--indirect-only) */
 #define SOFTGI_RAYTRACE 4u      /* Embree primary and shadow rays instead of the rasterizer (--raytrace) */
+#define SOFTGI_NO_INTERLEAVE 8u /* one tile: every pixel sees every VPL (--no-interleave) */
+#define SOFTGI_PIPELINE 16u     /* the next frame's VPL update overlaps this frame (--pipeline on); one
+                                   frame is the same either way, later frames differ */
+#define SOFTGI_COMPENSATE 32u   /* screen-space compensation of the energy the clamp removes
+                                   (--compensate on) */
+
+/* softgi_desc.clamp: no bounded geometry term (--clamp 0). */
+#define SOFTGI_CLAMP_OFF (-1.0f)
+
+/* Progress of a frame (softgi_desc.progress), called on the thread that
+ * called softgi_render: after every stage with `what` the stage's name (as
+ * softgi_get_timings names it) and done = total = 0, and while a long stage
+ * runs (the VPLs' maps of a large first frame) with done of total. It must
+ * not call back into the context. */
+typedef void (*softgi_progress_fn)(void *user, const char *what, uint32_t done, uint32_t total);
 
 /* What a context renders. Zero-initialise it: every zero field means the
  * program's default (in brackets the `softgi render` option it equals). */
@@ -105,7 +120,31 @@ typedef struct softgi_desc {
     const char *const *params; /* the method's "KEY=VALUE" parameters (--param), param_count of them,
                                   at most 32; copied by softgi_create */
     uint32_t param_count;
-    uint32_t flags;         /* SOFTGI_DIRECT_ONLY, SOFTGI_INDIRECT_ONLY, SOFTGI_RAYTRACE */
+    uint32_t flags;         /* SOFTGI_DIRECT_ONLY, SOFTGI_INDIRECT_ONLY, SOFTGI_RAYTRACE, SOFTGI_NO_INTERLEAVE,
+                               SOFTGI_PIPELINE, SOFTGI_COMPENSATE */
+    /* the direct light */
+    uint32_t shadow_size;   /* shadow-map texels per side, 16..8192; 0: 1024 (--shadow-size) */
+    uint32_t area_strata;   /* ray-traced area lights: N x N samples a pixel, 1..16; 0: 4 (--area-strata) */
+    uint32_t area_points;   /* rasterized area lights: K emitter points, 1..1024; 0: 32 (--area-points) */
+    /* the many-light stages (ignored with SOFTGI_DIRECT_ONLY) */
+    uint32_t tiles_n, tiles_m; /* interleaved tiles, 1..16 each, both or neither; 0: 4 x 4 (--tiles NxM) */
+    float clamp;            /* bounded geometry term b = clamp / diagonal^2, > 0; 0: 400; SOFTGI_CLAMP_OFF:
+                               none (--clamp C, --clamp 0) */
+    const char *filter;     /* "box", "bilateral", "gaussian", "none"; NULL: "box" (--filter) */
+    const char *visibility; /* the VPLs' shadows: "paraboloid", "ism", "raytrace"; NULL: "paraboloid"
+                               (--visibility) */
+    uint32_t ism_res;       /* visibility "ism" only: texels per side, a power of two 8..512; 0: 64 (--ism-res) */
+    uint32_t ism_points;    /* visibility "ism" only: points a frame, 1000..1e8; 0: the default (--ism-points) */
+    float ism_bias;         /* visibility "ism" only: bias scale, 1..64; 0: the default (--ism-bias) */
+    uint32_t indirect_scale; /* the indirect stages at 1/N resolution, 1..4; 0: 1 (--indirect-scale) */
+    uint32_t temporal;      /* temporal accumulation over up to N frames, 2..256; 0: off (--temporal) */
+    /* anti-aliasing */
+    uint32_t aa;            /* jittered samples a pixel, averaged, 1..256; 0: 1, the pixel centres (--aa) */
+    uint32_t taa;           /* temporal anti-aliasing over up to N frames, 2..256; 0: off (--taa, softgi
+                               sequence and view) */
+    /* progress of long frames (NULL: none) */
+    softgi_progress_fn progress;
+    void *progress_user;
 } softgi_desc;
 
 typedef struct softgi_context softgi_context;
@@ -230,9 +269,29 @@ typedef struct softgi_info {
     uint32_t frames;      /* frames rendered since the scene was loaded */
     uint32_t vpls;        /* VPLs in the last frame */
     float exposure;       /* stops the last rgba8 output used */
+    /* the last frame's many-light stages (0 / NULL without VPLs) */
+    uint32_t maps_rendered;    /* VPL shadow maps rendered in the last frame (new or moved VPLs) */
+    uint32_t tiles_n, tiles_m; /* interleaved tiles */
+    float clamp_b;             /* the bounded geometry term b in 1/m^2 (infinity when off) */
+    const char *visibility;    /* "paraboloid maps", "imperfect shadow maps" or "Embree rays" */
+    uint32_t aa_samples;       /* jittered samples a pixel (1: none) */
 } softgi_info;
 
 softgi_result softgi_get_info(const softgi_context *ctx, softgi_info *info, softgi_error *err);
+
+/* softgi_dump_stages formats */
+typedef enum softgi_dump_format {
+    SOFTGI_DUMP_PNG = 1,  /* the captioned pictures, with legends (--dump-format png, the default) */
+    SOFTGI_DUMP_EXR = 2,  /* the float data as 32-bit OpenEXR (--dump-format exr) */
+    SOFTGI_DUMP_BOTH = 3, /* both (--dump-format both) */
+} softgi_dump_format;
+
+/* Writes every stage of the last frame into the folder `dir` (created if
+ * missing) as `softgi render --dump-stages DIR` does: NN-name.png pictures
+ * at `exposure` stops and/or NN-name.exr float data, and captions.txt
+ * naming each stage and its paper section (docs/learn.md). */
+softgi_result softgi_dump_stages(const softgi_context *ctx, const char *dir, float exposure,
+                                 softgi_dump_format format, softgi_error *err);
 
 /* The program's --hash of a linear image: FNV-1a 64 over the float bits of
  * the width x height x 3 floats (rows `stride` floats apart, 0: packed).

@@ -1,34 +1,28 @@
-/* softgi_api: the public C API (include/softgi/softgi.h) over the modules
- * `softgi render` uses, so that a frame rendered here is, bit for bit, the
- * frame the program renders with the same options.
+/* softgi_api: the public C API (include/softgi/softgi.h) over the modules,
+ * and the program's `softgi render` (src/app/app_render.c) is built on it,
+ * so a frame rendered here is the program's frame with the same options.
  *
- * The set-up follows src/app/app_scene.c and src/app/app_render.c step by
- * step (the program's layer, which the library cannot link):
- *
- *   softgi_create       options checked, ISA resolved (pf_isa), jobs started (pf_jobs)
- *   softgi_load_scene   pf_gltf_load with the memory budget -> the file's camera, or
- *                       pf_defaults_camera -> pf_scene_validate -> pf_defaults_light
- *                       when nothing lights the scene -> the frame's budget
- *                       (app_budget_check) -> pf_rt_create -> rs_context_create
+ *   softgi_create       the description checked (the program's limits), ISA
+ *                       resolved (pf_isa), jobs started (pf_jobs)
+ *   softgi_load_scene   api_scene_read with the memory budget -> the file's
+ *                       camera, or api_default_camera -> pf_scene_validate ->
+ *                       api_default_light when nothing lights the scene ->
+ *                       api_budget_check -> pf_rt_create -> rs_context_create
  *   softgi_set_camera   pf_camera_look_at, as --camera
  *   softgi_set_lights   the scene's lights replaced, as --light
- *   softgi_render       gi_frame_create (with the indirect options) at the first frame
- *                       (app_frame_init), then gi_frame_render_raster (or _raytraced)
+ *   softgi_render       api_frame_create at the first frame, then
+ *                       gi_frame_render_raster (or _raytraced)
+ *   softgi_dump_stages  gi_dump_stages, as --dump-stages
  *
- * Duplicated from src/app/app_scene.c until it is factored below the
- * program (each marked "as app_scene.c" below): the automatic camera's and
- * light's round trip through their --camera / --light text (the program
- * prints them with 5 significant digits, or 9, and parses them back, so the
- * copied line gives the same image; the library must round the same way to
- * give the same image), app__has_emitters, the frame's budget check, and the
- * many-light options with their defaults. The automatic camera and light
- * themselves are pf_defaults.c, compiled into this library unchanged.
+ * The set-up (the scene, the automatic camera and light, the budget, the
+ * frame's options) is api_setup.c, which the program's other commands
+ * call too. What only the program reads (the automatic camera's and light's
+ * reasons for its notes, the budget warning) is softgi_internal.h.
  *
- * Deviation from the program: the camera and lights are set after the
- * scene is loaded (the program applies --camera / --light while loading).
- * The only difference that could make is the automatic light, which the
- * program places at the given camera; softgi_set_camera therefore re-places
- * an automatic light at the new camera, which gives the program's scene. */
+ * Order: the camera and lights are set after the scene is loaded. The only
+ * difference that could make is the automatic light, which `--camera`
+ * places at the given camera; softgi_set_camera therefore re-places an
+ * automatic light at the new camera, which gives the same scene. */
 #include "softgi/softgi.h"
 
 #include <math.h>
@@ -37,12 +31,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pf_defaults.h"
+#include "api_setup.h"
+#include "softgi_internal.h"
+#include "gi_aa.h"
+#include "gi_dump.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
-#include "pf_budget.h"
+#include "gi_ism.h"
 #include "pf_fpenv.h"
-#include "pf_gltf.h"
 #include "pf_imageio.h"
 #include "pf_isa.h"
 #include "pf_jobs.h"
@@ -61,10 +57,6 @@ _Static_assert(SOFTGI_OK == (int)PF_OK && SOFTGI_ERR_IO == (int)PF_ERR_IO &&
                "softgi_result must equal pf_result value for value");
 _Static_assert(sizeof(((softgi_error *)0)->message) == sizeof(((pf_error *)0)->message), "message sizes");
 
-/* The built-in scene (scenes/cornell-box, embedded by CMake). */
-extern const unsigned char softgi_api_default_scene[];
-extern const unsigned long softgi_api_default_scene_size;
-
 /* The program's limits on the same values (src/app/pf_cli.c). */
 #define API__MAX_SIDE 16384u
 #define API__MAX_THREADS 256u
@@ -73,22 +65,25 @@ extern const unsigned long softgi_api_default_scene_size;
 #define API__MAX_PARAMS 32u
 #define API__MAX_LIGHTS 64u /* PF_CLI_MAX_LIGHTS */
 #define API__MIN_MEMORY (64ull << 20)
+#define API__FLAGS                                                                                                    \
+    (SOFTGI_DIRECT_ONLY | SOFTGI_INDIRECT_ONLY | SOFTGI_RAYTRACE | SOFTGI_NO_INTERLEAVE | SOFTGI_PIPELINE |          \
+     SOFTGI_COMPENSATE)
 
 struct softgi_context {
-    /* options (softgi_create) */
-    uint32_t width, height, threads, flags;
+    /* options (softgi_create): the description with every pointer into
+     * this context (the method's and the choices' static names, owned
+     * copies of the parameters), width, height and threads resolved */
+    softgi_desc desc;
     pf_isa isa;
-    uint64_t max_memory;
     const gi_vpl_method *method;
-    uint32_t vpls, bounces;
-    uint32_t param_count;
     char *params[API__MAX_PARAMS]; /* owned copies: gi_params keeps pointers */
+    int warn;                      /* softgi_internal_warn */
     pf_jobs *jobs;
     /* scene lifetime (softgi_load_scene) */
     int loaded;
     pf_scene scene;
     pf_camera camera;
-    int auto_camera, auto_light;
+    softgi_internal_notes notes; /* auto_camera, auto_light and their text */
     pf_rt *rt;
     rs_context *raster;
     pf_stage_times load_times;
@@ -167,7 +162,7 @@ static void api__scene_free(softgi_context *c)
     if (c->loaded) pf_scene_free(&c->scene);
     memset(&c->scene, 0, sizeof c->scene);
     c->loaded = 0;
-    c->auto_camera = c->auto_light = 0;
+    memset(&c->notes, 0, sizeof c->notes);
     c->frames = 0;
     memset(&c->load_times, 0, sizeof c->load_times);
 }
@@ -177,22 +172,62 @@ void softgi_destroy(softgi_context *c)
     if (!c) return;
     api__scene_free(c);
     if (c->jobs) pf_jobs_destroy(c->jobs);
-    for (uint32_t i = 0; i < c->param_count; i++) free(c->params[i]);
+    for (uint32_t i = 0; i < c->desc.param_count; i++) free(c->params[i]);
     free(c);
 }
 
-/* The method's own checks of its parameters (its create), now rather
- * than at the first frame. */
-static pf_result api__check_params(const softgi_context *c, pf_error *e)
+/* `name` if it is one of the '|'-separated `choices` (as pf_cli's
+ * choices): the static string in `choices`' table; NULL otherwise. */
+static const char *api__choice(const char *name, const char *const *choices)
 {
-    gi_params p;
-    memset(&p, 0, sizeof p);
-    for (uint32_t i = 0; i < c->param_count; i++) {
-        pf_result r = gi_params_add(&p, c->params[i], e);
-        if (r != PF_OK) return r;
-    }
+    for (; *choices; choices++)
+        if (!strcmp(name, *choices)) return *choices;
+    return NULL;
+}
+
+/* The fields beyond the basics, with the program's limits (pf_cli.c). */
+static softgi_result api__check_frame_fields(const softgi_desc *d, softgi_error *err)
+{
+#define API__RANGE(field, lo, hi, what)                                                                               \
+    if (d->field && (d->field < (lo) || d->field > (hi)))                                                             \
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: " #field " %u: must be %u..%u (0: %s)",           \
+                          (unsigned)d->field, (unsigned)(lo), (unsigned)(hi), what);
+    API__RANGE(shadow_size, 16u, 8192u, "1024")
+    API__RANGE(area_strata, 1u, 16u, "4")
+    API__RANGE(area_points, 1u, 1024u, "32")
+    API__RANGE(ism_points, 1000u, GI_ISM_MAX_POINTS, "the default")
+    API__RANGE(indirect_scale, 1u, GI_INDIRECT_MAX_SCALE, "1")
+    API__RANGE(temporal, 2u, GI_INDIRECT_MAX_TEMPORAL, "off")
+    API__RANGE(aa, 1u, GI_AA_MAX_SAMPLES, "1")
+    API__RANGE(taa, 2u, GI_AA_MAX_TAA, "off")
+#undef API__RANGE
+    if ((d->tiles_n == 0) != (d->tiles_m == 0) || d->tiles_n > 16 || d->tiles_m > 16)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: tiles_n %u x tiles_m %u: give both (1..16) or "
+                          "neither (4 x 4)", d->tiles_n, d->tiles_m);
+    if (d->ism_res && (d->ism_res < 8 || d->ism_res > GI_ISM_MAX_RES || (d->ism_res & (d->ism_res - 1))))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: ism_res %u: must be a power of two in 8..%u "
+                          "(0: %u)", d->ism_res, GI_ISM_MAX_RES, GI_ISM_DEFAULT_RES);
+    if (d->ism_bias != 0.0f && !(d->ism_bias >= 1.0f && d->ism_bias <= GI_ISM_MAX_BIAS))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: ism_bias %g: must be 1..%g (0: the default)",
+                          (double)d->ism_bias, (double)GI_ISM_MAX_BIAS);
+    if (!(d->clamp >= 0.0f && isfinite(d->clamp)) && d->clamp != SOFTGI_CLAMP_OFF)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: clamp %g: must be finite and > 0 (0: 400, "
+                          "SOFTGI_CLAMP_OFF: off)", (double)d->clamp);
+    return SOFTGI_OK;
+}
+
+static const char *const api__filters[] = {"box", "bilateral", "gaussian", "none", NULL};
+static const char *const api__visibilities[] = {"paraboloid", "ism", "raytrace", NULL};
+
+/* The method's own checks of its parameters (its create), now rather
+ * than at the first frame, after the many-light options' own checks. */
+static pf_result api__check_indirect(const softgi_context *c, pf_error *e)
+{
+    gi_indirect_options io;
+    pf_result r = api_indirect_options(&c->desc, &io, e);
+    if (r != PF_OK) return r;
     void *state = NULL;
-    pf_result r = c->method->create(&state, &p, e);
+    r = c->method->create(&state, &io.params, e);
     if (r == PF_OK && c->method->destroy) c->method->destroy(state);
     return r;
 }
@@ -226,7 +261,7 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
                    "machine's memory)", (unsigned long long)d->max_memory);
         return NULL;
     }
-    if (d->flags & ~(SOFTGI_DIRECT_ONLY | SOFTGI_INDIRECT_ONLY | SOFTGI_RAYTRACE)) {
+    if (d->flags & ~API__FLAGS) {
         api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: flags 0x%x: unknown bits", d->flags);
         return NULL;
     }
@@ -238,6 +273,19 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
     if (d->param_count > API__MAX_PARAMS || (d->param_count && !d->params)) {
         api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: param_count %u: at most %u, with params not NULL",
                    d->param_count, API__MAX_PARAMS);
+        return NULL;
+    }
+    if (api__check_frame_fields(d, err) != SOFTGI_OK) return NULL;
+    const char *filter = d->filter ? api__choice(d->filter, api__filters) : NULL;
+    if (d->filter && !filter) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: filter '%.100s': expected box, bilateral, gaussian or "
+                   "none", d->filter);
+        return NULL;
+    }
+    const char *visibility = d->visibility ? api__choice(d->visibility, api__visibilities) : NULL;
+    if (d->visibility && !visibility) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: visibility '%.100s': expected paraboloid, ism or raytrace",
+                   d->visibility);
         return NULL;
     }
     const char *method = d->method ? d->method : "ir";
@@ -264,15 +312,18 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
         api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory creating a softgi context");
         return NULL;
     }
-    c->width = d->width ? d->width : 640;
-    c->height = d->height ? d->height : 480;
-    c->threads = d->threads ? d->threads : pf_jobs_core_count();
-    c->flags = d->flags;
+    c->desc = *d;
+    c->desc.width = d->width ? d->width : API_DEFAULT_WIDTH;
+    c->desc.height = d->height ? d->height : API_DEFAULT_HEIGHT;
+    c->desc.threads = d->threads ? d->threads : pf_jobs_core_count();
+    c->desc.isa = pf_isa_name(resolved);
+    c->desc.method = m->name;
+    c->desc.filter = filter;
+    c->desc.visibility = visibility;
+    c->desc.params = (const char *const *)c->params;
+    c->desc.param_count = 0;
     c->isa = resolved;
-    c->max_memory = d->max_memory;
     c->method = m;
-    c->vpls = d->vpls;
-    c->bounces = d->bounces;
     for (uint32_t i = 0; i < d->param_count; i++) {
         if (!d->params[i]) {
             softgi_destroy(c);
@@ -286,15 +337,15 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
             return NULL;
         }
         memcpy(c->params[i], d->params[i], len);
-        c->param_count = i + 1;
+        c->desc.param_count = i + 1;
     }
-    if (!(c->flags & SOFTGI_DIRECT_ONLY) && api__check_params(c, &e) != PF_OK) {
+    if (!(c->desc.flags & SOFTGI_DIRECT_ONLY) && api__check_indirect(c, &e) != PF_OK) {
         softgi_destroy(c);
         api__fail(err, &e);
         return NULL;
     }
-    if (!(c->jobs = pf_jobs_create(c->threads))) {
-        api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "cannot start %u threads", c->threads);
+    if (!(c->jobs = pf_jobs_create(c->desc.threads))) {
+        api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "cannot start %u threads", c->desc.threads);
         softgi_destroy(c);
         return NULL;
     }
@@ -302,141 +353,43 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
     return c;
 }
 
+void softgi_internal_warn(softgi_context *c, int on)
+{
+    if (c) c->warn = on;
+}
+
+const softgi_internal_notes *softgi_internal_notes_get(const softgi_context *c)
+{
+    return c && c->loaded ? &c->notes : NULL;
+}
+
 /* ---------------------------------------------------------------- the scene */
 
-/* As app_scene.c: whether any triangle's material emits (an area light). */
-static int api__has_emitters(const pf_scene *scene)
-{
-    for (uint32_t t = 0; t < scene->tri_count; t++) {
-        const float *e = scene->materials[scene->tri_material[t]].emission;
-        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) return 1;
-    }
-    return 0;
-}
-
-/* One number as the program prints it (printf `fmt` with `digits`) and
- * parses it back (strtof, pf_cli.c). */
-static float api__text_round(const char *fmt, int digits, float v)
-{
-    char buf[64];
-    snprintf(buf, sizeof buf, fmt, digits, (double)v);
-    return strtof(buf, NULL);
-}
-
-/* As app_scene.c (app__default_camera): pf_defaults_camera's camera as the
- * program prints it (5 significant digits, or 9 when 5 merge eye and
- * target) and parses it back, with pf_cli_parse_camera's checks. */
-static pf_result api__default_camera(const pf_scene *scene, pf_camera *camera, pf_error *err)
-{
-    pf_default_camera dc;
-    pf_defaults_camera(&dc, scene);
-    pf_result r = PF_OK;
-    for (int digits = 5; digits <= 9; digits += 4) {
-        pf_vec3 eye = pf_v3(api__text_round("%.*g", digits, dc.eye.x), api__text_round("%.*g", digits, dc.eye.y),
-                            api__text_round("%.*g", digits, dc.eye.z));
-        pf_vec3 target =
-            pf_v3(api__text_round("%.*g", digits, dc.target.x), api__text_round("%.*g", digits, dc.target.y),
-                  api__text_round("%.*g", digits, dc.target.z));
-        float fovy = api__text_round("%.*g", 6, dc.fovy_deg); /* "%g" */
-        if (!pf_scene_coord_ok(eye) || !pf_scene_coord_ok(target) || !(fovy > 0.0f && fovy < 180.0f) ||
-            (eye.x == target.x && eye.y == target.y && eye.z == target.z))
-            r = pf_error_set(err, PF_ERR_ARGUMENT, "the automatic camera is not a valid camera");
-        else r = pf_camera_look_at(camera, eye, target, pf_radians(fovy), err);
-        if (r == PF_OK) break;
-    }
-    if (r != PF_OK) return r;
-    snprintf(camera->name, sizeof camera->name, "default");
-    return PF_OK;
-}
-
-/* As app_scene.c (app__default_light): pf_defaults_light's light as the
- * program prints it ("point:x,y,z:1,1,1:I", 5 digits unless they move the
- * light by more than 1% of the median distance, then 9; I with 3) and
- * parses it back (pf_cli_parse_light's checks). */
-static pf_result api__default_light(const softgi_context *c, const pf_camera *camera, pf_light *out,
-                                    pf_error *err)
-{
-    pf_light l;
-    float median;
-    pf_defaults_light(&l, &median, &c->scene, camera, c->width, c->height);
-    pf_light parsed;
-    pf_result r = PF_OK;
-    for (int digits = 5; digits <= 9; digits += 4) {
-        memset(&parsed, 0, sizeof parsed);
-        parsed.type = PF_LIGHT_POINT;
-        parsed.position = pf_v3(api__text_round("%.*g", digits, l.position.x),
-                                api__text_round("%.*g", digits, l.position.y),
-                                api__text_round("%.*g", digits, l.position.z));
-        parsed.color = pf_v3(1.0f, 1.0f, 1.0f);
-        parsed.intensity = api__text_round("%.*g", 3, l.intensity);
-        if (!pf_scene_coord_ok(parsed.position) || !isfinite(parsed.intensity) || !(parsed.intensity >= 0.0f) ||
-            (double)parsed.intensity > PF_MAX_RADIANCE) {
-            r = pf_error_set(err, PF_ERR_ARGUMENT, "the automatic light is not a valid light");
-            continue;
-        }
-        r = PF_OK;
-        pf_vec3 moved = pf_v3_sub(parsed.position, l.position);
-        if (pf_v3_max_comp(pf_v3(fabsf(moved.x), fabsf(moved.y), fabsf(moved.z))) <= 0.01f * median) break;
-    }
-    if (r != PF_OK) return r;
-    *out = parsed;
-    snprintf(out->name, sizeof out->name, "default");
-    return PF_OK;
-}
-
-/* As app_scene.c (app_budget_check for a frame with indirect light): the
- * scene as loaded plus the frame the context will allocate, before either
- * the Embree scene or the frame is built. */
-static pf_result api__budget_check(const softgi_context *c, pf_error *err)
-{
-    pf_budget b;
-    pf_budget_init(&b, c->max_memory);
-    pf_result r = pf_budget_take(&b, c->scene.memory_bytes, "the scene", err);
-    if (r != PF_OK) return r;
-    const uint32_t width = c->width, height = c->height;
-    uint32_t vpls = !(c->flags & SOFTGI_DIRECT_ONLY) ? (c->vpls ? c->vpls : 256) : 0;
-    uint32_t area = api__has_emitters(&c->scene) ? GI_AREA_DEFAULT_POINTS : 0;
-    char what[160];
-    snprintf(what, sizeof what, "the frame (%ux%u, %u lights with shadow maps of %u^2, %u VPLs)", width, height,
-             c->scene.light_count, RS_SHADOW_DEFAULT_SIZE, vpls);
-    uint64_t all = gi_frame_memory_estimate(&c->scene, width, height, 0, vpls, 0, area);
-    r = pf_budget_take(&b, all, what, err);
-    if (r != PF_OK) { /* say which knob helps */
-        uint64_t no_vpls = gi_frame_memory_estimate(&c->scene, width, height, 0, 0, 0, area);
-        uint64_t no_shadows = all - gi_frame_memory_estimate(&c->scene, 0, 0, 0, 0, 0, 0);
-        const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs"
-                           : all - no_shadows > all / 2 ? "use fewer lights"
-                                                        : "use a smaller image";
-        size_t n = strlen(err->message);
-        snprintf(err->message + n, sizeof err->message - n, "; %s", hint);
-    }
-    return r;
-}
-
-/* The scene of softgi_load_scene, before Embree: load, camera, validate,
- * light (app_scene_load's order). */
+/* The scene of softgi_load_scene, before Embree: read, camera, validate,
+ * light, budget (the program's order, app_scene_load). */
 static pf_result api__scene_load(softgi_context *c, const char *path, pf_error *e)
 {
-    pf_gltf_options go = {.max_memory = c->max_memory};
-    pf_result r = path ? pf_gltf_load(&c->scene, path, &go, e)
-                       : pf_gltf_load_memory(&c->scene, softgi_api_default_scene, softgi_api_default_scene_size,
-                                             NULL, "embedded scenes/cornell-box", &go, e);
+    pf_result r = api_scene_read(&c->scene, path, c->desc.max_memory, e);
     if (r != PF_OK) return r;
     c->loaded = 1;
     if (c->scene.camera_count > 0) c->camera = c->scene.cameras[0];
     if ((r = pf_scene_validate(&c->scene, e)) != PF_OK) return r;
+    softgi_internal_notes *n = &c->notes;
     if (c->scene.camera_count == 0) {
-        if ((r = api__default_camera(&c->scene, &c->camera, e)) != PF_OK) return r;
-        c->auto_camera = 1;
+        r = api_default_camera(&c->scene, &c->camera, &n->camera, n->camera_spec, sizeof n->camera_spec, e);
+        if (r != PF_OK) return r;
+        n->auto_camera = 1;
     }
     /* emissive triangles are lights too (gi_area.h) */
-    if (c->scene.light_count == 0 && !api__has_emitters(&c->scene)) {
+    if (c->scene.light_count == 0 && !api_scene_has_emitters(&c->scene)) {
         pf_light l;
-        if ((r = api__default_light(c, &c->camera, &l, e)) != PF_OK) return r;
-        if ((r = pf_scene_add_light(&c->scene, &l, e)) != PF_OK) return r;
-        c->auto_light = 1;
+        r = api_default_light(&c->scene, &c->camera, c->desc.width, c->desc.height, &l, &n->light_median,
+                              n->light_spec, sizeof n->light_spec, e);
+        if (r == PF_OK) r = pf_scene_add_light(&c->scene, &l, e);
+        if (r != PF_OK) return r;
+        n->auto_light = 1;
     }
-    return api__budget_check(c, e);
+    return api_budget_check(&c->desc, &c->scene, 1, 1, 0, e);
 }
 
 softgi_result softgi_load_scene(softgi_context *c, const char *path, softgi_error *err)
@@ -450,10 +403,10 @@ softgi_result softgi_load_scene(softgi_context *c, const char *path, softgi_erro
     pf_stage_add(&c->load_times, "load scene", (pf_time_now() - t0) * 1e3);
     if (r == PF_OK) {
         t0 = pf_time_now();
-        r = pf_rt_create(&c->rt, &c->scene, c->isa, c->threads, &e);
+        r = pf_rt_create(&c->rt, &c->scene, c->isa, c->desc.threads, &e);
         pf_stage_add(&c->load_times, "embree build", (pf_time_now() - t0) * 1e3);
     }
-    if (r == PF_OK && !(c->flags & SOFTGI_RAYTRACE)) {
+    if (r == PF_OK && !(c->desc.flags & SOFTGI_RAYTRACE)) {
         t0 = pf_time_now();
         r = rs_context_create(&c->raster, &c->scene, c->jobs, rs_simd_for_isa(c->isa), &e);
         pf_stage_add(&c->load_times, "raster setup", (pf_time_now() - t0) * 1e3);
@@ -485,16 +438,22 @@ softgi_result softgi_set_camera(softgi_context *c, const softgi_camera *cam, sof
     pf_camera next;
     pf_error e;
     if (pf_camera_look_at(&next, eye, target, pf_radians(cam->fovy_deg), &e) != PF_OK) return api__fail(err, &e);
-    if (c->auto_light) { /* the program places its light at the camera it renders with */
+    softgi_internal_notes *n = &c->notes;
+    if (n->auto_light) { /* the program places its light at the camera it renders with */
         pf_fpenv_state env = api__fpenv_enter();
         pf_light l;
-        pf_result r = api__default_light(c, &next, &l, &e);
+        float median;
+        char spec[sizeof n->light_spec];
+        pf_result r = api_default_light(&c->scene, &next, c->desc.width, c->desc.height, &l, &median, spec,
+                                        sizeof spec, &e);
         api__fpenv_leave(env);
         if (r != PF_OK) return api__fail(err, &e);
         c->scene.lights[0] = l;
+        n->light_median = median;
+        memcpy(n->light_spec, spec, sizeof spec);
     }
     c->camera = next;
-    c->auto_camera = 0;
+    n->auto_camera = 0;
     if (c->frame_ready) c->frame.camera = next;
     api__ok(err);
     return SOFTGI_OK;
@@ -549,6 +508,27 @@ static softgi_result api__light(const softgi_light *in, uint32_t i, pf_light *ou
     return SOFTGI_OK;
 }
 
+/* The scene's punctual lights replaced by `next` (malloc'ed, owned from
+ * here on), as softgi_set_lights documents. */
+static void api__replace_lights(softgi_context *c, pf_light *next, uint32_t count)
+{
+    if (count == c->scene.light_count) {
+        /* moved in place, as `softgi sequence` moves them: the frame sees
+         * the same array and re-renders the maps of the lights that changed */
+        memcpy(c->scene.lights, next, count * sizeof *next);
+        free(next);
+    } else {
+        if (c->frame_ready) { /* the frame's shadow maps are per light: rebuilt at the next render */
+            gi_frame_free(&c->frame);
+            c->frame_ready = 0;
+        }
+        free(c->scene.lights);
+        c->scene.lights = next;
+        c->scene.light_count = count;
+    }
+    c->notes.auto_light = 0;
+}
+
 softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, uint32_t count, softgi_error *err)
 {
     if (!c || !lights) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
@@ -565,52 +545,35 @@ softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, u
             return r;
         }
     }
-    if (count == c->scene.light_count) {
-        /* moved in place, as `softgi sequence` moves them: the frame sees
-         * the same array and re-renders the maps of the lights that changed */
-        memcpy(c->scene.lights, next, count * sizeof *next);
-        free(next);
-    } else {
-        if (c->frame_ready) { /* the frame's shadow maps are per light: rebuilt at the next render */
-            gi_frame_free(&c->frame);
-            c->frame_ready = 0;
-        }
-        free(c->scene.lights);
-        c->scene.lights = next;
-        c->scene.light_count = count;
-    }
-    c->auto_light = 0;
+    api__replace_lights(c, next, count);
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light *lights, uint32_t count,
+                                               softgi_error *err)
+{
+    if (!c || !lights) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
+    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: no scene loaded");
+    if (count == 0 || count > API__MAX_LIGHTS)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: count %u: give 1..%u lights", count,
+                          API__MAX_LIGHTS);
+    pf_light *next = malloc(count * sizeof *next);
+    if (!next) return api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory setting %u lights", count);
+    memcpy(next, lights, count * sizeof *next);
+    api__replace_lights(c, next, count);
     api__ok(err);
     return SOFTGI_OK;
 }
 
 /* ---------------------------------------------------------------- frames */
 
-/* As app_frame_init with the program's defaults for every option the API
- * does not take: the budget, gi_frame_create, then the many-light stages
- * (app_indirect_options) unless SOFTGI_DIRECT_ONLY. */
-static pf_result api__frame_init(softgi_context *c, pf_error *e)
+/* pf_stage_hook: a stage of the frame has finished (softgi_desc.progress). */
+static void api__stage_done(void *user, const char *name, double ms)
 {
-    pf_result r = api__budget_check(c, e);
-    if (r != PF_OK) return r;
-    gi_frame_desc fd = {.scene = &c->scene, .rt = c->rt, .jobs = c->jobs, .raster = c->raster, .camera = &c->camera,
-                        .width = c->width, .height = c->height};
-    r = gi_frame_create(&c->frame, &fd, e);
-    if (r != PF_OK) return r;
-    if (!(c->flags & SOFTGI_DIRECT_ONLY)) {
-        gi_indirect_options io;
-        memset(&io, 0, sizeof io);
-        io.method = c->method;
-        io.vpls = c->vpls;
-        io.bounces = c->bounces;
-        for (uint32_t i = 0; i < c->param_count && r == PF_OK; i++) r = gi_params_add(&io.params, c->params[i], e);
-        io.clamp = -1.0f;          /* the default b = 400 / diagonal^2 */
-        io.pipeline = 0;           /* the program's default */
-        io.filter = GI_FILTER_BOX; /* Laine 2007's */
-        if (r == PF_OK) r = gi_frame_enable_indirect(&c->frame, &io, (c->flags & SOFTGI_INDIRECT_ONLY) != 0, e);
-    }
-    if (r != PF_OK) gi_frame_free(&c->frame);
-    return r;
+    (void)ms;
+    const softgi_context *c = user;
+    c->desc.progress(c->desc.progress_user, name, 0, 0);
 }
 
 static softgi_result api__check_target(const softgi_context *c, const softgi_target *t, softgi_error *err)
@@ -618,12 +581,13 @@ static softgi_result api__check_target(const softgi_context *c, const softgi_tar
     if (!t) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: the target is NULL");
     if (!t->rgb && !t->rgba8)
         return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: the target has neither rgb nor rgba8");
-    if (t->rgb && t->rgb_stride && t->rgb_stride < (size_t)3 * c->width)
+    const uint32_t w = c->desc.width;
+    if (t->rgb && t->rgb_stride && t->rgb_stride < (size_t)3 * w)
         return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: rgb_stride %zu is less than 3 x width (%u)",
-                          t->rgb_stride, 3 * c->width);
-    if (t->rgba8 && t->rgba8_stride && t->rgba8_stride < (size_t)4 * c->width)
+                          t->rgb_stride, 3 * w);
+    if (t->rgba8 && t->rgba8_stride && t->rgba8_stride < (size_t)4 * w)
         return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: rgba8_stride %zu is less than 4 x width (%u)",
-                          t->rgba8_stride, 4 * c->width);
+                          t->rgba8_stride, 4 * w);
     if (!t->auto_exposure && !(fabsf(t->exposure) <= 64.0f))
         return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_render: exposure %g: must be within +-64 stops",
                           (double)t->exposure);
@@ -640,20 +604,30 @@ softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_er
     pf_error e;
     pf_result r = PF_OK;
     if (!c->frame_ready) {
-        if ((r = api__frame_init(c, &e)) == PF_OK) c->frame_ready = 1;
+        r = api_frame_create(&c->frame, &c->desc, &c->scene, c->rt, c->raster, c->jobs, &c->camera, 1, c->warn, &e);
+        if (r == PF_OK) c->frame_ready = 1;
     }
     if (r == PF_OK) {
-        if (c->flags & SOFTGI_RAYTRACE) gi_frame_render_raytraced(&c->frame);
+        /* progress: the stages through the timer's hook, the VPL maps
+         * through the frame's own callback; both on this thread */
+        pf_stage_hook hook = {NULL, NULL};
+        if (c->desc.progress) {
+            hook = pf_stage_hook_set((pf_stage_hook){api__stage_done, c});
+            c->frame.progress = c->desc.progress, c->frame.progress_user = c->desc.progress_user;
+        }
+        if (c->desc.flags & SOFTGI_RAYTRACE) gi_frame_render_raytraced(&c->frame);
         else gi_frame_render_raster(&c->frame);
+        if (c->desc.progress) pf_stage_hook_set(hook);
         c->frames++;
         if (c->frame.status != PF_OK) r = c->frame.status, e = c->frame.error;
         /* what the program refuses to write is not returned either */
         if (r == PF_OK)
-            r = pf_imageio_check("the frame", c->frame.final, c->width, c->height, PF_IMAGEIO_RADIANCE, &e);
+            r = pf_imageio_check("the frame", c->frame.final, c->desc.width, c->desc.height, PF_IMAGEIO_RADIANCE,
+                                 &e);
     }
     if (r == PF_OK) {
         const float *src = c->frame.final;
-        const uint32_t w = c->width, h = c->height;
+        const uint32_t w = c->desc.width, h = c->desc.height;
         if (t->rgb) {
             size_t stride = t->rgb_stride ? t->rgb_stride : (size_t)3 * w;
             for (uint32_t y = 0; y < h; y++)
@@ -753,27 +727,60 @@ softgi_result softgi_get_info(const softgi_context *c, softgi_info *info, softgi
 {
     if (!c || !info) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_get_info: the context or info is NULL");
     memset(info, 0, sizeof *info);
-    info->width = c->width;
-    info->height = c->height;
-    info->threads = c->threads;
+    info->width = c->desc.width;
+    info->height = c->desc.height;
+    info->threads = c->desc.threads;
     info->isa = pf_isa_name(c->isa);
-    info->method = c->flags & SOFTGI_DIRECT_ONLY ? NULL : c->method->name;
+    info->method = c->desc.flags & SOFTGI_DIRECT_ONLY ? NULL : c->method->name;
     info->scene_loaded = c->loaded;
     info->warnings = "";
     info->exposure = c->exposure;
     if (c->loaded) {
         info->triangles = c->scene.tri_count;
         info->lights = c->scene.light_count;
-        info->auto_camera = c->auto_camera;
-        info->auto_light = c->auto_light;
+        info->auto_camera = c->notes.auto_camera;
+        info->auto_light = c->notes.auto_light;
         info->warnings = c->scene.warnings;
         const pf_camera *cam = &c->camera;
         pf_vec3 t = pf_v3_add(cam->eye, cam->forward);
         info->camera = (softgi_camera){{cam->eye.x, cam->eye.y, cam->eye.z}, {t.x, t.y, t.z},
                                        cam->yfov * (180.0f / PF_PI)};
         info->frames = c->frames;
-        if (c->frame_ready && c->frame.indirect) info->vpls = c->frame.ind.vpls.count;
+        if (c->frame_ready && c->frames) {
+            const gi_frame *f = &c->frame;
+            info->aa_samples = f->aa.samples ? f->aa.samples : 1;
+            if (f->indirect) {
+                info->vpls = f->ind.vpls.count;
+                info->maps_rendered = f->ind.maps_rendered;
+                info->tiles_n = f->ind.n;
+                info->tiles_m = f->ind.m;
+                info->clamp_b = f->ind.b;
+                info->visibility = f->ind.ism ? "imperfect shadow maps" : f->ind.para ? "paraboloid maps" : "Embree rays";
+            }
+        }
     }
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
+softgi_result softgi_dump_stages(const softgi_context *c, const char *dir, float exposure, softgi_dump_format format,
+                                 softgi_error *err)
+{
+    if (!c || !dir) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_dump_stages: the context or dir is NULL");
+    if (format != SOFTGI_DUMP_PNG && format != SOFTGI_DUMP_EXR && format != SOFTGI_DUMP_BOTH)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_dump_stages: format %d: SOFTGI_DUMP_PNG, _EXR or _BOTH",
+                          (int)format);
+    if (!(fabsf(exposure) <= 64.0f))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_dump_stages: exposure %g: must be within +-64 stops",
+                          (double)exposure);
+    if (!c->frame_ready || !c->frames)
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_dump_stages: no frame rendered yet (softgi_render)");
+    gi_view_settings vs = {exposure, 0}; /* the views `softgi view` shows at this exposure */
+    pf_error e;
+    const gi_dump_format fmt = format == SOFTGI_DUMP_BOTH ? GI_DUMP_BOTH
+                               : format == SOFTGI_DUMP_EXR ? GI_DUMP_EXR
+                                                           : GI_DUMP_PNG;
+    if (gi_dump_stages(&c->frame, dir, &vs, fmt, &e) != PF_OK) return api__fail(err, &e);
     api__ok(err);
     return SOFTGI_OK;
 }

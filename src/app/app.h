@@ -4,6 +4,8 @@
 #define APP_H
 
 #include "pf_cli.h"
+#include "pf_defaults.h"
+#include "softgi/softgi.h"
 
 /* Prints "softgi: <message>" and returns the exit status for err->code. */
 int app_fail(const pf_error *err);
@@ -17,6 +19,9 @@ int app_fail(const pf_error *err);
  * failure the scene is freed. */
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err);
+/* The output base name: SCENE's file name without its extension, or
+ * "cornell-box" for the built-in scene. */
+void app_stem(const pf_options *o, char *stem, size_t size);
 struct pf_sequence;
 /* app_scene_load for `softgi sequence` (and so `softgi evaluate`): the
  * sequence file's emitters, and its "lights": [], are applied
@@ -24,6 +29,21 @@ struct pf_sequence;
  * --light, validation and the automatic camera and light. seq may be NULL. */
 pf_result app_scene_load_sequence(const pf_options *o, const struct pf_sequence *seq, pf_scene *scene,
                                   pf_camera *camera, char *stem, size_t stem_size, pf_error *err);
+
+/* The options as the library's frame description (softgi.h): the image
+ * width x height (0 x 0: 640 x 480), threads, ISA, budget, the VPL method
+ * and every frame option (--shadow-size ... --aa, --taa). Pointers point
+ * into `o`. PF_ERR_ARGUMENT when --visibility was given as both ism and
+ * raytrace (with indirect light). `softgi render` passes it to
+ * softgi_create; app_frame_init, app_budget_check and app_indirect_options
+ * pass it to the library's set-up (src/api/api_setup.h). */
+pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_desc *d, pf_error *err);
+
+/* The "softgi: note:" lines (unless -q) of the automatic camera (with the
+ * reasons pf_defaults_camera gives) and light of scene `name`, each with
+ * the --camera / --light value that gives the same image. */
+void app_note_camera(const pf_options *o, const char *name, const pf_default_camera *dc, const char *spec);
+void app_note_light(const pf_options *o, const char *name, const char *spec, float median);
 
 /* The PNG's exposure in stops: --exposure STOPS, or for --exposure auto
  * the stops pf_defaults_exposure picks from the linear image (said in one

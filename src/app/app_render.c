@@ -1,8 +1,15 @@
-/* app_render: `softgi render` (see pf_cli.h for the options).
+/* app_render: `softgi render` (see pf_cli.h for the options), built on the
+ * public API (include/softgi/softgi.h, docs/api.md):
  *
- * load scene -> apply --camera/--light overrides -> build the Embree scene ->
- * render the frame (gi_frame_render_raster, or gi_frame_render_raytraced
- * with --raytrace) -> write the images, printing the time of every step.
+ * options -> softgi_desc (app_desc) -> softgi_create -> softgi_load_scene
+ * -> --camera (softgi_set_camera) / --light (softgi_internal_set_scene_lights)
+ * -> softgi_render into a linear RGB buffer -> write the images
+ * (softgi_dump_stages for --dump-stages), printing the time of every step
+ * (softgi_get_timings) and what the frame was (softgi_get_info).
+ *
+ * What only the program does (src/api/softgi_internal.h): the
+ * "softgi: note:" lines of the automatic camera and light with their
+ * reasons, the memory warning, and --light applied as parsed.
  *
  * Outputs (pf_imageio.h, by extension): -o NAME.png writes the PNG and the
  * linear image NAME.pfm (or --hdr FILE.exr / FILE.pfm); -o NAME.exr or
@@ -11,15 +18,16 @@
  * files too), are refused before anything is rendered (exit 2). Every file
  * is written to a temporary file and renamed over its target when
  * complete; an image with a NaN, infinite or negative value is not written
- * (exit 1). --dump-stages DIR writes the stages (gi_dump.h) as pictures,
- * float OpenEXR data or both (--dump-format png|exr|both, default png).
- * --exposure auto picks the PNG's (and the pictures') exposure from the
- * image (app_exposure); a nearly black image gets a one-line hint.
+ * (exit 1; softgi_render refuses such a frame). --dump-stages DIR writes
+ * the stages (gi_dump.h) as pictures, float OpenEXR data or both
+ * (--dump-format png|exr|both, default png). --exposure auto picks the
+ * PNG's (and the pictures') exposure from the image (app_exposure); a
+ * nearly black image gets a one-line hint.
  *
  * A frame that takes long (large --vpls: every VPL's paraboloid map is
  * rendered in the first frame) shows, on a terminal and without -q, the
  * time so far and the last stage finished (app_progress.h; through
- * pf_stage_hook, so the frame knows nothing of it).
+ * softgi_desc.progress, so the frame knows nothing of it).
  *
  * --aa N (gi_aa.h): N jittered samples per pixel, averaged in linear
  * radiance before anything is written; --aa 1 (the default) is the
@@ -34,13 +42,10 @@
 #include "app.h"
 #include "app_progress.h"
 #include "gi_dump.h"
-#include "gi_frame.h"
 #include "gi_view.h"
-#include "pf_gltf.h"
 #include "pf_imageio.h"
-#include "pf_jobs.h"
-#include "pf_rt.h"
 #include "pf_timer.h"
+#include "softgi_internal.h"
 
 /* --dump-format as gi_dump's format (not given: the pictures). */
 static gi_dump_format app__dump_format(const pf_options *o)
@@ -83,124 +88,148 @@ static pf_result app__check_outputs(const pf_options *o, const char *default_png
     return r;
 }
 
-/* pf_stage_hook: a stage of the frame has finished. */
+/* softgi_progress_fn: a stage of the frame has finished (done = total =
+ * 0), or a long stage's progress (the VPL maps). */
 typedef struct app__render_progress {
     app_progress bar;
     uint32_t stages;
     char what[96];
 } app__render_progress;
 
-static void app__render_stage(void *user, const char *name, double ms)
+static void app__render_progress_fn(void *user, const char *what, uint32_t done, uint32_t total)
 {
-    (void)ms;
     app__render_progress *p = user;
-    p->stages++;
-    snprintf(p->what, sizeof p->what, "frame: %u stages done, the last %s", p->stages, name);
-    app_progress_update(&p->bar, 0.0, 0.0, p->what);
+    if (!total) {
+        p->stages++;
+        snprintf(p->what, sizeof p->what, "frame: %u stages done, the last %s", p->stages, what);
+        app_progress_update(&p->bar, 0.0, 0.0, p->what);
+    } else {
+        snprintf(p->what, sizeof p->what, "%s %u/%u", what, done, total);
+        app_progress_update(&p->bar, done, total, p->what);
+    }
 }
 
-/* gi_frame_progress_fn: a long stage's progress (the VPL maps). */
-static void app__render_work(void *user, const char *what, uint32_t done, uint32_t total)
+/* A library error as the program's (app_fail prints it). */
+static int app__fail_api(const softgi_error *se)
 {
-    app__render_progress *p = user;
-    snprintf(p->what, sizeof p->what, "%s %u/%u", what, done, total);
-    app_progress_update(&p->bar, done, total, p->what);
+    pf_error e;
+    e.code = (pf_result)se->code;
+    snprintf(e.message, sizeof e.message, "%s", se->message);
+    return app_fail(&e);
+}
+
+/* The frame: from the scene to the linear image in rgb (malloc'ed,
+ * width x height x 3), on `ctx`. Returns the exit status (0: rendered). */
+static int app__render_frame(const pf_options *o, softgi_context *ctx, app__render_progress *prog, float **rgb)
+{
+    softgi_error se;
+    if (softgi_load_scene(ctx, o->scene_path, &se) != SOFTGI_OK) return app__fail_api(&se);
+    softgi_info info;
+    softgi_get_info(ctx, &info, NULL);
+    if (info.warnings[0] && !o->quiet) fprintf(stderr, "softgi: warnings:\n%s", info.warnings);
+    /* --camera and --light replace the scene's (the automatic light moves to
+     * the given camera); then the notes of what is still automatic */
+    if (o->has_camera) {
+        const softgi_camera cam = {{o->camera_eye.x, o->camera_eye.y, o->camera_eye.z},
+                                   {o->camera_target.x, o->camera_target.y, o->camera_target.z},
+                                   o->camera_fovy_deg};
+        if (softgi_set_camera(ctx, &cam, &se) != SOFTGI_OK) return app__fail_api(&se);
+    }
+    if (o->light_count && softgi_internal_set_scene_lights(ctx, o->lights, o->light_count, &se) != SOFTGI_OK)
+        return app__fail_api(&se);
+    const softgi_internal_notes *n = softgi_internal_notes_get(ctx);
+    const char *name = o->scene_path ? o->scene_path : "the scene";
+    if (n->auto_camera) app_note_camera(o, name, &n->camera, n->camera_spec);
+    if (n->auto_light) app_note_light(o, name, n->light_spec, n->light_median);
+
+    const uint32_t w = info.width, h = info.height;
+    if (!(*rgb = malloc((size_t)w * h * 3 * sizeof **rgb))) {
+        pf_error e;
+        pf_error_set(&e, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%u image", w, h);
+        return app_fail(&e);
+    }
+    app_progress_begin(&prog->bar, "render", o->quiet); /* the clock from the frame on */
+    softgi_target target = {.rgb = *rgb};
+    softgi_result r = softgi_render(ctx, &target, &se);
+    app_progress_end(&prog->bar);
+    return r == SOFTGI_OK ? 0 : app__fail_api(&se);
 }
 
 int app_render(const pf_options *o)
 {
     pf_error err;
-    pf_stage_times t;
-    memset(&t, 0, sizeof t);
     /* -o / --hdr: usage errors before any work (the default name is always valid) */
     pf_imageio_outputs out;
     pf_result r = app__check_outputs(o, "out/scene.png", &out, &err);
     if (r != PF_OK) return app_fail(&err);
+    char stem[256], def[4096];
+    app_stem(o, stem, sizeof stem);
+    snprintf(def, sizeof def, "out/%s.png", stem);
+    if ((r = app__check_outputs(o, def, &out, &err)) != PF_OK) return app_fail(&err);
 
-    /* Scene, Embree, jobs */
-    app_setup su;
-    r = app_setup_begin(o, &su, &t, &err);
-    if (r != PF_OK) return app_fail(&err);
-    char def[4096];
-    snprintf(def, sizeof def, "out/%s.png", su.stem);
-    if ((r = app__check_outputs(o, def, &out, &err)) != PF_OK) {
-        app_setup_end(&su);
-        return app_fail(&err);
-    }
-    const pf_scene *scene = &su.scene;
-    uint32_t width = su.width, height = su.height;
-    rs_context *raster = NULL;
-    gi_frame frame;
-    if (!o->raytrace) {
-        double t0 = pf_time_now();
-        r = rs_context_create(&raster, scene, su.jobs, rs_simd_for_isa(su.isa), &err);
-        pf_stage_add(&t, "raster setup", (pf_time_now() - t0) * 1e3);
-    }
-    if (r == PF_OK) r = app_frame_init(o, &frame, scene, su.rt, raster, su.jobs, &su.camera, width, height, 1, &err);
-    if (r != PF_OK) {
-        rs_context_destroy(raster);
-        app_setup_end(&su);
-        return app_fail(&err);
-    }
-
-    /* Frame */
+    softgi_desc d;
+    if ((r = app_desc(o, o->width, o->height, &d, &err)) != PF_OK) return app_fail(&err);
     app__render_progress prog = {.stages = 0};
-    app_progress_begin(&prog.bar, "render", o->quiet);
-    pf_stage_hook hook = pf_stage_hook_set((pf_stage_hook){prog.bar.on ? app__render_stage : NULL, &prog});
-    if (prog.bar.on) frame.progress = app__render_work, frame.progress_user = &prog;
-    if (o->raytrace) gi_frame_render_raytraced(&frame);
-    else gi_frame_render_raster(&frame);
-    pf_stage_hook_set(hook);
-    app_progress_end(&prog.bar);
-    if (frame.status != PF_OK) {
-        err = frame.error;
-        gi_frame_free(&frame);
-        rs_context_destroy(raster);
-        app_setup_end(&su);
-        return app_fail(&err);
+    app_progress_begin(&prog.bar, "render", o->quiet); /* whether a bar will be drawn */
+    if (prog.bar.on) d.progress = app__render_progress_fn, d.progress_user = &prog;
+    softgi_error se;
+    softgi_context *ctx = softgi_create(&d, &se);
+    if (!ctx) return app__fail_api(&se);
+    softgi_internal_warn(ctx, 1);
+    float *rgb = NULL;
+    int status = app__render_frame(o, ctx, &prog, &rgb);
+    if (status) {
+        free(rgb);
+        softgi_destroy(ctx);
+        return status;
     }
-    for (uint32_t i = 0; i < frame.times.count; i++) pf_stage_add(&t, frame.times.name[i], frame.times.ms[i]);
+    softgi_info info;
+    softgi_get_info(ctx, &info, NULL);
+    const uint32_t width = info.width, height = info.height;
+    pf_stage_times t;
+    memset(&t, 0, sizeof t);
+    softgi_timing timing[PF_MAX_STAGES];
+    uint32_t nt = softgi_get_timings(ctx, timing, PF_MAX_STAGES);
+    for (uint32_t i = 0; i < nt && i < PF_MAX_STAGES; i++) pf_stage_add(&t, timing[i].name, timing[i].ms);
 
     /* Output */
     double t0 = pf_time_now();
-    const float exposure = app_exposure(o, frame.final, width, height); /* the PNG's; the linear image is as rendered */
-    r = pf_imageio_outputs_write(&out, frame.final, width, height, exposure, &err);
+    const float exposure = app_exposure(o, rgb, width, height); /* the PNG's; the linear image is as rendered */
+    r = pf_imageio_outputs_write(&out, rgb, width, height, exposure, &err);
     if (r == PF_OK && o->dump_dir) {
-        gi_view_settings vs = {exposure, 0}; /* the views `softgi view` shows at this exposure */
-        r = gi_dump_stages(&frame, o->dump_dir, &vs, app__dump_format(o), &err);
+        /* the views `softgi view` shows at this exposure */
+        const softgi_dump_format fmt = (softgi_dump_format)app__dump_format(o);
+        if (softgi_dump_stages(ctx, o->dump_dir, exposure, fmt, &se) != SOFTGI_OK) {
+            r = (pf_result)se.code;
+            err.code = r;
+            snprintf(err.message, sizeof err.message, "%s", se.message);
+        }
     }
     pf_stage_add(&t, o->dump_dir ? "write images + dump" : "write images", (pf_time_now() - t0) * 1e3);
-    int status = 0;
     if (r != PF_OK) status = app_fail(&err);
     else {
         if (!o->quiet) {
-            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", su.stem,
-                   scene->tri_count, scene->light_count, width, height, su.threads, pf_isa_name(su.isa),
+            printf("softgi render: %s, %u triangles, %u lights, %ux%u, %u threads, isa %s, %s\n", stem,
+                   info.triangles, info.lights, width, height, info.threads, info.isa,
                    o->raytrace ? "ray-traced G-buffer" : "rasterized G-buffer");
-            if (frame.indirect)
+            if (info.visibility)
                 printf("indirect: %s, %u VPLs (%u maps rendered), %ux%u tiles, clamp b = %g, visibility %s\n",
-                       frame.ind.opt.method->name, frame.ind.vpls.count, frame.ind.maps_rendered, frame.ind.n,
-                       frame.ind.m, (double)frame.ind.b,
-                       frame.ind.ism    ? "imperfect shadow maps"
-                       : frame.ind.para ? "paraboloid maps"
-                                        : "Embree rays");
-            if (frame.aa.samples > 1)
+                       info.method, info.vpls, info.maps_rendered, info.tiles_n, info.tiles_m,
+                       (double)info.clamp_b, info.visibility);
+            if (info.aa_samples > 1)
                 printf("anti-aliasing: %u jittered samples per pixel, averaged (the per-sample stages' times are "
                        "their sums)\n",
-                       frame.aa.samples);
+                       info.aa_samples);
             pf_stage_print(&t, stdout);
             if (out.png[0]) printf("wrote %s and %s\n", out.png, out.linear);
             else printf("wrote %s\n", out.linear);
             fflush(stdout); /* before the hint on stderr */
         }
-        app_hint_dark(o, frame.final, width, height, exposure);
+        app_hint_dark(o, rgb, width, height, exposure);
         if (o->print_hash)
-            printf("hash %016llx (isa %s)\n",
-                   (unsigned long long)pf_imageio_hash(frame.final, (uint64_t)width * height * 3),
-                   pf_isa_name(su.isa));
+            printf("hash %016llx (isa %s)\n", (unsigned long long)softgi_image_hash(rgb, width, height, 0), info.isa);
     }
-    gi_frame_free(&frame);
-    rs_context_destroy(raster);
-    app_setup_end(&su);
+    free(rgb);
+    softgi_destroy(ctx);
     return status;
 }

@@ -1,30 +1,32 @@
-/* app_scene: what the commands share before they render: the scene loading
- * (the file or the embedded default scene, the --camera / --light
- * overrides, validation, the automatic camera and light of pf_defaults.h
+/* app_scene: what the commands share before they render: the options as
+ * a softgi_desc (app_desc: every frame option means what it means to the
+ * library), the scene loading (the file or the built-in Cornell box, the
+ * --camera / --light overrides, validation, the automatic camera and light
  * and the user-facing warnings and notes), the PNG exposure (--exposure
- * auto) and the nearly-black hint, the scene + Embree +
- * jobs setup of `render` and `reference`, and the frame and path-tracer
- * options the command line describes. */
+ * auto) and the nearly-black hint, the scene + Embree + jobs setup of the
+ * commands that use the modules (reference, view, sequence, evaluate), and
+ * the frame and path-tracer options the command line describes.
+ *
+ * The set-up itself is the library's (src/api/api_setup.h: reading the
+ * scene, the automatic camera and light with their rounding through the
+ * printed text, the memory budget, the many-light options, the frame), so
+ * `softgi render` (on the public API), the library and the other commands
+ * run one implementation; this file adds the program's parts: the notes
+ * and warnings on stderr and the mapping from pf_options. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "pf_sequence.h"
+#include "api_setup.h"
 #include "app.h"
 #include "pf_defaults.h"
 #include "gi_frame.h"
 #include "gi_indirect.h"
-#include "gi_ism.h"
 #include "gi_reference.h"
-#include "pf_budget.h"
-#include "pf_gltf.h"
-#include "pf_imageio.h"
 #include "pf_jobs.h"
 #include "pf_rt.h"
 #include "pf_timer.h"
-
-extern const unsigned char softgi_default_scene[];
-extern const unsigned long softgi_default_scene_size;
 
 int app_fail(const pf_error *err)
 {
@@ -42,95 +44,70 @@ static void app__stem(const char *path, char *buf, size_t size)
     if (dot && dot != buf) *dot = 0;
 }
 
-/* Whether any triangle's material emits (an area light, gi_area.h). */
-static int app__has_emitters(const pf_scene *scene)
+void app_stem(const pf_options *o, char *stem, size_t size)
 {
-    for (uint32_t t = 0; t < scene->tri_count; t++) {
-        const float *e = scene->materials[scene->tri_material[t]].emission;
-        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f) return 1;
-    }
-    return 0;
+    if (o->scene_path) app__stem(o->scene_path, stem, size);
+    else snprintf(stem, size, "cornell-box");
 }
 
-/* The image size the command will render (render's default 640x480;
- * sequence passes the file's size in o->width/height when it has one). */
-static void app__image_size(const pf_options *o, uint32_t *w, uint32_t *h)
+pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_desc *d, pf_error *err)
 {
-    *w = o->width ? o->width : 640;
-    *h = o->height ? o->height : 480;
-}
-
-/* No camera anywhere: pf_defaults_camera, printed as a --camera value and
- * parsed back from that text, so that copying the line gives the same
- * image bit for bit. */
-static pf_result app__default_camera(const pf_options *o, const pf_scene *scene, pf_camera *camera, const char *name,
-                                     pf_error *err)
-{
-    pf_default_camera dc;
-    pf_defaults_camera(&dc, scene);
-    char spec[256];
-    pf_vec3 eye, target;
-    float fovy;
-    pf_result r = PF_OK;
-    /* 5 digits read well; 9 give every float back exactly, for a small
-     * scene far from the origin whose eye and target 5 digits would merge */
-    for (int digits = 5; digits <= 9; digits += 4) {
-        snprintf(spec, sizeof spec, "%.*g,%.*g,%.*g:%.*g,%.*g,%.*g:%g", digits, (double)dc.eye.x, digits,
-                 (double)dc.eye.y, digits, (double)dc.eye.z, digits, (double)dc.target.x, digits, (double)dc.target.y,
-                 digits, (double)dc.target.z, (double)dc.fovy_deg);
-        r = pf_cli_parse_camera(spec, &eye, &target, &fovy, err);
-        if (r == PF_OK) r = pf_camera_look_at(camera, eye, target, pf_radians(fovy), err);
-        if (r == PF_OK) break;
-    }
-    if (r != PF_OK) return r;
-    snprintf(camera->name, sizeof camera->name, "default");
-    if (!o->quiet) {
-        if (dc.interior)
-            fprintf(stderr,
-                    "softgi: note: %s has no camera; using --camera %s (an interior: %u of %u rays from the bounds' "
-                    "centre hit; looking down its %c axis%s)\n",
-                    name, spec, dc.hits, dc.rays, dc.axis, dc.open_end ? " through its open end" : "");
-        else
-            fprintf(stderr,
-                    "softgi: note: %s has no camera; using --camera %s (outside: the bounds fill 80%% of the "
-                    "view)\n",
-                    name, spec);
-    }
+    memset(d, 0, sizeof *d);
+    if (o->visibility_ism && o->visibility_raytrace && !o->direct_only)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
+    d->width = width;
+    d->height = height;
+    d->threads = o->threads;
+    d->isa = pf_isa_name(o->isa);
+    d->max_memory = o->max_memory;
+    d->method = o->method;
+    d->vpls = o->vpls;
+    d->bounces = o->bounces;
+    d->params = o->params;
+    d->param_count = o->param_count;
+    d->flags = (o->direct_only ? SOFTGI_DIRECT_ONLY : 0u) | (o->indirect_only ? SOFTGI_INDIRECT_ONLY : 0u) |
+               (o->raytrace ? SOFTGI_RAYTRACE : 0u) | (o->no_interleave ? SOFTGI_NO_INTERLEAVE : 0u) |
+               (o->pipeline == 1 ? SOFTGI_PIPELINE : 0u) /* default off for every command */ |
+               (o->compensate ? SOFTGI_COMPENSATE : 0u);
+    d->shadow_size = o->shadow_size;
+    d->area_strata = o->area_strata;
+    d->area_points = o->area_points;
+    d->tiles_n = o->tiles_n;
+    d->tiles_m = o->tiles_m;
+    d->clamp = !o->clamp_set ? 0.0f : o->clamp == 0.0f ? SOFTGI_CLAMP_OFF : o->clamp;
+    d->filter = o->filter;
+    d->visibility = o->visibility_ism ? "ism" : o->visibility_raytrace ? "raytrace" : NULL;
+    d->ism_res = o->ism_res;
+    d->ism_points = o->ism_points;
+    d->ism_bias = o->ism_bias;
+    d->indirect_scale = o->indirect_scale;
+    d->temporal = o->temporal;
+    d->aa = o->aa;
+    d->taa = o->taa;
     return PF_OK;
 }
 
-/* No light and no emitter: pf_defaults_light, printed as a --light value
- * and parsed back (as app__default_camera). */
-static pf_result app__default_light(const pf_options *o, pf_scene *scene, const pf_camera *camera, const char *name,
-                                    pf_error *err)
+void app_note_camera(const pf_options *o, const char *name, const pf_default_camera *dc, const char *spec)
 {
-    uint32_t w, h;
-    app__image_size(o, &w, &h);
-    pf_light l;
-    float median;
-    pf_defaults_light(&l, &median, scene, camera, w, h);
-    char spec[256];
-    pf_light parsed;
-    pf_result r = PF_OK;
-    /* 5 digits unless they move the light by more than 1% of the median
-     * distance (a small scene far from the origin): then 9, exact */
-    for (int digits = 5; digits <= 9; digits += 4) {
-        snprintf(spec, sizeof spec, "point:%.*g,%.*g,%.*g:1,1,1:%.3g", digits, (double)l.position.x, digits,
-                 (double)l.position.y, digits, (double)l.position.z, (double)l.intensity);
-        if ((r = pf_cli_parse_light(spec, &parsed, err)) != PF_OK) continue;
-        pf_vec3 moved = pf_v3_sub(parsed.position, l.position);
-        if (pf_v3_max_comp(pf_v3(fabsf(moved.x), fabsf(moved.y), fabsf(moved.z))) <= 0.01f * median) break;
-    }
-    if (r != PF_OK) return r;
-    l = parsed;
-    snprintf(l.name, sizeof l.name, "default");
-    if ((r = pf_scene_add_light(scene, &l, err)) != PF_OK) return r;
-    if (!o->quiet)
+    if (o->quiet) return;
+    if (dc->interior)
         fprintf(stderr,
-                "softgi: note: %s has no lights; added --light %s (at the camera: %g W/m^2 at the median distance "
-                "%.3g)\n",
-                name, spec, (double)APP_DEFAULT_IRRADIANCE, (double)median);
-    return PF_OK;
+                "softgi: note: %s has no camera; using --camera %s (an interior: %u of %u rays from the bounds' "
+                "centre hit; looking down its %c axis%s)\n",
+                name, spec, dc->hits, dc->rays, dc->axis, dc->open_end ? " through its open end" : "");
+    else
+        fprintf(stderr,
+                "softgi: note: %s has no camera; using --camera %s (outside: the bounds fill 80%% of the view)\n",
+                name, spec);
+}
+
+void app_note_light(const pf_options *o, const char *name, const char *spec, float median)
+{
+    if (o->quiet) return;
+    fprintf(stderr,
+            "softgi: note: %s has no lights; added --light %s (at the camera: %g W/m^2 at the median distance "
+            "%.3g)\n",
+            name, spec, (double)APP_DEFAULT_IRRADIANCE, (double)median);
 }
 
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
@@ -142,16 +119,8 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
 pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_camera *camera,
                                   char *stem, size_t stem_size, pf_error *err)
 {
-    pf_result r;
-    pf_gltf_options go = {.max_memory = o->max_memory};
-    if (o->scene_path) {
-        r = pf_gltf_load(scene, o->scene_path, &go, err);
-        app__stem(o->scene_path, stem, stem_size);
-    } else {
-        r = pf_gltf_load_memory(scene, softgi_default_scene, softgi_default_scene_size, NULL,
-                                "embedded scenes/cornell-box", &go, err);
-        snprintf(stem, stem_size, "cornell-box");
-    }
+    pf_result r = api_scene_read(scene, o->scene_path, o->max_memory, err);
+    app_stem(o, stem, stem_size);
     if (r != PF_OK) return r;
     /* a sequence file's emitters are part of the scene from here on */
     if (seq && (r = pf_sequence_apply_emitters(seq, scene, err)) != PF_OK) {
@@ -163,17 +132,28 @@ pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, p
         r = pf_camera_look_at(camera, o->camera_eye, o->camera_target, pf_radians(o->camera_fovy_deg), err);
     } else if (scene->camera_count > 0) {
         *camera = scene->cameras[0];
-    } /* else app__default_camera below, once the scene is validated */
+    } /* else the automatic camera below, once the scene is validated */
     if (r == PF_OK && o->light_count > 0) {
         scene->light_count = 0; /* given lights replace the file's */
         for (uint32_t i = 0; i < o->light_count && r == PF_OK; i++) r = pf_scene_add_light(scene, &o->lights[i], err);
     }
     if (r == PF_OK) r = pf_scene_validate(scene, err);
     const char *name = o->scene_path ? o->scene_path : "the scene";
-    if (r == PF_OK && !o->has_camera && scene->camera_count == 0) r = app__default_camera(o, scene, camera, name, err);
+    char spec[256];
+    if (r == PF_OK && !o->has_camera && scene->camera_count == 0) {
+        pf_default_camera dc;
+        r = api_default_camera(scene, camera, &dc, spec, sizeof spec, err);
+        if (r == PF_OK) app_note_camera(o, name, &dc, spec);
+    }
     /* emissive triangles are lights too (gi_area.h) */
-    if (r == PF_OK && scene->light_count == 0 && !app__has_emitters(scene))
-        r = app__default_light(o, scene, camera, name, err);
+    if (r == PF_OK && scene->light_count == 0 && !api_scene_has_emitters(scene)) {
+        pf_light l;
+        float median;
+        r = api_default_light(scene, camera, o->width ? o->width : API_DEFAULT_WIDTH,
+                              o->height ? o->height : API_DEFAULT_HEIGHT, &l, &median, spec, sizeof spec, err);
+        if (r == PF_OK) r = pf_scene_add_light(scene, &l, err);
+        if (r == PF_OK) app_note_light(o, name, spec, median);
+    }
     if (r != PF_OK) {
         pf_scene_free(scene);
         return r;
@@ -217,89 +197,26 @@ void app_reference_options(const pf_options *o, gi_reference_options *ro)
 
 pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)
 {
-    memset(io, 0, sizeof *io);
-    io->method = gi_vpl_method_find(o->method);
-    if (!io->method)
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--method '%s': softgi knows %s", o->method, gi_vpl_method_names());
-    io->vpls = o->vpls;
-    io->bounces = o->bounces;
-    io->tiles_n = o->tiles_n;
-    io->tiles_m = o->tiles_m;
-    io->no_interleave = o->no_interleave;
-    io->visibility_raytrace = o->visibility_raytrace;
-    io->visibility_ism = o->visibility_ism;
-    if (o->visibility_ism && o->visibility_raytrace)
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
-    if (!o->visibility_ism && (o->ism_res || o->ism_points || o->ism_bias != 0.0f))
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res, --ism-points and --ism-bias need --visibility ism");
-    io->ism.resolution = o->ism_res;
-    io->ism.points = o->ism_points;
-    io->ism.bias_scale = o->ism_bias;
-    for (uint32_t i = 0; i < o->param_count; i++) {
-        pf_result r = gi_params_add(&io->params, o->params[i], err);
-        if (r != PF_OK) return r;
-    }
-    io->clamp = o->clamp_set ? o->clamp : -1.0f;
-    io->pipeline = o->pipeline == 1; /* default off for every command */
-    io->scale = o->indirect_scale;
-    io->temporal = o->temporal;
-    io->compensate = o->compensate;
-    io->filter = !o->filter || !strcmp(o->filter, "box") ? GI_FILTER_BOX
-                 : !strcmp(o->filter, "bilateral")       ? GI_FILTER_BILATERAL
-                 : !strcmp(o->filter, "gaussian")        ? GI_FILTER_GAUSSIAN
-                                                         : GI_FILTER_NONE;
-    return PF_OK;
+    softgi_desc d;
+    pf_result r = app_desc(o, o->width, o->height, &d, err);
+    return r == PF_OK ? api_indirect_options(&d, io, err) : r;
 }
 
 pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t width, uint32_t height, int frame,
                            int indirect, pf_error *err)
 {
-    pf_budget b;
-    pf_budget_init(&b, o->max_memory);
-    pf_result r = pf_budget_take(&b, scene->memory_bytes, "the scene", err);
-    if (r != PF_OK) return r;
-    if (!frame) { /* the path tracer: its image and per-pixel sums */
-        r = pf_budget_take(&b, pf_budget_mul((uint64_t)width * height, 64), "the image", err);
-        if (r == PF_OK) pf_budget_warn(&b, "a smaller scene or --size");
-        return r;
-    }
-    uint32_t vpls = indirect && !o->direct_only ? (o->vpls ? o->vpls : 256) : 0;
-    uint32_t res = o->visibility_raytrace ? 1 : o->visibility_ism ? (o->ism_res ? o->ism_res : GI_ISM_DEFAULT_RES) : 0;
-    uint32_t area = app__has_emitters(scene) ? (o->area_points ? o->area_points : GI_AREA_DEFAULT_POINTS) : 0;
-    char what[160];
-    snprintf(what, sizeof what, "the frame (%ux%u, %u lights with shadow maps of %u^2, %u VPLs)", width, height,
-             scene->light_count, o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE, vpls);
-    uint64_t all = gi_frame_memory_estimate(scene, width, height, o->shadow_size, vpls, res, area);
-    r = pf_budget_take(&b, all, what, err);
-    /* which knob helps, for the refusal or the warning */
-    uint64_t no_vpls = gi_frame_memory_estimate(scene, width, height, o->shadow_size, 0, res, area);
-    uint64_t no_shadows = all - gi_frame_memory_estimate(scene, 0, 0, o->shadow_size, 0, res, 0);
-    const char *hint = all - no_vpls > all / 2      ? "use fewer VPLs or --visibility raytrace (--vpls N)"
-                       : all - no_shadows > all / 2 ? "use fewer lights or a smaller --shadow-size"
-                                                    : "use a smaller --size";
-    if (r != PF_OK) {
-        size_t n = strlen(err->message);
-        snprintf(err->message + n, sizeof err->message - n, "; %s", hint);
-    } else
-        pf_budget_warn(&b, hint);
-    return r;
+    softgi_desc d;
+    pf_result r = app_desc(o, width, height, &d, err);
+    return r == PF_OK ? api_budget_check(&d, scene, frame, indirect, 1, err) : r;
 }
 
 pf_result app_frame_init(const pf_options *o, gi_frame *f, const pf_scene *scene, const pf_rt *rt, rs_context *raster,
                          pf_jobs *jobs, const pf_camera *camera, uint32_t width, uint32_t height, int indirect,
                          pf_error *err)
 {
-    pf_result r = app_budget_check(o, scene, width, height, 1, indirect, err);
-    if (r != PF_OK) return r;
-    gi_indirect_options io;
-    int with_indirect = indirect && !o->direct_only;
-    if (with_indirect && (r = app_indirect_options(o, &io, err)) != PF_OK) return r;
-    gi_frame_desc d = {.scene = scene, .rt = rt, .jobs = jobs, .raster = raster, .camera = camera,
-                       .width = width, .height = height, .shadow_size = o->shadow_size,
-                       .area_strata = o->area_strata, .area_points = o->area_points,
-                       .indirect = with_indirect ? &io : NULL, .indirect_only = o->indirect_only,
-                       .aa_samples = o->aa, .taa_frames = o->taa};
-    return gi_frame_create(f, &d, err);
+    softgi_desc d;
+    pf_result r = app_desc(o, width, height, &d, err);
+    return r == PF_OK ? api_frame_create(f, &d, scene, rt, raster, jobs, camera, indirect, 1, err) : r;
 }
 
 pf_result app_setup_begin(const pf_options *o, app_setup *s, pf_stage_times *t, pf_error *err)

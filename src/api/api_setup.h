@@ -1,0 +1,96 @@
+/* api_setup: what a frame needs before it renders, in one place for the
+ * library (softgi_api.c) and the program's commands (src/app/app_scene.c:
+ * render through the library, and view, sequence, evaluate, reference and
+ * the benchmarks, which build their frames on the modules):
+ *
+ *   api_scene_read        the .gltf / .glb file, or the built-in Cornell box,
+ *                         under the memory budget
+ *   api_default_camera    pf_defaults_camera as the program prints it (its
+ *                         --camera text) and parses it back
+ *   api_default_light     pf_defaults_light likewise (its --light text)
+ *   api_budget_check      the scene plus the frame (or the path tracer's
+ *                         image) against the budget, before allocating
+ *   api_indirect_options  the many-light options of a softgi_desc
+ *   api_frame_create      gi_frame_create with every option of a softgi_desc
+ *
+ * The frame's options are the public softgi_desc (include/softgi/softgi.h):
+ * the program maps its pf_options to one (app_desc, app_scene.c), so each
+ * option means the same to the library and to every command.
+ *
+ * The automatic camera and light go through their text because the
+ * program prints them as a --camera / --light value to copy: the copied
+ * line must give the same image bit for bit, so the image is rendered with
+ * the rounded numbers (5 significant digits, or 9 when 5 merge eye and
+ * target or move the light by more than 1% of the median distance; the
+ * fovy with %g, the intensity with %.3g; strtof, as pf_cli parses them).
+ *
+ * Nothing here prints, except api_budget_check's warning when asked
+ * (the program's; pf_budget_warn). */
+#ifndef API_SETUP_H
+#define API_SETUP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "softgi/softgi.h"
+#include "pf_defaults.h"
+#include "pf_result.h"
+#include "pf_scene.h"
+
+struct gi_frame;
+struct gi_indirect_options;
+struct pf_jobs;
+struct pf_rt;
+struct rs_context;
+
+/* 640 x 480, the size of a desc with width = height = 0. */
+#define API_DEFAULT_WIDTH 640u
+#define API_DEFAULT_HEIGHT 480u
+
+/* Whether any triangle's material emits (an area light, gi_area.h). */
+int api_scene_has_emitters(const pf_scene *scene);
+
+/* Reads `path` (NULL: the built-in Cornell box, scenes/cornell-box) into
+ * `scene` with the memory budget max_memory (0: half the machine's). */
+pf_result api_scene_read(pf_scene *scene, const char *path, uint64_t max_memory, pf_error *err);
+
+/* The automatic camera of a validated scene without one: pf_defaults_camera
+ * (its reasons into *dc when not NULL), rounded through the --camera value
+ * written into spec (ex,ey,ez:tx,ty,tz:fovy). Named "default". */
+pf_result api_default_camera(const pf_scene *scene, pf_camera *camera, pf_default_camera *dc, char *spec,
+                             size_t spec_size, pf_error *err);
+
+/* The automatic light of a scene that nothing lights, at `camera`, for a
+ * width x height image: pf_defaults_light rounded through the --light value
+ * written into spec (point:x,y,z:1,1,1:I); *median (may be NULL) gets the
+ * median distance it was scaled for. Named "default"; not added. */
+pf_result api_default_light(const pf_scene *scene, const pf_camera *camera, uint32_t width, uint32_t height,
+                            pf_light *out, float *median, char *spec, size_t spec_size, pf_error *err);
+
+/* The memory budget (d->max_memory, pf_budget.h) against the scene as
+ * loaded plus what will be allocated: with `frame`, a frame of d's size
+ * (gi_frame_memory_estimate: planes, shadow maps, VPL maps, with `indirect`
+ * and not SOFTGI_DIRECT_ONLY the VPLs d asks for); without, the path
+ * tracer's image. Refused with one line naming what helps; with `warn`,
+ * a run that takes most of the machine's memory prints the program's
+ * warning on stderr. */
+pf_result api_budget_check(const softgi_desc *d, const pf_scene *scene, int frame, int indirect, int warn,
+                           pf_error *err);
+
+/* The many-light options of d: the method (NULL: ir), its parameters
+ * (pointers into d->params, which must outlive the frame), VPLs, bounces,
+ * tiles, clamp, filter, visibility and the ISM settings, pipelining,
+ * compensation, temporal accumulation, the indirect scale. Errors use the
+ * program's option names ("--ism-res ... need --visibility ism"). */
+pf_result api_indirect_options(const softgi_desc *d, struct gi_indirect_options *io, pf_error *err);
+
+/* The frame d describes, on a loaded scene: the budget check (warn as
+ * above), then gi_frame_create with the shadow-map size, the area-light
+ * sampling, anti-aliasing and, unless SOFTGI_DIRECT_ONLY or `indirect` is
+ * 0 (sequence --reference), the many-light stages. On failure nothing is
+ * left to free. */
+pf_result api_frame_create(struct gi_frame *f, const softgi_desc *d, const pf_scene *scene, const struct pf_rt *rt,
+                           struct rs_context *raster, struct pf_jobs *jobs, const pf_camera *camera, int indirect,
+                           int warn, pf_error *err);
+
+#endif

@@ -529,15 +529,34 @@ static void api__replace_lights(softgi_context *c, pf_light *next, uint32_t coun
     c->notes.auto_light = 0;
 }
 
+/* softgi_set_lights' checks and the new array (count lights, uninitialised)
+ * shared with softgi_internal_set_scene_lights; NULL with *r set on failure. */
+static pf_light *api__lights_begin(const softgi_context *c, const void *lights, uint32_t count, softgi_error *err,
+                                   softgi_result *r)
+{
+    *r = SOFTGI_ERR_ARGUMENT;
+    if (!c || !lights) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
+        return NULL;
+    }
+    if (!c->loaded) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: no scene loaded");
+        return NULL;
+    }
+    if (count == 0 || count > API__MAX_LIGHTS) {
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: count %u: give 1..%u lights", count, API__MAX_LIGHTS);
+        return NULL;
+    }
+    pf_light *next = malloc(count * sizeof *next);
+    if (!next) *r = api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory setting %u lights", count);
+    return next;
+}
+
 softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, uint32_t count, softgi_error *err)
 {
-    if (!c || !lights) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
-    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: no scene loaded");
-    if (count == 0 || count > API__MAX_LIGHTS)
-        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: count %u: give 1..%u lights", count,
-                          API__MAX_LIGHTS);
-    pf_light *next = malloc(count * sizeof *next);
-    if (!next) return api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory setting %u lights", count);
+    softgi_result r;
+    pf_light *next = api__lights_begin(c, lights, count, err, &r);
+    if (!next) return r;
     for (uint32_t i = 0; i < count; i++) {
         softgi_result r = api__light(&lights[i], i, &next[i], err);
         if (r != SOFTGI_OK) {
@@ -553,13 +572,9 @@ softgi_result softgi_set_lights(softgi_context *c, const softgi_light *lights, u
 softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light *lights, uint32_t count,
                                                softgi_error *err)
 {
-    if (!c || !lights) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: the context or lights is NULL");
-    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: no scene loaded");
-    if (count == 0 || count > API__MAX_LIGHTS)
-        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_lights: count %u: give 1..%u lights", count,
-                          API__MAX_LIGHTS);
-    pf_light *next = malloc(count * sizeof *next);
-    if (!next) return api__error(err, SOFTGI_ERR_OUT_OF_MEMORY, "out of memory setting %u lights", count);
+    softgi_result r;
+    pf_light *next = api__lights_begin(c, lights, count, err, &r);
+    if (!next) return r;
     memcpy(next, lights, count * sizeof *next);
     api__replace_lights(c, next, count);
     api__ok(err);

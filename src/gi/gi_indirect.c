@@ -594,7 +594,7 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     uint32_t t = item / rows, row = item % rows;
     if (t >= T || row >= io->tile_h[t]) return;
     const float weight = (float)T; /* each tile sees 1/T of the VPLs */
-    const uint32_t grp = (t + io->shift) % T; /* gi_indirect_tile_group */
+    const uint32_t grp = gi_tile_group(t, io->shift, T);
     uint32_t a0 = io->assign_start[grp], a1 = io->assign_start[grp + 1];
     const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;

@@ -195,12 +195,13 @@ void gi_stage_upsample(struct gi_frame *f);
 /* opt.temporal > 0: filtered blended with last frame's reprojected output. */
 void gi_stage_temporal(struct gi_frame *f);
 
-/* The group of VPLs (an index into assign_start) tile t shades with this
- * frame: t itself, or rotated by the frame with temporal accumulation. */
+/* The group of VPLs (an index into assign_start) tile t of T shades with
+ * this frame: t itself, or rotated by `shift` (ind->shift: the frame with
+ * temporal accumulation, the anti-aliasing sample). */
+static inline uint32_t gi_tile_group(uint32_t t, uint32_t shift, uint32_t T) { return (t + shift) % T; }
 static inline uint32_t gi_indirect_tile_group(const gi_indirect *ind, uint32_t t)
 {
-    uint32_t T = ind->n * ind->m;
-    return (t + ind->shift) % T;
+    return gi_tile_group(t, ind->shift, ind->n * ind->m);
 }
 
 /* Irradiance at (p, n) from one VPL with the bounded geometry term, no

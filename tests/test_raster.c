@@ -327,6 +327,7 @@ static void test_clipping(void **state)
                              0.1f / h.t, h.t);
             }
         assert_true(hits > W * H / 3);
+        if (mismatch > W) print_message("mismatch %u hits %u\n", mismatch, hits);
         assert_true(mismatch <= W); /* at most the pixels along the far edge of the quad */
         /* every covered pixel was covered exactly once (the two triangles share an edge) */
         for (uint32_t i = 0; i < W * H; i++) assert_true(fx.t.coverage[i] <= 1);

@@ -3,11 +3,11 @@
  * on every path"). The kernels are written once over the SIMD vocabulary
  * (src/base/simd) and compiled once per instruction set; the scalar compile
  * is the reference. What is checked:
- * - the tile raster's row and block kernels (rs_raster_kernels): random
- *   small and large triangles over an 8x8 block with random earlier depths,
- *   every lane mask and row count; depth, triangle id and the "wrote"
- *   result of every table (scalar included) equal a pixel-by-pixel int64
- *   reference, which checks the 32-bit lanes of small triangles;
+ * - the tile raster (rs_raster_kernels): random tiles of small, medium and
+ *   huge triangles (masked ones too) over random earlier depths, partial
+ *   tiles at the image's edge; depth, triangle id and coverage of every
+ *   table (scalar included) equal a pixel-by-pixel int64 reference, which
+ *   checks the 32-bit forms and walks against exact integers;
  * - the paraboloid lookup (rs_para_lookup.h, rs_para_kernels.visible)
  *   against the scalar rs_para_visible_scaled: random maps (empty and
  *   outside codes included), VPL frames, points in front, behind, on the
@@ -66,120 +66,192 @@ static int tables(rs_simd out[3])
 
 /* ------------------------------------------------------------ raster */
 
-static void random_tri(uint64_t *s, rs__tri *t, int small)
+/* A set-up triangle from three snapped vertices (1/256 pixel), as
+ * rs__setup_tri makes it (edge functions with the top-left rule, the box of
+ * covered pixel centres inside a target of tw x th, the small-triangle
+ * form), with a random depth plane; `c` gets the exact 64-bit constants
+ * (the record may hold the 32-bit form instead). 0 for a triangle of zero
+ * area or one covering no pixel centre. */
+static int make_tri(uint64_t *s, rs__tri *t, int64_t c[3], const int64_t X[3], const int64_t Y[3], int32_t tw,
+                    int32_t th)
 {
     memset(t, 0, sizeof *t);
-    int64_t lim = small ? (1 << 14) : (1 << 24); /* |a|, |b| in 1/256 pixel units: 2^14 keeps reach < 2^29 */
+    int64_t x[3] = {X[0], X[1], X[2]}, y[3] = {Y[0], Y[1], Y[2]};
+    int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    if (area == 0) return 0;
+    if (area < 0) {
+        int64_t tx = x[1], ty = y[1];
+        x[1] = x[2], y[1] = y[2], x[2] = tx, y[2] = ty;
+    }
+    int64_t minx = x[0], maxx = x[0], miny = y[0], maxy = y[0];
+    for (int k = 1; k < 3; k++) {
+        minx = x[k] < minx ? x[k] : minx, maxx = x[k] > maxx ? x[k] : maxx;
+        miny = y[k] < miny ? y[k] : miny, maxy = y[k] > maxy ? y[k] : maxy;
+    }
+    int64_t px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> 8, px1 = (maxx - RS_SUB / 2) >> 8;
+    int64_t py0 = (miny - RS_SUB / 2 + RS_SUB - 1) >> 8, py1 = (maxy - RS_SUB / 2) >> 8;
+    px0 = px0 < 0 ? 0 : px0, py0 = py0 < 0 ? 0 : py0;
+    px1 = px1 > tw - 1 ? tw - 1 : px1, py1 = py1 > th - 1 ? th - 1 : py1;
+    if (px0 > px1 || py0 > py1) return 0;
     for (int k = 0; k < 3; k++) {
-        t->a[k] = (int32_t)rng_range(s, -lim, lim);
-        t->b[k] = (int32_t)rng_range(s, -lim, lim);
+        int a = k, b = (k + 1) % 3;
+        int64_t A = y[a] - y[b], B = x[b] - x[a], C = -A * x[a] - B * y[a];
+        int top_left = (A == 0 && B > 0) || A > 0;
+        t->a[k] = (int32_t)A, t->b[k] = (int32_t)B;
+        c[k] = t->c[k] = C - (top_left ? 0 : 1);
     }
-    if (small) { /* rs__setup_tri's test */
-        t->small = 1;
-        for (int k = 0; k < 3; k++) {
-            int64_t A = t->a[k], B = t->b[k];
-            if (((A < 0 ? -A : A) + (B < 0 ? -B : B)) * RS_SUB * 7 >= ((int64_t)1 << 29)) t->small = 0;
-        }
-    }
+    t->x0 = (int32_t)px0, t->x1 = (int32_t)px1, t->y0 = (int32_t)py0, t->y1 = (int32_t)py1;
+    rs__tri_classify(t);
     t->zv = rng_unit(s);
-    t->xv = rng_range(s, 0, 64) + rng_unit(s);
-    t->yv = rng_range(s, 0, 64) + rng_unit(s);
-    t->dzdx_d = (rng_unit(s) - 0.5) * 0.02;
-    t->dzdy_d = (rng_unit(s) - 0.5) * 0.02;
-    t->dzdx = (float)t->dzdx_d;
+    t->xv = (double)x[0] / RS_SUB;
+    t->yv = (double)y[0] / RS_SUB;
+    t->dzdx_d = (rng_unit(s) - 0.5) * 0.004;
+    t->dzdy_d = (rng_unit(s) - 0.5) * 0.004;
     t->zmin = (float)rng_unit(s) * 0.5f;
     t->zmax = t->zmin + (float)rng_unit(s) * 0.7f;
     t->prim = (uint32_t)rng_next(s);
+    t->masked = RS__NOT_MASKED;
+    return 1;
 }
 
-/* The tile raster's definition, pixel by pixel in exact int64 (the scalar
- * row of softgi before the kernels were written over the vocabulary): every
- * table must give its bits. */
-static int ref_rows(const rs__tri *t, int32_t x, int32_t y0, int32_t y1, const int64_t e_in[3], unsigned lanes,
-                    float *depth, uint32_t *prim, size_t stride)
+/* The test's alpha test: a fixed hash of the pixel and triangle. */
+static int test_alpha(const void *ctx, const void *masked, const rs__tri *t, int32_t x, int32_t y)
 {
-    int64_t e[3] = {e_in[0], e_in[1], e_in[2]};
-    int wrote = 0;
-    for (int32_t y = y0; y <= y1; y++) {
-        float zrow = rs__zrow(t, x, y);
-        float *d = depth + (size_t)(y - y0) * stride;
-        uint32_t *pr = prim ? prim + (size_t)(y - y0) * stride : NULL;
-        for (int i = 0; i < 8; i++) {
-            if (!(lanes >> i & 1)) continue;
-            int64_t e0 = e[0] + (int64_t)t->a[0] * RS_SUB * i, e1 = e[1] + (int64_t)t->a[1] * RS_SUB * i;
-            int64_t e2 = e[2] + (int64_t)t->a[2] * RS_SUB * i;
-            if ((e0 | e1 | e2) < 0) continue;
-            float z = zrow + t->dzdx * (float)i;
-            z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
-            if (z > d[i]) {
-                d[i] = z;
-                if (pr) pr[i] = t->prim;
-                wrote = 1;
-            }
-        }
-        for (int k = 0; k < 3; k++) e[k] += (int64_t)t->b[k] * RS_SUB;
-    }
-    return wrote;
+    (void)ctx, (void)masked;
+    uint32_t h = (uint32_t)x * 0x9E3779B1u ^ (uint32_t)y * 0x85EBCA77u ^ t->prim;
+    return (h ^ h >> 15) % 3 != 0;
 }
 
+/* The tile raster's definition, pixel by pixel in exact int64 (what
+ * rs_raster_kernels.h writes down): every table must give its bits. */
+static void ref_tile(const rs__tri *const *tris, const int64_t (*c)[3], const int *masked, uint32_t count,
+                     int32_t x0, int32_t y0, int32_t xlim, int32_t ylim, float *depth, uint32_t *prim,
+                     uint32_t *coverage)
+{
+    for (uint32_t i = 0; i < count; i++) {
+        const rs__tri *t = tris[i];
+        float zt = (float)(t->zv + t->dzdx_d * ((double)x0 + 0.5 - t->xv) + t->dzdy_d * ((double)y0 + 0.5 - t->yv));
+        float dzdx = (float)t->dzdx_d, dzdy = (float)t->dzdy_d;
+        for (int32_t y = 0; y < ylim; y++)
+            for (int32_t x = 0; x < xlim; x++) {
+                int64_t px = (int64_t)(x0 + x) * RS_SUB + RS_SUB / 2, py = (int64_t)(y0 + y) * RS_SUB + RS_SUB / 2;
+                int in = 1;
+                for (int k = 0; k < 3; k++) in &= t->a[k] * px + t->b[k] * py + c[i][k] >= 0;
+                if (!in) continue;
+                size_t o = (size_t)y * 64 + (size_t)x;
+                if (coverage) coverage[o]++;
+                float z = (zt + dzdx * (float)x) + dzdy * (float)y;
+                z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
+                if (!(z > depth[o])) continue;
+                if (masked[i] && !test_alpha(NULL, NULL, t, x0 + x, y0 + y)) continue;
+                depth[o] = z;
+                if (prim) prim[o] = t->prim;
+            }
+    }
+}
+
+/* A kernel's tile buffer (stamp order, rs_raster_kernels.h) as rows of 64. */
+static void unstamp(const uint32_t *in, uint32_t *out, uint32_t stamp_h)
+{
+    for (uint32_t y = 0; y < 64; y++)
+        for (uint32_t x = 0; x < 64; x++)
+            out[y * 64 + x] = in[((y / stamp_h) * 16 + x / 4) * 4 * stamp_h + (y % stamp_h) * 4 + x % 4];
+}
+static void stamp(const uint32_t *in, uint32_t *out, uint32_t stamp_h)
+{
+    for (uint32_t y = 0; y < 64; y++)
+        for (uint32_t x = 0; x < 64; x++)
+            out[((y / stamp_h) * 16 + x / 4) * 4 * stamp_h + (y % stamp_h) * 4 + x % 4] = in[y * 64 + x];
+}
+
+/* Random tiles of a few triangles each: small ones (the 32-bit form and the
+ * 2 x 2 walk), medium ones (banded walks), huge ones reaching far into the
+ * guard band (64-bit rebasing, dropped edges), partial tiles at the image's
+ * edge, masked triangles, with and without the id and coverage planes;
+ * every table (scalar included) against the int64 reference. */
 static void test_raster_kernels(void **state)
 {
     (void)state;
     rs_simd simd[3];
     int n = tables(simd);
     uint64_t s = 17;
-    enum { STRIDE = 64 };
-    float depth[3][8 * STRIDE], rdepth[8 * STRIDE];
-    uint32_t prim[3][8 * STRIDE], rprim[8 * STRIDE];
-    uint32_t blocks = 0, wrote = 0;
-    for (int it = 0; it < 40000; it++) {
-        rs__tri t;
-        random_tri(&s, &t, it % 4 != 0);
-        int32_t x = (int32_t)rng_range(&s, 0, 56), y0 = (int32_t)rng_range(&s, 0, 56);
-        int32_t y1 = y0 + (int32_t)rng_range(&s, 0, 7);
-        unsigned lanes = (unsigned)rng_range(&s, 1, 255);
-        if (it % 3 == 0) lanes = 0xffu;
-        /* edge values at (x, y0): near the edges, so coverage varies over
-         * the block; blocks an edge misses entirely are rejected before the
-         * kernels, as rs__raster_tri does */
-        int64_t e[3], step[3];
-        int reject = 0;
-        for (int k = 0; k < 3; k++) {
-            step[k] = (int64_t)t.a[k] * RS_SUB;
-            int64_t span = (int64_t)(t.a[k] < 0 ? -t.a[k] : t.a[k]) * RS_SUB * 8 +
-                           (int64_t)(t.b[k] < 0 ? -t.b[k] : t.b[k]) * RS_SUB * 8 + 1;
-            e[k] = rng_range(&s, -span, 2 * span);
-            if (it % 7 == 0) e[k] += (int64_t)1 << 31; /* far inside: the 2^30 clamp */
-            int64_t emax = (t.a[k] > 0 ? step[k] * 7 : 0) + (t.b[k] > 0 ? (int64_t)t.b[k] * RS_SUB * (y1 - y0) : 0);
-            reject |= e[k] + emax < 0;
+    enum { MAXT = 12 };
+    _Alignas(64) uint32_t depth[64 * 64], prim[64 * 64], cov[64 * 64];
+    uint32_t rdepth[64 * 64], rprim[64 * 64], rcov[64 * 64], got[64 * 64], init[64 * 64];
+    uint64_t written = 0, pixels = 0, small = 0, large = 0, tiles = 0;
+    for (int it = 0; it < 3000; it++) {
+        int32_t tw = 64 * (int32_t)rng_range(&s, 1, 8), th = 64 * (int32_t)rng_range(&s, 1, 8);
+        if (it % 5 == 0) tw -= (int32_t)rng_range(&s, 1, 63), th -= (int32_t)rng_range(&s, 1, 63);
+        int32_t x0 = 64 * (int32_t)rng_range(&s, 0, (tw - 1) / 64), y0 = 64 * (int32_t)rng_range(&s, 0, (th - 1) / 64);
+        int32_t xlim = tw - x0 < 64 ? tw - x0 : 64, ylim = th - y0 < 64 ? th - y0 : 64;
+        rs__tri tri[MAXT];
+        const rs__tri *tp[MAXT];
+        const void *mp[MAXT];
+        int64_t c[MAXT][3];
+        int masked[MAXT];
+        uint32_t count = 0;
+        for (int k = 0; k < MAXT; k++) {
+            int kind = (int)rng_range(&s, 0, 9); /* 0-5 small, 6-8 medium, 9 huge */
+            int64_t spread = kind < 6 ? 12 * 256 : kind < 9 ? 120 * 256 : (int64_t)30000 * 256;
+            int64_t cx = ((int64_t)x0 + rng_range(&s, -8, 72)) * 256, cy = ((int64_t)y0 + rng_range(&s, -8, 72)) * 256;
+            int64_t X[3], Y[3];
+            for (int v = 0; v < 3; v++) X[v] = cx + rng_range(&s, -spread, spread), Y[v] = cy + rng_range(&s, -spread, spread);
+            if (!make_tri(&s, &tri[count], c[count], X, Y, tw, th)) continue;
+            masked[count] = rng_range(&s, 0, 7) == 0;
+            tri[count].masked = masked[count] ? 0u : RS__NOT_MASKED;
+            mp[count] = masked[count] ? &tri[count] : NULL;
+            tp[count] = &tri[count];
+            small += tri[count].flags & RS__SMALL ? 1 : 0;
+            large += kind == 9;
+            count++;
         }
-        if (reject) continue;
-        blocks++;
-        float init[8 * STRIDE];
-        for (int i = 0; i < 8 * STRIDE; i++) init[i] = (float)rng_unit(&s) * 0.8f;
-        int w[3];
-        for (int p = 0; p < n; p++) {
-            const rs_raster_kernels *k = rs_raster_kernels_for(simd[p]);
-            memcpy(depth[p], init, sizeof init);
-            memset(prim[p], 0xab, sizeof prim[p]);
-            if (it % 2)
-                w[p] = k->block(&t, x, y0, y1, e, lanes, depth[p], it % 5 ? prim[p] : NULL, STRIDE);
-            else { /* one row */
-                w[p] = k->row(&t, x, y0, rs__zrow(&t, x, y0), e, step, lanes, depth[p], it % 5 ? prim[p] : NULL);
-            }
+        tiles++;
+        for (int i = 0; i < 64 * 64; i++) {
+            float z = (float)rng_unit(&s) * 0.8f;
+            if (it % 4 == 0) z = 0.0f; /* a cleared tile */
+            memcpy(&init[i], &z, 4);
         }
+        int with_prim = it % 3 != 0, with_cov = it % 4 == 1;
         memcpy(rdepth, init, sizeof init);
         memset(rprim, 0xab, sizeof rprim);
-        int rw = ref_rows(&t, x, y0, it % 2 ? y1 : y0, e, lanes, rdepth, it % 5 ? rprim : NULL, STRIDE);
-        wrote += (uint32_t)rw;
+        memset(rcov, 0, sizeof rcov);
+        ref_tile(tp, (const int64_t(*)[3])c, masked, count, x0, y0, xlim, ylim, (float *)rdepth,
+                 with_prim ? rprim : NULL, with_cov ? rcov : NULL);
+        for (int i = 0; i < 64 * 64; i++) pixels++, written += rdepth[i] != init[i];
         for (int p = 0; p < n; p++) {
-            if (w[p] != rw || memcmp(depth[p], rdepth, sizeof rdepth) || memcmp(prim[p], rprim, sizeof rprim))
-                fail_msg("raster kernel %s differs from the reference at iteration %d (small %u, lanes %#x, rows %d)",
-                         rs_raster_kernels_for(simd[p])->isa, it, t.small, lanes, (int)(y1 - y0 + 1));
+            const rs_raster_kernels *kern = rs_raster_kernels_for(simd[p]);
+            stamp(init, depth, kern->stamp_h);
+            memset(prim, 0xab, sizeof prim);
+            memset(cov, 0, sizeof cov);
+            rs__tile_in in = {tp, mp, count, x0, y0, xlim, ylim, test_alpha, NULL, (float *)depth,
+                              with_prim ? prim : NULL, with_cov ? cov : NULL};
+            kern->tile(&in);
+            unstamp(depth, got, kern->stamp_h);
+            for (int i = 0; i < 64 * 64; i++)
+                if (got[i] != rdepth[i] && (i % 64 < xlim && i / 64 < ylim))
+                    fail_msg("raster kernel %s: depth differs at (%d, %d) of tile %d (iteration %d)", kern->isa,
+                             i % 64, i / 64, (int)tiles, it);
+            if (with_prim) {
+                unstamp(prim, got, kern->stamp_h);
+                for (int i = 0; i < 64 * 64; i++)
+                    if (got[i] != rprim[i] && (i % 64 < xlim && i / 64 < ylim))
+                        fail_msg("raster kernel %s: id differs at (%d, %d) (iteration %d)", kern->isa, i % 64, i / 64, it);
+            }
+            if (with_cov) {
+                unstamp(cov, got, kern->stamp_h);
+                for (int i = 0; i < 64 * 64; i++)
+                    if (got[i] != rcov[i] && (i % 64 < xlim && i / 64 < ylim))
+                        fail_msg("raster kernel %s: coverage differs at (%d, %d) (iteration %d)", kern->isa, i % 64,
+                                 i / 64, it);
+            }
         }
     }
-    print_message("raster kernels: %u blocks and rows, %u wrote, %d paths identical\n", blocks, wrote, n);
-    assert_true(wrote > blocks / 4 && wrote < blocks);
+    print_message("raster kernels: %llu tiles, %llu small and %llu huge triangles, %.1f%% of pixels written, %d paths "
+                  "identical\n",
+                  (unsigned long long)tiles, (unsigned long long)small, (unsigned long long)large,
+                  100.0 * (double)written / (double)pixels, n);
+    assert_true(written > pixels / 20 && written < pixels);
+    assert_true(small > 1000 && large > 1000);
 }
 
 /* ------------------------------------------------------------ paraboloid lookup */

@@ -24,15 +24,12 @@
 
 #define RS_CLUSTER 256     /* triangles per culling cluster */
 #define RS_CHUNK 2048      /* triangles per setup/binning job item */
-#define RS_BLOCK 8         /* hierarchical-Z block size (pixels) */
 #define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
 #define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
-#define RS_PREFETCH 4      /* triangles (tile raster) fetched ahead of use */
 
 /* ------------------------------------------------------------------ types */
 
 /* rs__tri, the set-up triangle, is in rs_raster_kernels.h (the kernels read it). */
-#define RS__NOT_MASKED 0xffffffffu
 
 /* The alpha test's extra planes for a masked triangle: 1/w, b1/w, b2/w
  * (b = barycentrics of the scene triangle), so b1 = (b1/w) / (1/w) is
@@ -66,6 +63,8 @@ typedef struct rs__chunk {
 typedef struct rs__vtx {
     float x, y, z, w;
     int32_t X, Y;
+    float zs, iw; /* z / w and 1 / w, inside the frustum */
+    float rx, ry; /* the unsnapped screen position minus the snapped one, pixels (rs__snap_rest) */
 } rs__vtx;
 #define RS__NO_SNAP INT32_MIN
 
@@ -73,13 +72,20 @@ typedef struct rs__cluster {
     pf_vec3 lo, hi;
 } rs__cluster;
 
+/* A tile's triangles in drawing order, handed to the kernel in one call. */
+typedef struct rs__list {
+    const rs__tri **tris;
+    const void **masked;
+    uint32_t cap;
+} rs__list;
+
 struct rs_scratch {
     uint32_t chunk_count;
     rs__vtx *vtx; /* vertex_count: clip position and, inside the frustum, the snapped screen position */
     uint8_t *cluster_visible;
     rs__chunk *chunks; /* chunk_count */
-    rs_stats *tile_stats; /* rs_render: one per tile, grown with the largest target */
-    uint32_t tile_stats_cap;
+    rs__list *lists; /* per worker: a tile's triangles for the kernel, grown with the largest tile */
+    uint32_t list_count;
     /* allocation failures since rs_scratch_status last read them: failed
      * chunks and passes counted after each pass, tiles by the job items
      * (relaxed atomics) */
@@ -100,6 +106,7 @@ struct rs_context {
     rs__cluster *clusters;
     rs_scratch *scratch; /* for rs_render */
     rs_resolve_tri *resolve_table; /* the G-buffer resolve's per-triangle constants */
+    uint8_t *tri_masked;           /* per triangle: 1 if its material is alpha-masked (alphaMode MASK) */
 };
 
 /* The state of one pass, shared by the job items. */
@@ -216,7 +223,8 @@ void rs_scratch_destroy(rs_scratch *s)
     if (!s) return;
     free(s->vtx);
     free(s->cluster_visible);
-    free(s->tile_stats);
+    for (uint32_t w = 0; w < s->list_count; w++) free(s->lists[w].tris), free(s->lists[w].masked);
+    free(s->lists);
     if (s->chunks)
         for (uint32_t c = 0; c < s->chunk_count; c++) rs__chunk_free(&s->chunks[c]);
     free(s->chunks);
@@ -292,7 +300,10 @@ pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jo
     }
     ctx->scratch = rs_scratch_create(ctx);
     ctx->resolve_table = rs_resolve_table_create(scene);
-    if (!ctx->scratch || !ctx->resolve_table) goto oom;
+    ctx->tri_masked = malloc(scene->tri_count ? scene->tri_count : 1);
+    if (!ctx->scratch || !ctx->resolve_table || !ctx->tri_masked) goto oom;
+    for (uint32_t t = 0; t < scene->tri_count; t++)
+        ctx->tri_masked[t] = scene->materials[scene->tri_material[t]].alpha_mode == PF_ALPHA_MASK;
     *out = ctx;
     return PF_OK;
 oom:
@@ -308,6 +319,7 @@ void rs_context_destroy(rs_context *ctx)
     free(ctx->weld_pos);
     free(ctx->weld_idx);
     rs_resolve_table_destroy(ctx->resolve_table);
+    free(ctx->tri_masked);
     free(ctx);
 }
 
@@ -348,6 +360,18 @@ static void rs__snap(float x, float y, float w, float W, float H, int64_t *X, in
     *Y = rs__floor64(sy * (float)RS_SUB + 0.5f);
 }
 
+/* What snapping took off a vertex: its exact screen position (in double,
+ * pixels) minus the snapped one, as floats (below 1/512 pixel, so float
+ * keeps it to 2^-33 pixel). The depth plane goes through the unsnapped
+ * positions: a triangle seen at a grazing angle whose clipped vertices lie
+ * far out in the guard band would otherwise tilt by the snapping error. */
+static void rs__snap_rest(float x, float y, float w, float W, float H, int64_t X, int64_t Y, float *rx, float *ry)
+{
+    double dx = ((double)x / w * 0.5 + 0.5) * W, dy = (0.5 - (double)y / w * 0.5) * H;
+    *rx = (float)(dx - (double)X * (1.0 / RS_SUB));
+    *ry = (float)(dy - (double)Y * (1.0 / RS_SUB));
+}
+
 /* Transforms vertices [v0, v1) to clip space (-ffp-contract=off: each
  * product and sum rounded on its own) and snaps those inside the frustum
  * with the very operations rs__setup_tri would use, so the bits are the
@@ -364,10 +388,14 @@ static void rs__transform(const rs__pass_state *st, const pf_vec3 *pos, rs__vtx 
         c->z = M[2] * x + M[6] * y + M[10] * z + M[14];
         c->w = M[3] * x + M[7] * y + M[11] * z + M[15];
         c->X = c->Y = RS__NO_SNAP;
+        c->zs = c->iw = c->rx = c->ry = 0.0f;
         if (rs__inside(c->x, c->y, c->z, c->w)) {
             int64_t X, Y;
             rs__snap(c->x, c->y, c->w, W, H, &X, &Y); /* |X|, |Y| < 2^23 inside the frustum */
             c->X = (int32_t)X, c->Y = (int32_t)Y;
+            c->iw = 1.0f / c->w;
+            c->zs = c->z * c->iw;
+            rs__snap_rest(c->x, c->y, c->w, W, H, X, Y, &c->rx, &c->ry);
         }
     }
 }
@@ -481,49 +509,44 @@ static int rs__grow_aligned(void **p, uint32_t *cap, uint32_t need, size_t elem,
     return 1;
 }
 
-/* Sets up one (clipped) screen triangle and bins it. `snapped`: the
- * vertices' snapped positions from the vertex stage (X0, Y0, X1, ...), or
- * NULL to snap here (clipped vertices). */
-static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim, const int32_t *snapped)
+/* A vertex ready for setup: its snapped screen position (1/RS_SUB pixel, y
+ * down), zs = z / w, 1/w, and the barycentrics (u, v) of the scene
+ * triangle it lies at (vertices 1 and 2 of an unclipped triangle: (1, 0),
+ * (0, 1); the alpha test's planes interpolate them). */
+typedef struct rs__sv {
+    int64_t X, Y;
+    float z, iw, u, v;
+    float rx, ry; /* rs__snap_rest */
+} rs__sv;
+
+/* The snapped vertex of a clip-space vertex (clipped ones; the vertex stage
+ * does the same for vertices inside the frustum). 0 for a vertex at the eye
+ * (w = 0 passes the z >= 0 plane): every point of its triangle then lies on
+ * a line through the eye with one of the other two, so the triangle projects
+ * to a segment and covers nothing; 1/w = inf would snap to NaN (undefined
+ * as an integer). */
+static int rs__snap_cv(const rs__pass_state *st, const rs__cv *c, rs__sv *out)
+{
+    if (!(c->w >= FLT_MIN)) return 0;
+    float W = (float)st->t->width, H = (float)st->t->height;
+    rs__snap(c->x, c->y, c->w, W, H, &out->X, &out->Y);
+    rs__snap_rest(c->x, c->y, c->w, W, H, out->X, out->Y, &out->rx, &out->ry);
+    out->iw = 1.0f / c->w;
+    out->z = c->z * out->iw;
+    out->u = c->u, out->v = c->v;
+    return 1;
+}
+
+/* Sets up one screen triangle (snapped vertices) and bins it. */
+static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3], uint32_t prim)
 {
     const rs_target *t = st->t;
-    float W = (float)t->width, H = (float)t->height;
-    /* snapped positions first: most triangles of a detailed scene are
-     * rejected by the area or pixel-centre tests below, before the depth and
-     * attribute terms are needed */
-    int64_t X[3], Y[3];
-    for (int k = 0; k < 3; k++) {
-        if (snapped)
-            X[k] = snapped[2 * k], Y[k] = snapped[2 * k + 1];
-        else if (!(v[k].w >= FLT_MIN)) {
-            /* a clipped vertex at the eye (w = 0 passes the z >= 0 plane):
-             * every point of the triangle then lies on a line through the
-             * eye with one of the other two, so it projects to a segment and
-             * covers nothing; 1/w = inf would snap to NaN (undefined as an
-             * integer) */
-            ch->stats.triangles_culled++;
-            return;
-        } else
-            rs__snap(v[k].x, v[k].y, v[k].w, W, H, &X[k], &Y[k]);
-    }
-    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
-    /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
-    if (area == 0 || (st->pass->cull == RS_CULL_BACK && area > 0) || (st->pass->cull == RS_CULL_FRONT && area < 0)) {
-        ch->stats.triangles_culled++;
-        return;
-    }
-    int o[3] = {0, 1, 2}; /* vertex order: the interior on the positive side of every edge */
-    if (area < 0) {
-        int64_t tx = X[1], ty = Y[1];
-        X[1] = X[2], Y[1] = Y[2];
-        X[2] = tx, Y[2] = ty;
-        o[1] = 2, o[2] = 1;
-        area = -area;
-    }
-    int64_t minx = X[0], maxx = X[0], miny = Y[0], maxy = Y[0];
+    /* the pixel box first: most triangles of a detailed scene cover no pixel
+     * centre, and are rejected here before anything else is computed */
+    int64_t minx = sv[0].X, maxx = sv[0].X, miny = sv[0].Y, maxy = sv[0].Y;
     for (int k = 1; k < 3; k++) {
-        minx = X[k] < minx ? X[k] : minx, maxx = X[k] > maxx ? X[k] : maxx;
-        miny = Y[k] < miny ? Y[k] : miny, maxy = Y[k] > maxy ? Y[k] : maxy;
+        minx = sv[k].X < minx ? sv[k].X : minx, maxx = sv[k].X > maxx ? sv[k].X : maxx;
+        miny = sv[k].Y < miny ? sv[k].Y : miny, maxy = sv[k].Y > maxy ? sv[k].Y : maxy;
     }
     /* pixels whose centre 256 x + 128 lies in [min, max] */
     int64_t px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> RS_SUBPIXEL_BITS, px1 = (maxx - RS_SUB / 2) >> RS_SUBPIXEL_BITS;
@@ -536,17 +559,17 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         ch->stats.triangles_culled++; /* falls between pixel centres or off screen */
         return;
     }
-    float Z[3], IW[3], U[3], V[3];
-    double DX[3], DY[3]; /* unsnapped screen positions: the depth plane goes through these */
-    for (int k = 0; k < 3; k++) {
-        const rs__cv *c = &v[o[k]];
-        float iw = 1.0f / c->w;
-        DX[k] = ((double)c->x / c->w * 0.5 + 0.5) * W;
-        DY[k] = (0.5 - (double)c->y / c->w * 0.5) * H;
-        Z[k] = c->z * iw;
-        IW[k] = iw;
-        U[k] = c->u * iw;
-        V[k] = c->v * iw;
+    int64_t X[3] = {sv[0].X, sv[1].X, sv[2].X}, Y[3] = {sv[0].Y, sv[1].Y, sv[2].Y};
+    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
+    /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
+    if (area == 0 || (st->pass->cull == RS_CULL_BACK && area > 0) || (st->pass->cull == RS_CULL_FRONT && area < 0)) {
+        ch->stats.triangles_culled++;
+        return;
+    }
+    int o[3] = {0, 1, 2}; /* vertex order: the interior on the positive side of every edge */
+    if (area < 0) {
+        o[1] = 2, o[2] = 1;
+        X[1] = sv[2].X, Y[1] = sv[2].Y, X[2] = sv[1].X, Y[2] = sv[1].Y;
     }
     if (!rs__grow_aligned((void **)&ch->tris, &ch->tri_cap, ch->tri_count + 1, sizeof(rs__tri), ch->tri_count)) {
         ch->failed = 1; /* out of memory: the chunk is dropped (rs_scratch_status) */
@@ -562,20 +585,50 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
          * going +x (A == 0, B > 0), a left edge goes up (A > 0). Pixels exactly
          * on other edges are excluded: test E - 1 >= 0 there. */
         int top_left = (A == 0 && B > 0) || A > 0;
-        int64_t reach = ((A < 0 ? -A : A) + (B < 0 ? -B : B)) * RS_SUB * (RS_BLOCK - 1);
-        if (k == 0) r->small = 1;
-        if (reach >= ((int64_t)1 << 29)) r->small = 0;
         r->a[k] = (int32_t)A;
         r->b[k] = (int32_t)B;
         r->c[k] = C - (top_left ? 0 : 1);
     }
-    /* depth plane through the snapped vertices, in pixel units */
-    float fx[3], fy[3];
-    for (int k = 0; k < 3; k++) fx[k] = (float)X[k] * (1.0f / RS_SUB), fy[k] = (float)Y[k] * (1.0f / RS_SUB);
-    float e1x = fx[1] - fx[0], e1y = fy[1] - fy[0], e2x = fx[2] - fx[0], e2y = fy[2] - fy[0];
-    float inv_area = 1.0f / (e1x * e2y - e2x * e1y);
-    /* a screen-linear quantity q: plane through the vertices, evaluated as
-     * q0 + dqdx x + dqdy y at pixel centre (x + .5, y + .5) */
+    r->x0 = (int32_t)px0, r->x1 = (int32_t)px1, r->y0 = (int32_t)py0, r->y1 = (int32_t)py1;
+    r->flags = 0;
+    rs__tri_classify(r);
+    /* the depth plane through the unsnapped vertices (rs__snap_rest), in
+     * pixel units, in double relative to vertex 0: the snapped differences
+     * are exact, so clipped vertices far out in the guard band cost no
+     * precision through cancellation */
+    float Z[3] = {sv[o[0]].z, sv[o[1]].z, sv[o[2]].z};
+    {
+        double rx0 = sv[o[0]].rx, ry0 = sv[o[0]].ry;
+        double dx1 = (double)(X[1] - X[0]) * (1.0 / RS_SUB) + ((double)sv[o[1]].rx - rx0);
+        double dy1 = (double)(Y[1] - Y[0]) * (1.0 / RS_SUB) + ((double)sv[o[1]].ry - ry0);
+        double dx2 = (double)(X[2] - X[0]) * (1.0 / RS_SUB) + ((double)sv[o[2]].rx - rx0);
+        double dy2 = (double)(Y[2] - Y[0]) * (1.0 / RS_SUB) + ((double)sv[o[2]].ry - ry0);
+        double d1 = (double)Z[1] - Z[0], d2 = (double)Z[2] - Z[0];
+        double den = dx1 * dy2 - dx2 * dy1;
+        double inv = den != 0.0 ? 1.0 / den : 0.0; /* the snapped area is nonzero; the exact one can vanish */
+        r->dzdx_d = (d1 * dy2 - d2 * dy1) * inv;
+        r->dzdy_d = (d2 * dx1 - d1 * dx2) * inv;
+        r->zv = Z[0];
+        r->xv = (double)X[0] * (1.0 / RS_SUB) + rx0;
+        r->yv = (double)Y[0] * (1.0 / RS_SUB) + ry0;
+    }
+    r->masked = RS__NOT_MASKED;
+    if (st->ctx->tri_masked[prim]) {
+        if (!rs__grow((void **)&ch->masked, &ch->masked_cap, ch->masked_count + 1, sizeof(rs__tri_masked))) {
+            ch->failed = 1;
+            return;
+        }
+        rs__tri_masked *m = &ch->masked[ch->masked_count];
+        r->masked = ch->masked_count++;
+        /* a screen-linear quantity q: plane through the vertices, evaluated
+         * as q0 + dqdx x + dqdy y at pixel centre (x + .5, y + .5) */
+        float fx[3], fy[3], IW[3], U[3], V[3];
+        for (int k = 0; k < 3; k++) {
+            fx[k] = (float)X[k] * (1.0f / RS_SUB), fy[k] = (float)Y[k] * (1.0f / RS_SUB);
+            IW[k] = sv[o[k]].iw, U[k] = sv[o[k]].u * IW[k], V[k] = sv[o[k]].v * IW[k];
+        }
+        float e1x = fx[1] - fx[0], e1y = fy[1] - fy[0], e2x = fx[2] - fx[0], e2y = fy[2] - fy[0];
+        float inv_area = 1.0f / (e1x * e2y - e2x * e1y);
 #define RS__PLANE(Q, q0, dqdx, dqdy)                                                                                   \
     do {                                                                                                           \
         float d1 = Q[1] - Q[0], d2 = Q[2] - Q[0];                                                                  \
@@ -583,34 +636,13 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
         dqdy = (d2 * e1x - d1 * e2x) * inv_area;                                                                   \
         q0 = Q[0] + dqdx * (0.5f - fx[0]) + dqdy * (0.5f - fy[0]);                                                 \
     } while (0)
-    {
-        double dx1 = DX[1] - DX[0], dy1 = DY[1] - DY[0], dx2 = DX[2] - DX[0], dy2 = DY[2] - DY[0];
-        double d1 = (double)Z[1] - Z[0], d2 = (double)Z[2] - Z[0];
-        double den = dx1 * dy2 - dx2 * dy1;
-        double inv = den != 0.0 ? 1.0 / den : 0.0; /* snapped area is nonzero; the exact one can vanish */
-        r->dzdx_d = (d1 * dy2 - d2 * dy1) * inv;
-        r->dzdy_d = (d2 * dx1 - d1 * dx2) * inv;
-        r->zv = Z[0];
-        r->xv = DX[0];
-        r->yv = DY[0];
-        r->dzdx = (float)r->dzdx_d;
-    }
-    r->masked = RS__NOT_MASKED;
-    if (st->ctx->scene->materials[st->ctx->scene->tri_material[prim]].alpha_mode == PF_ALPHA_MASK) {
-        if (!rs__grow((void **)&ch->masked, &ch->masked_cap, ch->masked_count + 1, sizeof(rs__tri_masked))) {
-            ch->failed = 1;
-            return;
-        }
-        rs__tri_masked *m = &ch->masked[ch->masked_count];
-        r->masked = ch->masked_count++;
         RS__PLANE(IW, m->iw0, m->diwdx, m->diwdy);
         RS__PLANE(U, m->u0, m->dudx, m->dudy);
         RS__PLANE(V, m->v0, m->dvdx, m->dvdy);
-    }
 #undef RS__PLANE
+    }
     r->zmin = fminf(Z[0], fminf(Z[1], Z[2]));
     r->zmax = fmaxf(Z[0], fmaxf(Z[1], Z[2]));
-    r->x0 = (int32_t)px0, r->x1 = (int32_t)px1, r->y0 = (int32_t)py0, r->y1 = (int32_t)py1;
     r->prim = prim;
     uint32_t ti = ch->tri_count++;
     ch->stats.triangles_binned++;
@@ -624,6 +656,19 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], 
     for (uint32_t ty = ty0; ty <= ty1; ty++)
         for (uint32_t tx = tx0; tx <= tx1; tx++)
             ch->entries[ch->entry_count++] = (uint64_t)(ty * st->tiles_x + tx) << 32 | ti;
+}
+
+/* A clip-space triangle inside the guard band (clipped or not): snapped
+ * here, then set up. */
+static void rs__setup_cv(rs__pass_state *st, rs__chunk *ch, const rs__cv v[3], uint32_t prim)
+{
+    rs__sv sv[3];
+    for (int k = 0; k < 3; k++)
+        if (!rs__snap_cv(st, &v[k], &sv[k])) {
+            ch->stats.triangles_culled++;
+            return;
+        }
+    rs__setup_tri(st, ch, sv, prim);
 }
 
 /* Frustum outcode (for trivial reject) and the planes a vertex violates
@@ -658,22 +703,22 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
         if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
         ch->stats.triangles_in++;
         const uint32_t *idx = &st->ctx->weld_idx[3 * t];
-        rs__cv v[3];
-        int32_t snapped[6];
-        int inside = 1;
-        for (int k = 0; k < 3; k++) {
-            const rs__vtx *c = &vtx[idx[k]];
-            v[k].x = c->x, v[k].y = c->y, v[k].z = c->z, v[k].w = c->w;
-            v[k].u = k == 1 ? 1.0f : 0.0f;
-            v[k].v = k == 2 ? 1.0f : 0.0f;
-            snapped[2 * k] = c->X, snapped[2 * k + 1] = c->Y;
-            inside &= c->X != RS__NO_SNAP;
-        }
+        const rs__vtx *c0 = &vtx[idx[0]], *c1 = &vtx[idx[1]], *c2 = &vtx[idx[2]];
         /* vertices inside the frustum are inside every clip plane (the guard
          * band is wider than the frustum): no clipping, snapped already */
-        if (inside) {
-            rs__setup_tri(st, ch, v, t, snapped);
+        if (c0->X != RS__NO_SNAP && c1->X != RS__NO_SNAP && c2->X != RS__NO_SNAP) {
+            rs__sv sv[3] = {{c0->X, c0->Y, c0->zs, c0->iw, 0.0f, 0.0f, c0->rx, c0->ry},
+                            {c1->X, c1->Y, c1->zs, c1->iw, 1.0f, 0.0f, c1->rx, c1->ry},
+                            {c2->X, c2->Y, c2->zs, c2->iw, 0.0f, 1.0f, c2->rx, c2->ry}};
+            rs__setup_tri(st, ch, sv, t);
             continue;
+        }
+        rs__cv v[3];
+        const rs__vtx *cs[3] = {c0, c1, c2};
+        for (int k = 0; k < 3; k++) {
+            v[k].x = cs[k]->x, v[k].y = cs[k]->y, v[k].z = cs[k]->z, v[k].w = cs[k]->w;
+            v[k].u = k == 1 ? 1.0f : 0.0f;
+            v[k].v = k == 2 ? 1.0f : 0.0f;
         }
         if (rs__outcode(v[0]) & rs__outcode(v[1]) & rs__outcode(v[2])) {
             ch->stats.triangles_culled++;
@@ -681,7 +726,7 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
         }
         unsigned need = rs__clip_mask(st, v[0]) | rs__clip_mask(st, v[1]) | rs__clip_mask(st, v[2]);
         if (!need) {
-            rs__setup_tri(st, ch, v, t, NULL);
+            rs__setup_cv(st, ch, v, t);
             continue;
         }
         ch->stats.triangles_clipped++;
@@ -689,7 +734,7 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
         int n = rs__clip_polygon(st, need, poly, 3);
         for (int i = 1; i + 1 < n; i++) {
             rs__cv tri[3] = {poly[0], poly[i], poly[i + 1]};
-            rs__setup_tri(st, ch, tri, t, NULL);
+            rs__setup_cv(st, ch, tri, t);
         }
     }
     /* counting sort of the bin entries by tile; stable, so triangle order is
@@ -714,59 +759,34 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
 
 /* ------------------------------------------------------- 4. tile raster */
 
-/* The row and block kernels (rs_raster_kernels.c, one table per
- * instruction set) compute, for pixel i of a row,
- *   covered = e0 + i*step0 >= 0 && ... (exact integers)
- *   z = zrow + dzdx * (float)i, clamped to the vertices' range
- * so all paths give identical bits. Masked triangles and coverage counting
- * take the scalar functions below on every path. */
+/* The triangle kernels (rs_raster_kernels.c, one table per instruction set)
+ * compute, for pixel (x, y) of a triangle,
+ *   covered = E0(x, y) >= 0 && E1 >= 0 && E2 >= 0 (exact integers)
+ *   z = zrow(8-pixel block of x, y) + dzdx * (float)(x & 7), clamped to the
+ *       vertices' range
+ * so all paths give identical bits. Masked triangles take the scalar alpha
+ * test below on every path. */
 
-/* Coverage counting (rs_target.coverage): the scalar coverage test only. */
-static void rs__row_count(const rs__tri *t, const int64_t e[3], const int64_t step[3], unsigned lanes, uint32_t *count)
+/* Alpha-masked triangles (alphaMode MASK): the perspective-correct
+ * barycentrics of pixel (x, y) give the texture coordinate and the texel
+ * alpha at mip level 0 decides (alpha < cutoff is a hole): the same test
+ * Embree's filter function makes, so raster and ray agree. The kernels call
+ * it for covered pixels that pass the depth test. */
+static int rs__alpha(const void *ctx, const void *masked, const rs__tri *t, int32_t x, int32_t y)
 {
-    (void)t;
-    for (int i = 0; i < 8; i++) {
-        if (!(lanes >> i & 1)) continue;
-        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
-        if ((e0 | e1 | e2) >= 0) count[i]++;
-    }
-}
-
-/* Alpha-masked triangles (alphaMode MASK): coverage as the row kernel, then
- * the perspective-correct barycentrics give the texture coordinate and the
- * texel alpha at mip level 0 decides (alpha < cutoff is a hole) — the same
- * test Embree's filter function makes, so raster and ray agree. Every SIMD
- * path uses this one function for masked triangles. */
-static int rs__row_masked(const rs__pass_state *st, const rs__tri *t, const rs__tri_masked *m, int32_t x, int32_t y,
-                          float zrow, const int64_t e[3], const int64_t step[3], unsigned lanes, float *depth,
-                          uint32_t *prim)
-{
-    const pf_scene *sc = st->ctx->scene;
+    const pf_scene *sc = ctx;
+    const rs__tri_masked *m = masked;
     const uint32_t *tri = &sc->indices[3 * t->prim];
     uint32_t mat = sc->tri_material[t->prim];
-    int wrote = 0;
-    float yf = (float)y;
-    for (int i = 0; i < 8; i++) {
-        if (!(lanes >> i & 1)) continue;
-        int64_t e0 = e[0] + step[0] * i, e1 = e[1] + step[1] * i, e2 = e[2] + step[2] * i;
-        if ((e0 | e1 | e2) < 0) continue;
-        float xf = (float)(x + i);
-        float z = zrow + t->dzdx * (float)i;
-        z = z < t->zmin ? t->zmin : (z > t->zmax ? t->zmax : z);
-        if (!(z > depth[i])) continue;
-        float iw = m->iw0 + m->diwdx * xf + m->diwdy * yf;
-        float b1 = (m->u0 + m->dudx * xf + m->dudy * yf) / iw, b2 = (m->v0 + m->dvdx * xf + m->dvdy * yf) / iw;
-        float b0 = 1.0f - b1 - b2;
-        pf_vec2 a = sc->uvs[tri[0]], b = sc->uvs[tri[1]], c = sc->uvs[tri[2]];
-        pf_vec2 uv = {b0 * a.x + b1 * b.x + b2 * c.x, b0 * a.y + b1 * b.y + b2 * c.y};
-        float rgba[4];
-        pf_material_sample(sc, mat, uv, 0.0f, rgba);
-        if (rgba[3] < sc->materials[mat].alpha_cutoff) continue;
-        depth[i] = z;
-        if (prim) prim[i] = t->prim;
-        wrote = 1;
-    }
-    return wrote;
+    float xf = (float)x, yf = (float)y;
+    float iw = m->iw0 + m->diwdx * xf + m->diwdy * yf;
+    float b1 = (m->u0 + m->dudx * xf + m->dudy * yf) / iw, b2 = (m->v0 + m->dvdx * xf + m->dvdy * yf) / iw;
+    float b0 = 1.0f - b1 - b2;
+    pf_vec2 pa = sc->uvs[tri[0]], pb = sc->uvs[tri[1]], pc = sc->uvs[tri[2]];
+    pf_vec2 uv = {b0 * pa.x + b1 * pb.x + b2 * pc.x, b0 * pa.y + b1 * pb.y + b2 * pc.y};
+    float rgba[4];
+    pf_material_sample(sc, mat, uv, 0.0f, rgba);
+    return !(rgba[3] < sc->materials[mat].alpha_cutoff);
 }
 
 const rs_raster_kernels *rs_raster_kernels_for(rs_simd simd)
@@ -777,129 +797,6 @@ const rs_raster_kernels *rs_raster_kernels_for(rs_simd simd)
 #endif
     (void)simd;
     return &rs_raster_kernels_scalar;
-}
-
-/* A tile's planes while it is rasterized: RS_TILE x RS_TILE, row stride
- * RS_TILE, pixel (x, y) of the image at (x - x0, y - y0). Kept on the
- * rasterizing thread's stack (L1/L2-resident), cleared there and copied to
- * the target once, instead of clearing and writing the target's rows (which
- * costs a read for ownership of every line and, with 2 threads, contention
- * for the shared cache). */
-typedef struct rs__tile_buf {
-    float *depth;
-    uint32_t *prim;     /* NULL when the target has none */
-    uint32_t *coverage; /* NULL when the target has none */
-    int32_t x0, y0;
-} rs__tile_buf;
-
-static size_t rs__tile_at(const rs__tile_buf *tb, int32_t x, int32_t y)
-{
-    return (size_t)(y - tb->y0) * RS_TILE + (size_t)(x - tb->x0);
-}
-
-/* The farthest (smallest) depth in block [x, x1] x [y, y1] of the tile. A
- * full 8x8 block keeps 8 independent minima (one per column, 8 / SIMD_W
- * vectors) instead of one long dependency chain; simd_min_f is the
- * ternary below, and depths are never NaN, so the order of the minima does
- * not matter. */
-_Static_assert(8 % SIMD_W == 0 || SIMD_W % 8 == 0, "rs__block_min: a row of 8 in whole vectors");
-static float rs__block_min(const rs__tile_buf *tb, int32_t x, int32_t y, int32_t x1, int32_t y1)
-{
-    if (x1 - x == RS_BLOCK - 1 && SIMD_W <= RS_BLOCK) {
-        enum { N = SIMD_W <= RS_BLOCK ? RS_BLOCK / SIMD_W : 1 };
-        const float *d = tb->depth + rs__tile_at(tb, x, y);
-        simd_f acc[N];
-        for (int k = 0; k < N; k++) acc[k] = simd_loadu_f(d + k * SIMD_W);
-        for (int32_t yy = y + 1; yy <= y1; yy++) {
-            d += RS_TILE;
-            for (int k = 0; k < N; k++) acc[k] = simd_min_f(simd_loadu_f(d + k * SIMD_W), acc[k]);
-        }
-        for (int k = 1; k < N; k++) acc[0] = simd_min_f(acc[0], acc[k]);
-        return simd_hmin_f(acc[0]);
-    }
-    float m = INFINITY;
-    for (int32_t yy = y; yy <= y1; yy++) {
-        const float *d = tb->depth + rs__tile_at(tb, x, yy);
-        for (int32_t i = 0; i <= x1 - x; i++) m = d[i] < m ? d[i] : m;
-    }
-    return m;
-}
-
-/* Rasterizes one triangle inside one tile, 8x8 block by block, with the
- * hierarchical-Z test per block: block_far[b] is the farthest (smallest)
- * depth in block b, so a triangle whose nearest depth zmax is not greater
- * cannot pass the depth test anywhere in it. */
-static void rs__raster_tri(const rs__pass_state *st, rs__row_fn row, rs__block_fn block, const rs__tri *t,
-                           const rs__tri_masked *m, const rs__tile_buf *tb, int32_t tx0, int32_t ty0, int32_t tx1,
-                           int32_t ty1, float block_far[64], uint8_t block_writes[64], rs_stats *stats)
-{
-    int32_t bx0 = t->x0 > tx0 ? t->x0 : tx0, bx1 = t->x1 < tx1 ? t->x1 : tx1;
-    int32_t by0 = t->y0 > ty0 ? t->y0 : ty0, by1 = t->y1 < ty1 ? t->y1 : ty1;
-    if (bx0 > bx1 || by0 > by1) return;
-    int64_t step[3], block_step[3], amax[3];
-    for (int k = 0; k < 3; k++) {
-        step[k] = (int64_t)t->a[k] * RS_SUB;
-        block_step[k] = step[k] * RS_BLOCK;
-        amax[k] = t->a[k] > 0 ? step[k] * (RS_BLOCK - 1) : 0;
-    }
-    int32_t bxx0 = (bx0 - tx0) / RS_BLOCK, bxx1 = (bx1 - tx0) / RS_BLOCK;
-    for (int32_t byy = (by0 - ty0) / RS_BLOCK; byy <= (by1 - ty0) / RS_BLOCK; byy++) {
-        int32_t y = ty0 + byy * RS_BLOCK;
-        int32_t ry0 = y > by0 ? y : by0, ry1 = y + RS_BLOCK - 1 < by1 ? y + RS_BLOCK - 1 : by1;
-        /* edge functions at pixel (x, ry0) of the row's first block, stepped
-         * by a block (exact integers: the values a px + b py + c the block
-         * would compute itself), and their increase to the block's farthest
-         * corner */
-        int64_t erow[3], emax_off[3];
-        int64_t px0 = (int64_t)(tx0 + bxx0 * RS_BLOCK) * RS_SUB + RS_SUB / 2, py = (int64_t)ry0 * RS_SUB + RS_SUB / 2;
-        for (int k = 0; k < 3; k++) {
-            int64_t b = t->b[k];
-            erow[k] = t->a[k] * px0 + b * py + t->c[k];
-            emax_off[k] = amax[k] + (b > 0 ? b * (ry1 - ry0) * RS_SUB : 0);
-        }
-        for (int32_t bxx = bxx0; bxx <= bxx1; bxx++) {
-            int64_t e[3];
-            for (int k = 0; k < 3; k++) e[k] = erow[k], erow[k] += block_step[k];
-            int b = byy * (RS_TILE / RS_BLOCK) + bxx;
-            if (t->zmax <= block_far[b] && !tb->coverage) {
-                stats->blocks_early_z_rejected++;
-                continue;
-            }
-            int32_t x = tx0 + bxx * RS_BLOCK;
-            int32_t rx0 = x > bx0 ? x : bx0, rx1 = x + RS_BLOCK - 1 < bx1 ? x + RS_BLOCK - 1 : bx1;
-            /* rejected if an edge is negative over the whole block (its
-             * maximum over the corners) */
-            if (e[0] + emax_off[0] < 0 || e[1] + emax_off[1] < 0 || e[2] + emax_off[2] < 0) continue;
-            unsigned lanes = ((1u << (rx1 - x + 1)) - 1u) & ~((1u << (rx0 - x)) - 1u);
-            int wrote = 0;
-            if (!m && !tb->coverage) {
-                size_t o = rs__tile_at(tb, x, ry0);
-                wrote = block(t, x, ry0, ry1, e, lanes, tb->depth + o, tb->prim ? tb->prim + o : NULL, RS_TILE);
-            } else
-            for (int32_t yy = ry0; yy <= ry1; yy++) {
-                size_t o = rs__tile_at(tb, x, yy);
-                /* lanes past the image edge are masked, so the row functions
-                 * never touch memory beyond the row */
-                if (tb->coverage) rs__row_count(t, e, step, lanes, tb->coverage + o);
-                float *drow = tb->depth + o;
-                uint32_t *prow = tb->prim ? tb->prim + o : NULL;
-                float zrow = rs__zrow(t, x, yy);
-                wrote |= m ? rs__row_masked(st, t, m, x, yy, zrow, e, step, lanes, drow, prow)
-                                   : row(t, x, yy, zrow, e, step, lanes, drow, prow);
-                for (int k = 0; k < 3; k++) e[k] += (int64_t)t->b[k] * RS_SUB;
-            }
-            /* Depths only grow, so a stale block_far stays a valid (lower)
-             * bound: refresh it only every few writes, or when this triangle
-             * spans the whole block, instead of after every triangle. */
-            if (wrote && (++block_writes[b] >= 4 || (rx0 == x && rx1 == x + RS_BLOCK - 1 && ry0 == y &&
-                                                     ry1 == y + RS_BLOCK - 1))) {
-                block_writes[b] = 0;
-                int32_t cx1 = x + RS_BLOCK - 1 < tx1 ? x + RS_BLOCK - 1 : tx1;
-                int32_t cy1 = y + RS_BLOCK - 1 < ty1 ? y + RS_BLOCK - 1 : ty1;
-                block_far[b] = rs__block_min(tb, x, y, cx1, cy1);
-            }
-        }
-    }
 }
 
 /* Copies n 32-bit values of a finished tile row to the target. Rows that
@@ -921,57 +818,86 @@ static void rs__copy_out(void *dst, const void *src, size_t n)
     memcpy(dst, src, n * 4);
 }
 
-static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs_stats *out_stats)
+/* Tile row y (tile-relative) of a plane in the kernels' stamp order
+ * (rs_raster_kernels.h), as plain pixels. */
+static void rs__unstamp_row(uint32_t *row, const uint32_t *plane, int32_t y, uint32_t stamp_h)
 {
-    rs_stats local; /* written back once: per-tile stats of neighbouring tiles share cache lines */
-    memset(&local, 0, sizeof local);
-    rs_stats *stats = &local;
+    const uint32_t *src = plane + (size_t)(y / (int32_t)stamp_h) * RS_STAMPS_X * RS_STAMP_W * stamp_h +
+                          (size_t)(y % (int32_t)stamp_h) * RS_STAMP_W;
+    for (int s = 0; s < RS_STAMPS_X; s++) memcpy(row + s * RS_STAMP_W, src + (size_t)s * RS_STAMP_W * stamp_h, 16);
+}
+
+/* Rasterizes one tile: its triangles, gathered from the chunks' bins in
+ * drawing order, go to the kernel in one call, into a tile buffer on this
+ * thread's stack (L1/L2-resident; cleared there and copied to the target
+ * once, instead of clearing and writing the target's rows, which costs a
+ * read for ownership of every line and, with 2 threads, contention for the
+ * shared cache). `list`: room for the tile's triangles (the caller grows it). */
+static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs__list *list)
+{
     const rs_target *tg = st->t;
     int32_t tx0 = (int32_t)(tile % st->tiles_x) * RS_TILE, ty0 = (int32_t)(tile / st->tiles_x) * RS_TILE;
-    int32_t tx1 = tx0 + RS_TILE - 1 < (int32_t)tg->width - 1 ? tx0 + RS_TILE - 1 : (int32_t)tg->width - 1;
-    int32_t ty1 = ty0 + RS_TILE - 1 < (int32_t)tg->height - 1 ? ty0 + RS_TILE - 1 : (int32_t)tg->height - 1;
+    const rs_raster_kernels *kern = rs_raster_kernels_for(st->simd);
+    uint32_t n = 0;
+    for (uint32_t c = 0; c < st->s->chunk_count; c++) {
+        const rs__chunk *ch = &st->s->chunks[c];
+        if (ch->tri_count && !ch->failed) n += ch->tile_start[tile + 1] - ch->tile_start[tile];
+    }
+    if (n > list->cap) {
+        uint32_t cap = list->cap ? list->cap : 256;
+        while (cap < n) cap *= 2;
+        const rs__tri **tris = realloc(list->tris, sizeof(*tris) * cap);
+        if (tris) list->tris = tris;
+        const void **masked = realloc(list->masked, sizeof(*masked) * cap);
+        if (masked) list->masked = masked;
+        if (!tris || !masked) {
+            __atomic_fetch_add(&st->s->failed_tiles, 1u, __ATOMIC_RELAXED); /* the tile stays as it was */
+            return;
+        }
+        list->cap = cap;
+    }
+    const rs__tri **tris = list->tris;
+    const void **masked = list->masked;
     _Alignas(64) float depth[RS_TILE * RS_TILE];
     _Alignas(64) uint32_t prim[RS_TILE * RS_TILE];
     uint32_t *coverage = NULL;
     if (tg->coverage && !(coverage = calloc(RS_TILE * RS_TILE, sizeof(uint32_t)))) /* tests only */
         __atomic_fetch_add(&st->s->failed_tiles, 1u, __ATOMIC_RELAXED);        /* that tile's counts are missing */
-    rs__tile_buf tb = {depth, tg->prim ? prim : NULL, coverage, tx0, ty0};
     memset(depth, 0, sizeof depth);
     if (tg->prim)
         for (int i = 0; i < RS_TILE * RS_TILE; i++) prim[i] = RS_NO_PRIM;
-    float block_far[64];
-    uint8_t block_writes[64];
-    for (int b = 0; b < 64; b++) block_far[b] = 0.0f, block_writes[b] = 0;
-    const rs_raster_kernels *kern = rs_raster_kernels_for(st->simd);
-    rs__row_fn row = kern->row;
-    rs__block_fn block = kern->block;
+    n = 0;
     for (uint32_t c = 0; c < st->s->chunk_count; c++) {
         const rs__chunk *ch = &st->s->chunks[c];
         if (ch->tri_count == 0 || ch->failed) continue;
-        uint32_t e0 = ch->tile_start[tile], e1 = ch->tile_start[tile + 1];
-        for (uint32_t e = e0; e < e1; e++) {
-            /* the tile's triangles are scattered over the chunk: fetch the
-             * record a few triangles ahead (two lines) */
-            if (e + RS_PREFETCH < e1) {
-                const char *next = (const char *)&ch->tris[ch->sorted[e + RS_PREFETCH]];
-                __builtin_prefetch(next);
-                __builtin_prefetch(next + 64);
-            }
+        for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++, n++) {
             const rs__tri *t = &ch->tris[ch->sorted[e]];
-            rs__raster_tri(st, row, block, t, t->masked == RS__NOT_MASKED ? NULL : &ch->masked[t->masked], &tb, tx0,
-                           ty0, tx1, ty1, block_far, block_writes, stats);
+            tris[n] = t;
+            masked[n] = t->masked == RS__NOT_MASKED ? NULL : &ch->masked[t->masked];
         }
     }
-    size_t w = (size_t)(tx1 - tx0 + 1);
-    for (int32_t y = ty0; y <= ty1; y++) {
-        size_t o = (size_t)y * tg->width + (size_t)tx0, l = (size_t)(y - ty0) * RS_TILE;
-        rs__copy_out(tg->depth + o, depth + l, w);
-        if (tg->prim) rs__copy_out(tg->prim + o, prim + l, w);
-        if (coverage) memcpy(tg->coverage + o, coverage + l, sizeof(uint32_t) * w);
+    rs__tile_in in = {tris, masked, n, tx0, ty0, 0, 0, rs__alpha, st->ctx->scene, depth, tg->prim ? prim : NULL,
+                      coverage};
+    in.xlim = (int32_t)tg->width - tx0 < RS_TILE ? (int32_t)tg->width - tx0 : RS_TILE;
+    in.ylim = (int32_t)tg->height - ty0 < RS_TILE ? (int32_t)tg->height - ty0 : RS_TILE;
+    kern->tile(&in);
+    _Alignas(64) uint32_t row[RS_TILE];
+    size_t w = (size_t)in.xlim;
+    for (int32_t y = 0; y < in.ylim; y++) {
+        size_t o = (size_t)(ty0 + y) * tg->width + (size_t)tx0;
+        rs__unstamp_row(row, (const uint32_t *)depth, y, kern->stamp_h);
+        rs__copy_out(tg->depth + o, row, w);
+        if (tg->prim) {
+            rs__unstamp_row(row, prim, y, kern->stamp_h);
+            rs__copy_out(tg->prim + o, row, w);
+        }
+        if (coverage) {
+            rs__unstamp_row(row, coverage, y, kern->stamp_h);
+            memcpy(tg->coverage + o, row, sizeof(uint32_t) * w);
+        }
     }
     simd_stream_fence(); /* the streamed rows are visible before the job reports the tile done */
     free(coverage);
-    out_stats->blocks_early_z_rejected += local.blocks_early_z_rejected;
 }
 
 /* ------------------------------------------------------- the pass */
@@ -990,16 +916,23 @@ static void rs__setup_job(void *p, uint32_t item, uint32_t worker)
     rs__setup_bin(p, item);
 }
 
-typedef struct rs__tile_ctx {
-    rs__pass_state *st;
-    rs_stats *tile_stats; /* one per tile: summed in tile order afterwards */
-} rs__tile_ctx;
-
 static void rs__tile_job(void *p, uint32_t item, uint32_t worker)
 {
-    (void)worker;
-    rs__tile_ctx *tc = p;
-    rs__raster_tile(tc->st, item, &tc->tile_stats[item]);
+    rs__pass_state *st = p;
+    rs__raster_tile(st, item, &st->s->lists[worker]);
+}
+
+/* One tile list per thread that may run tile jobs (grown once: a scratch
+ * keeps its lists). 0 when out of memory. */
+static int rs__lists(rs_scratch *s, uint32_t count)
+{
+    if (count <= s->list_count) return 1;
+    rs__list *l = realloc(s->lists, sizeof *l * count);
+    if (!l) return 0;
+    memset(l + s->list_count, 0, sizeof *l * (count - s->list_count));
+    s->lists = l;
+    s->list_count = count;
+    return 1;
 }
 
 static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t,
@@ -1032,7 +965,7 @@ pf_result rs_scratch_status(rs_scratch *s, pf_error *err)
     pf_result r = PF_OK;
     if (s->failed_pass)
         r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
-                         "rasterizer: out of memory for the per-tile statistics of %u passes; they drew nothing",
+                         "rasterizer: out of memory for the tile lists of %u passes; they drew nothing",
                          s->failed_pass);
     else if (s->failed_chunks)
         r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
@@ -1041,7 +974,7 @@ pf_result rs_scratch_status(rs_scratch *s, pf_error *err)
                          s->failed_chunks, s->chunk_count);
     else if (s->failed_tiles)
         r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY,
-                         "rasterizer: out of memory for the coverage counts of %u tiles; they were not counted",
+                         "rasterizer: out of memory for the triangle lists or coverage counts of %u tiles; they were not drawn or not counted",
                          s->failed_tiles);
     s->failed_chunks = s->failed_tiles = s->failed_pass = 0;
     return r;
@@ -1049,7 +982,7 @@ pf_result rs_scratch_status(rs_scratch *s, pf_error *err)
 
 pf_result rs_context_status(rs_context *ctx, pf_error *err) { return rs_scratch_status(ctx->scratch, err); }
 
-static void rs__finish_stats(const rs__pass_state *st, const rs_stats *tile_stats, rs_stats *out)
+static void rs__finish_stats(const rs__pass_state *st, rs_stats *out)
 {
     if (!out) return;
     memset(out, 0, sizeof *out);
@@ -1061,8 +994,6 @@ static void rs__finish_stats(const rs__pass_state *st, const rs_stats *tile_stat
         out->triangles_culled += cs->triangles_culled;
         out->triangles_binned += cs->triangles_binned;
     }
-    uint32_t tiles = st->tiles_x * st->tiles_y;
-    for (uint32_t k = 0; k < tiles && tile_stats; k++) out->blocks_early_z_rejected += tile_stats[k].blocks_early_z_rejected;
 }
 
 void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *stats)
@@ -1070,38 +1001,35 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
     rs__pass_state st;
     if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
     uint32_t tiles = st.tiles_x * st.tiles_y;
-    rs_scratch *sc = ctx->scratch;
-    if (!rs__grow((void **)&sc->tile_stats, &sc->tile_stats_cap, tiles, sizeof(rs_stats))) {
-        sc->failed_pass++; /* nothing drawn (rs_context_status) */
+    pf_jobs *jobs = ctx->jobs;
+    if (!rs__lists(ctx->scratch, pf_jobs_thread_count(jobs))) {
+        ctx->scratch->failed_pass++; /* nothing drawn (rs_context_status) */
         return;
     }
-    rs_stats *tile_stats = sc->tile_stats;
-    memset(tile_stats, 0, sizeof(rs_stats) * tiles);
-    rs__tile_ctx tc = {&st, tile_stats};
-    pf_jobs *jobs = ctx->jobs;
     uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
     pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, &st, nv, 1, NULL, 0);
     pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, &st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
     pf_job_id deps[2] = {vj, cj};
     pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, &st, ctx->chunk_count, 1, deps, 2);
-    pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &tc, tiles, 1, &sj, 1);
+    pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &st, tiles, 1, &sj, 1);
     pf_jobs_wait(jobs, tj);
     rs__finish_status(&st);
-    rs__finish_stats(&st, tile_stats, stats);
+    rs__finish_stats(&st, stats);
 }
 
 void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t, rs_stats *stats)
 {
     rs__pass_state st;
     if (!rs__begin(&st, ctx, s, pass, t, ctx->simd)) return;
+    if (!rs__lists(s, 1)) {
+        s->failed_pass++;
+        return;
+    }
     rs__transform(&st, ctx->weld_pos, s->vtx, 0, ctx->weld_count);
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
-    rs_stats ts;
-    memset(&ts, 0, sizeof ts);
     uint32_t tiles = st.tiles_x * st.tiles_y;
-    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, k, &ts);
+    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, k, &s->lists[0]);
     rs__finish_status(&st);
-    rs__finish_stats(&st, NULL, stats);
-    if (stats) stats->blocks_early_z_rejected = ts.blocks_early_z_rejected;
+    rs__finish_stats(&st, stats);
 }

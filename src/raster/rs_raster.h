@@ -12,20 +12,26 @@
  *                          planes; snap to 8-bit sub-pixel fixed point; back-
  *                          face cull; edge functions with the top-left rule;
  *                          binning into 64x64-pixel tiles;
- *   3. rs__raster_tiles    every tile is rasterized by one job item, walking
- *                          its bins in triangle order: hierarchical early-Z
- *                          per 8x8 block, then exact coverage + depth test per
- *                          pixel centre with the row and block kernels
+ *   3. rs__raster_tile     every tile is rasterized by one job item: its
+ *                          triangles, gathered from the bins in triangle
+ *                          order, go to the tile kernel in one call
  *                          (rs_raster_kernels.c: written once over the SIMD
- *                          vocabulary, compiled scalar, AVX2 and AVX-512).
+ *                          vocabulary, compiled scalar, AVX2 and AVX-512),
+ *                          which walks each triangle's rectangle of stamps
+ *                          (4x4 pixels on AVX-512, 4x2 otherwise: one vector)
+ *                          band by band, with exact coverage of every pixel
+ *                          centre and the depth test per stamp, into a tile
+ *                          buffer copied to the target once.
  *
  * Exactness: vertex positions are snapped to 1/256 pixel and edge functions
- * are evaluated in 64-bit integers, so coverage is exact: a closed mesh
+ * are evaluated exactly (64-bit integers, or 32-bit lanes where every value
+ * is known to fit), so coverage is exact: a closed mesh
  * covers every pixel centre inside its silhouette exactly once, and of two
  * triangles sharing an edge exactly one covers a pixel centre on it (top-
  * left fill rule). Depth is interpolated in float with one fixed expression
- * (z = z0 + dzdx * x + dzdy * y, no FMA) in every path, so the SIMD paths
- * give the same bits as the scalar one.
+ * per tile (z = (zt + dzdx * x) + dzdy * y from the tile's first pixel, no
+ * FMA; rs_raster_kernels.h) in every path, so the SIMD paths give the same
+ * bits as the scalar one.
  *
  * Depth convention (reversed): the rasterizer interpolates zs = z_clip /
  * w_clip linearly in screen space and keeps the GREATEST value; 0 means
@@ -98,7 +104,6 @@ typedef struct rs_pass {
 /* Per-pass statistics (for the bench and tests). */
 typedef struct rs_stats {
     uint64_t clusters_culled, triangles_in, triangles_clipped, triangles_culled, triangles_binned;
-    uint64_t blocks_early_z_rejected;
 } rs_stats;
 
 typedef struct rs_context rs_context;

@@ -211,7 +211,6 @@ static void rs__stats_add(rs_stats *sum, const rs_stats *s)
     sum->triangles_clipped += s->triangles_clipped;
     sum->triangles_culled += s->triangles_culled;
     sum->triangles_binned += s->triangles_binned;
-    sum->blocks_early_z_rejected += s->blocks_early_z_rejected;
 }
 
 /* One rs_render pass per face, in map and face order. A 1024 face has 256

@@ -65,6 +65,8 @@ static inline simd_mask simd_eq_f(simd_f a, simd_f b) { return _mm256_cmp_ps(a, 
 /* ---- float memory */
 static inline simd_f simd_load_f(const float *p) { return _mm256_load_ps(p); }
 static inline simd_f simd_loadu_f(const float *p) { return _mm256_loadu_ps(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_f(float *p, simd_f a) { _mm256_store_ps(p, a); }
 static inline void simd_storeu_f(float *p, simd_f a) { _mm256_storeu_ps(p, a); }
 static inline simd_f simd_maskz_loadu_f(const float *p, simd_mask m) { return _mm256_maskload_ps(p, _mm256_castps_si256(m)); }
 static inline void simd_mask_storeu_f(float *p, simd_mask m, simd_f a) { _mm256_maskstore_ps(p, _mm256_castps_si256(m), a); }
@@ -79,6 +81,10 @@ static inline void simd_mask_storeu_rows8_f(float *p, size_t stride, simd_mask m
     simd_mask_storeu_f(p, m, a);
 }
 static inline simd_f simd_set_rows8_f(const float *r) { return _mm256_set1_ps(r[0]); }
+static inline simd_f simd_spread4_f(const float *r)
+{
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(r[0])), _mm_set1_ps(r[1]), 1);
+}
 
 /* ---- int32 lanes */
 static inline simd_i simd_set1_i(int32_t x) { return _mm256_set1_epi32(x); }
@@ -96,6 +102,8 @@ static inline simd_f simd_i2f(simd_i a) { return _mm256_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm256_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm256_load_si256((const __m256i *)p); }
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm256_loadu_si256((const __m256i *)p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_i(int32_t *p, simd_i a) { _mm256_store_si256((__m256i *)p, a); }
 static inline void simd_storeu_i(int32_t *p, simd_i a) { _mm256_storeu_si256((__m256i *)p, a); }
 static inline void simd_mask_storeu_i(int32_t *p, simd_mask m, simd_i a) { _mm256_maskstore_epi32(p, _mm256_castps_si256(m), a); }
 static inline void simd_mask_storeu_rows8_i(int32_t *p, size_t stride, simd_mask m, simd_i a)

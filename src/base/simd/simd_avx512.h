@@ -54,6 +54,8 @@ static inline simd_mask simd_eq_f(simd_f a, simd_f b) { return _mm512_cmp_ps_mas
 /* ---- float memory */
 static inline simd_f simd_load_f(const float *p) { return _mm512_load_ps(p); }
 static inline simd_f simd_loadu_f(const float *p) { return _mm512_loadu_ps(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_f(float *p, simd_f a) { _mm512_store_ps(p, a); }
 static inline void simd_storeu_f(float *p, simd_f a) { _mm512_storeu_ps(p, a); }
 static inline simd_f simd_maskz_loadu_f(const float *p, simd_mask m) { return _mm512_maskz_loadu_ps((__mmask16)m, p); }
 static inline void simd_mask_storeu_f(float *p, simd_mask m, simd_f a) { _mm512_mask_storeu_ps(p, (__mmask16)m, a); }
@@ -73,6 +75,11 @@ static inline simd_f simd_set_rows8_f(const float *r)
 {
     return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_set1_ps(r[0])), _mm256_set1_ps(r[1]), 1);
 }
+static inline simd_f simd_spread4_f(const float *r)
+{
+    return _mm512_permutexvar_ps(_mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3),
+                                 _mm512_castps128_ps512(_mm_loadu_ps(r)));
+}
 
 /* ---- int32 lanes */
 static inline simd_i simd_set1_i(int32_t x) { return _mm512_set1_epi32(x); }
@@ -90,6 +97,8 @@ static inline simd_f simd_i2f(simd_i a) { return _mm512_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm512_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm512_load_si512(p); }
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm512_loadu_si512(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_i(int32_t *p, simd_i a) { _mm512_store_si512(p, a); }
 static inline void simd_storeu_i(int32_t *p, simd_i a) { _mm512_storeu_si512(p, a); }
 static inline void simd_mask_storeu_i(int32_t *p, simd_mask m, simd_i a) { _mm512_mask_storeu_epi32(p, (__mmask16)m, a); }
 static inline void simd_mask_storeu_rows8_i(int32_t *p, size_t stride, simd_mask m, simd_i a)

@@ -157,6 +157,11 @@ static inline simd_f simd_loadu_f(const float *p)
     return r;
 }
 static inline simd_f simd_load_f(const float *p) { return simd_loadu_f(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_f(float *p, simd_f a)
+{
+    for (int l = 0; l < SIMD_W; l++) p[l] = a.v[l];
+}
 static inline void simd_storeu_f(float *p, simd_f a)
 {
     for (int l = 0; l < SIMD_W; l++) p[l] = a.v[l];
@@ -186,6 +191,13 @@ static inline void simd_mask_storeu_rows8_f(float *p, size_t stride, simd_mask m
 }
 /* lane l = r[l >> 3] */
 static inline simd_f simd_set_rows8_f(const float *r) { return simd_set1_f(r[0]); }
+/* lane l = r[l >> 2]: a stamp's row values spread over its rows of 4 lanes */
+static inline simd_f simd_spread4_f(const float *r)
+{
+    simd_f v;
+    for (int l = 0; l < SIMD_W; l++) v.v[l] = r[l >> 2];
+    return v;
+}
 
 /* ---- int32 lanes (wrapping) */
 static inline simd_i simd_set1_i(int32_t x)
@@ -277,6 +289,11 @@ static inline simd_i simd_loadu_i(const int32_t *p)
     return r;
 }
 static inline simd_i simd_load_i(const int32_t *p) { return simd_loadu_i(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_i(int32_t *p, simd_i a)
+{
+    for (int l = 0; l < SIMD_W; l++) p[l] = a.v[l];
+}
 static inline void simd_storeu_i(int32_t *p, simd_i a)
 {
     for (int l = 0; l < SIMD_W; l++) p[l] = a.v[l];

@@ -76,6 +76,8 @@ static inline simd_mask simd_eq_f(simd_f a, simd_f b) { return _mm_cmpeq_ps(a, b
 /* ---- float memory (SSE2 has no masked loads: lane by lane) */
 static inline simd_f simd_load_f(const float *p) { return _mm_load_ps(p); }
 static inline simd_f simd_loadu_f(const float *p) { return _mm_loadu_ps(p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_f(float *p, simd_f a) { _mm_store_ps(p, a); }
 static inline void simd_storeu_f(float *p, simd_f a) { _mm_storeu_ps(p, a); }
 static inline simd_f simd_maskz_loadu_f(const float *p, simd_mask m)
 {
@@ -103,6 +105,7 @@ static inline void simd_mask_storeu_rows8_f(float *p, size_t stride, simd_mask m
     simd_mask_storeu_f(p, m, a);
 }
 static inline simd_f simd_set_rows8_f(const float *r) { return _mm_set1_ps(r[0]); }
+static inline simd_f simd_spread4_f(const float *r) { return _mm_set1_ps(r[0]); }
 
 /* ---- int32 lanes */
 static inline simd_i simd_set1_i(int32_t x) { return _mm_set1_epi32(x); }
@@ -127,6 +130,8 @@ static inline simd_f simd_i2f(simd_i a) { return _mm_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm_load_si128((const __m128i *)p); }
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm_loadu_si128((const __m128i *)p); }
+/* p aligned to the vector (SIMD_W * 4 bytes) */
+static inline void simd_store_i(int32_t *p, simd_i a) { _mm_store_si128((__m128i *)p, a); }
 static inline void simd_storeu_i(int32_t *p, simd_i a) { _mm_storeu_si128((__m128i *)p, a); }
 static inline void simd_mask_storeu_i(int32_t *p, simd_mask m, simd_i a)
 {

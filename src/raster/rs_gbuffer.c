@@ -110,28 +110,40 @@ static int rs__bary(const rs__tri_consts *c, pf_vec3 d, float *u, float *v)
     return 1;
 }
 
-/* Normalises the row's normals (pf_v3_normalize's operations: l =
- * sqrt((x*x + y*y) + z*z), n * (1 / l), 0 for l = 0), SIMD_W at a time with
- * the baseline vocabulary (four with SSE2) whose sqrt/div round exactly like
- * the scalar ones, so the bits are the scalar function's; taken out of the per-pixel loop because its
- * sqrt -> divide latency chain dominated the resolve. A covered pixel whose
- * normal comes out zero (the interpolated normal vanished) gets the
- * camera-facing geometric normal, as pf_scene_surface does: the SIMD loop
- * flags such lanes itself, so the row is read once. */
-static void rs__normal_fallback(rs_gbuffer *g, const pf_scene *s, const pf_camera *cam, const float *sx, float sy,
-                                uint32_t x, uint32_t y)
+/* A covered pixel whose normal came out zero (the interpolated normal
+ * vanished) gets the camera-facing geometric normal, as pf_scene_surface
+ * does. */
+void rs__gbuf_normal_fallback(const rs__resolve_ctx *rc, uint32_t x, uint32_t y)
 {
+    rs_gbuffer *g = rc->g;
+    const pf_camera *cam = rc->cam;
     size_t i = (size_t)y * g->width + x;
     if (g->prim[i] == RS_GBUFFER_EMPTY || g->nrm_x[i] != 0.0f || g->nrm_y[i] != 0.0f || g->nrm_z[i] != 0.0f) return;
-    pf_vec3 ng = pf_scene_face_normal(s, g->prim[i]);
-    pf_vec3 d = pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, sx[x]), pf_v3_scale(cam->up, sy)));
+    pf_vec3 ng = pf_scene_face_normal(rc->scene, g->prim[i]);
+    pf_vec3 d =
+        pf_v3_add(cam->forward, pf_v3_add(pf_v3_scale(cam->right, rc->sx[x]), pf_v3_scale(cam->up, rc->sy[y])));
     if (pf_v3_dot(ng, d) > 0.0f) ng = pf_v3_scale(ng, -1.0f);
     g->nrm_x[i] = ng.x, g->nrm_y[i] = ng.y, g->nrm_z[i] = ng.z;
 }
 
-static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera *cam, const float *sx, float sy,
-                              uint32_t y)
+void rs__gbuf_normalize_pixel(const rs__resolve_ctx *rc, uint32_t x, uint32_t y)
 {
+    rs_gbuffer *g = rc->g;
+    size_t i = (size_t)y * g->width + x;
+    pf_vec3 n = pf_v3_normalize(pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]));
+    g->nrm_x[i] = n.x, g->nrm_y[i] = n.y, g->nrm_z[i] = n.z;
+    rs__gbuf_normal_fallback(rc, x, y);
+}
+
+/* Normalises the row's normals as rs__gbuf_normalize_pixel does, SIMD_W at
+ * a time with the baseline vocabulary (four with SSE2) whose sqrt/div round
+ * exactly like the scalar ones, so the bits are the scalar function's; taken
+ * out of the scalar path's per-pixel loop because its sqrt -> divide
+ * latency chain dominated it. The SIMD loop flags vanished normals itself,
+ * so the row is read once. */
+static void rs__normalize_row(const rs__resolve_ctx *rc, uint32_t y)
+{
+    rs_gbuffer *g = rc->g;
     float *nx = g->nrm_x + (size_t)y * g->width, *ny = g->nrm_y + (size_t)y * g->width;
     float *nz = g->nrm_z + (size_t)y * g->width;
     uint32_t x = 0;
@@ -146,13 +158,9 @@ static void rs__normalize_row(rs_gbuffer *g, const pf_scene *s, const pf_camera 
         simd_storeu_f(nz + x, c);
         simd_mask vanished = simd_mask_and(simd_mask_and(simd_eq_f(a, zero), simd_eq_f(b, zero)), simd_eq_f(c, zero));
         for (uint32_t m = simd_mask_bits(vanished); m; m &= m - 1)
-            rs__normal_fallback(g, s, cam, sx, sy, x + (uint32_t)__builtin_ctz(m), y);
+            rs__gbuf_normal_fallback(rc, x + (uint32_t)__builtin_ctz(m), y);
     }
-    for (; x < g->width; x++) {
-        pf_vec3 n = pf_v3_normalize(pf_v3(nx[x], ny[x], nz[x]));
-        nx[x] = n.x, ny[x] = n.y, nz[x] = n.z;
-        rs__normal_fallback(g, s, cam, sx, sy, x, y);
-    }
+    for (; x < g->width; x++) rs__gbuf_normalize_pixel(rc, x, y);
 }
 
 /* One pixel (x, y) of the resolve, scalar; the reference for the SIMD path. */
@@ -202,7 +210,7 @@ void rs__gbuf_resolve_pixel(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32
     float w = 1.0f - u - v;
     pf_vec3 pos = pf_v3_add(t->p0, pf_v3_add(pf_v3_scale(t->e1, u), pf_v3_scale(t->e2, v)));
     /* the interpolated normal, turned to face the camera (two-sided
-     * shading); normalised for the whole row by rs__normalize_row */
+     * shading); normalised afterwards (rs__gbuf_normalize_pixel) */
     pf_vec3 ns = pf_v3_add(pf_v3_add(pf_v3_scale(t->n0, w), pf_v3_scale(t->n1, u)), pf_v3_scale(t->n2, v));
     if (pf_v3_dot(t->ng, d) > 0.0f) ns = pf_v3_scale(ns, -1.0f);
     float albedo[4];
@@ -225,10 +233,10 @@ void rs__gbuf_resolve_pixel(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32
 }
 
 /* Software prefetch of the table entries of the triangles that pixels
- * i..i+n-1 (row-major over the image) show: a resolve starts a new triangle
- * every few pixels (Sibenik at 1024x768: 142K setups for 786K pixels) and
- * each start would otherwise wait for a miss to memory. Issued a fixed
- * distance ahead of the pixel being resolved; changes no result. */
+ * i..i+n-1 of a row show: a resolve starts a new triangle every few pixels
+ * (Sibenik at 1024x768: 142K setups for 786K pixels) and each start would
+ * otherwise wait for a miss to memory. Issued a fixed distance ahead of the
+ * pixels being resolved; changes no result. */
 static void rs__prefetch(const rs__resolve_ctx *rc, size_t i, size_t n, uint32_t *last)
 {
     const rs_gbuffer *g = rc->g;
@@ -247,6 +255,7 @@ static void rs__prefetch(const rs__resolve_ctx *rc, size_t i, size_t n, uint32_t
 
 enum { RS__PREFETCH_AHEAD = 64 }; /* pixels */
 
+/* The scalar path: row y pixel by pixel, then its normals. */
 static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
@@ -258,18 +267,38 @@ static void rs__resolve_row(void *p, uint32_t y, uint32_t worker)
     size_t row = (size_t)y * g->width;
     uint32_t last = RS_GBUFFER_EMPTY;
     rs__prefetch(rc, row, RS__PREFETCH_AHEAD, &last);
-    const uint32_t n = rc->kern ? rc->kern->lanes : 8;
-    for (uint32_t x = 0; x < g->width;) {
-        rs__prefetch(rc, row + x + RS__PREFETCH_AHEAD, n, &last);
-        if (rc->kern && x + n <= g->width) {
-            if (!rc->kern->group(rc, &c, x, y))
-                for (uint32_t k = 0; k < n; k++) rs__gbuf_resolve_pixel(rc, &c, x + k, y);
-            x += n;
-            continue;
-        }
-        for (uint32_t k = 0; k < n && x < g->width; k++, x++) rs__gbuf_resolve_pixel(rc, &c, x, y);
+    for (uint32_t x = 0; x < g->width; x++) {
+        if (x % 8 == 0) rs__prefetch(rc, row + x + RS__PREFETCH_AHEAD, 8, &last);
+        rs__gbuf_resolve_pixel(rc, &c, x, y);
     }
-    rs__normalize_row(g, rc->scene, rc->cam, rc->sx, rc->sy[y], y);
+    rs__normalize_row(rc, y);
+}
+
+/* The SIMD paths: band b (rows of blocks, kern->rows pixel rows) block by
+ * block; blocks the kernel leaves (textured triangles, many triangles, the
+ * image's right and bottom edge) pixel by pixel. */
+static void rs__resolve_band(void *p, uint32_t b, uint32_t worker)
+{
+    (void)worker;
+    const rs__resolve_ctx *rc = p;
+    rs_gbuffer *g = rc->g;
+    const uint32_t rows = rc->kern->rows, y0 = b * rows;
+    rs__tri_consts c;
+    memset(&c, 0, sizeof c);
+    c.prim = RS_GBUFFER_EMPTY;
+    uint32_t last[4] = {RS_GBUFFER_EMPTY, RS_GBUFFER_EMPTY, RS_GBUFFER_EMPTY, RS_GBUFFER_EMPTY};
+    for (uint32_t r = 0; r < rows && y0 + r < g->height; r++)
+        rs__prefetch(rc, (size_t)(y0 + r) * g->width, RS__PREFETCH_AHEAD, &last[r]);
+    for (uint32_t x = 0; x < g->width; x += 4) {
+        for (uint32_t r = 0; r < rows && y0 + r < g->height; r++)
+            rs__prefetch(rc, (size_t)(y0 + r) * g->width + x + RS__PREFETCH_AHEAD, 4, &last[r]);
+        if (x + 4 <= g->width && y0 + rows <= g->height && rc->kern->group(rc, &c, x, y0)) continue;
+        for (uint32_t y = y0; y < y0 + rows && y < g->height; y++)
+            for (uint32_t xx = x; xx < x + 4 && xx < g->width; xx++) {
+                rs__gbuf_resolve_pixel(rc, &c, xx, y);
+                rs__gbuf_normalize_pixel(rc, xx, y);
+            }
+    }
 }
 
 rs_resolve_tri *rs_resolve_table_create(const pf_scene *scene)
@@ -303,5 +332,8 @@ void rs_gbuffer_resolve_simd(rs_gbuffer *g, const pf_scene *scene, const rs_reso
     float th = tanf(0.5f * cam->yfov), aspect = (float)g->width / (float)g->height;
     for (uint32_t x = 0; x <= g->width; x++) rc.sx[x] = (2.0f * ((float)x + 0.5f) / (float)g->width - 1.0f) * th * aspect;
     for (uint32_t y = 0; y <= g->height; y++) rc.sy[y] = (1.0f - 2.0f * ((float)y + 0.5f) / (float)g->height) * th;
-    pf_jobs_parallel_for(jobs, rs__resolve_row, &rc, g->height, 4);
+    if (kern)
+        pf_jobs_parallel_for(jobs, rs__resolve_band, &rc, (g->height + kern->rows - 1) / kern->rows, 1);
+    else
+        pf_jobs_parallel_for(jobs, rs__resolve_row, &rc, g->height, 4);
 }

@@ -39,8 +39,16 @@ typedef struct rs__tri_consts {
 
 /* The constants of triangle prim for the context's camera (rs_gbuffer.c). */
 void rs__gbuf_tri_setup(rs__tri_consts *c, const rs__resolve_ctx *rc, uint32_t prim);
-/* One pixel of the resolve, scalar: the reference (rs_gbuffer.c). */
+/* One pixel of the resolve, scalar: the reference (rs_gbuffer.c). Its
+ * normal is left unnormalised: rs__gbuf_normalize_pixel finishes it. */
 void rs__gbuf_resolve_pixel(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32_t x, uint32_t y);
+/* The pixel's normal normalised (pf_v3_normalize's operations), and a
+ * covered pixel whose normal vanished given the camera-facing geometric
+ * normal, as pf_scene_surface does. */
+void rs__gbuf_normalize_pixel(const rs__resolve_ctx *rc, uint32_t x, uint32_t y);
+/* The second half of it alone, for a pixel whose normal is normalised and
+ * came out zero. */
+void rs__gbuf_normal_fallback(const rs__resolve_ctx *rc, uint32_t x, uint32_t y);
 
 /* The group kernels read a triangle's constants as floats: T = the
  * rs_resolve_tri from p0 to n2 (24 floats), UV = n_u, n_v (6). */
@@ -53,9 +61,10 @@ _Static_assert(offsetof(rs__tri_consts, n_v) == offsetof(rs__tri_consts, n_u) + 
 
 typedef struct rs_gbuffer_kernels {
     const char *isa; /* SIMD_NAME of the vocabulary it was compiled with */
-    uint32_t lanes;  /* SIMD_W: pixels of one group */
-    /* pixels x .. x + lanes - 1 of row y (all inside the image); returns 0
-     * and writes nothing when the group is left to rs__gbuf_resolve_pixel */
+    uint32_t rows;   /* SIMD_W / 4: a block is 4 pixels wide and this many rows high */
+    /* the block of pixels x .. x + 3, y .. y + rows - 1 (all inside the
+     * image; x a multiple of 4, y of rows); returns 0 and writes nothing
+     * when the block is left to rs__gbuf_resolve_pixel */
     int (*group)(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32_t x, uint32_t y);
 } rs_gbuffer_kernels;
 

@@ -166,6 +166,18 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
                          _mm256_permutevar8x32_ps(e2, _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 4, 7)), 0xe0);
 }
 
+static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
+{
+    return _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)p)),
+                                   _mm_loadu_si128((const __m128i *)(p + stride)), 1);
+}
+static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
+{
+    _mm_storeu_ps(p, _mm256_castps256_ps128(a));
+    _mm_storeu_ps(p + stride, _mm256_extractf128_ps(a, 1));
+}
+static inline simd_f simd_tile4_f(const float *p) { return _mm256_broadcast_ps((const __m128 *)p); }
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm256_set1_epi64x(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

@@ -161,6 +161,22 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
     }
 }
 
+static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
+{
+    __m512i r = _mm512_castsi128_si512(_mm_loadu_si128((const __m128i *)p));
+    r = _mm512_inserti32x4(r, _mm_loadu_si128((const __m128i *)(p + stride)), 1);
+    r = _mm512_inserti32x4(r, _mm_loadu_si128((const __m128i *)(p + 2 * stride)), 2);
+    return _mm512_inserti32x4(r, _mm_loadu_si128((const __m128i *)(p + 3 * stride)), 3);
+}
+static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
+{
+    _mm_storeu_ps(p, _mm512_castps512_ps128(a));
+    _mm_storeu_ps(p + stride, _mm512_extractf32x4_ps(a, 1));
+    _mm_storeu_ps(p + 2 * stride, _mm512_extractf32x4_ps(a, 2));
+    _mm_storeu_ps(p + 3 * stride, _mm512_extractf32x4_ps(a, 3));
+}
+static inline simd_f simd_tile4_f(const float *p) { return _mm512_broadcast_f32x4(_mm_loadu_ps(p)); }
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm512_set1_epi64(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

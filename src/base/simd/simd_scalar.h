@@ -386,6 +386,26 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
     return r;
 }
 
+/* Stamps of 4-pixel rows (SIMD_W / 4 rows): lane l is column l & 3 of row
+ * l >> 2 of a row-major plane with row stride `stride`. */
+static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
+{
+    simd_i r;
+    for (int l = 0; l < SIMD_W; l++) r.v[l] = p[(size_t)(l >> 2) * stride + (size_t)(l & 3)];
+    return r;
+}
+static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
+{
+    for (int l = 0; l < SIMD_W; l++) p[(size_t)(l >> 2) * stride + (size_t)(l & 3)] = a.v[l];
+}
+/* lane l = p[l & 3]: a stamp's column values repeated over its rows */
+static inline simd_f simd_tile4_f(const float *p)
+{
+    simd_f r;
+    for (int l = 0; l < SIMD_W; l++) r.v[l] = p[l & 3];
+    return r;
+}
+
 /* ---- int64 lanes (wrapping) */
 static inline simd_l simd_set1_l(int64_t x)
 {

@@ -214,6 +214,18 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
     return _mm_loadu_ps(v);
 }
 
+static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
+{
+    (void)stride;
+    return _mm_loadu_si128((const __m128i *)p);
+}
+static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
+{
+    (void)stride;
+    _mm_storeu_ps(p, a);
+}
+static inline simd_f simd_tile4_f(const float *p) { return _mm_loadu_ps(p); }
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm_set1_epi64x(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

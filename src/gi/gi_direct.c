@@ -115,7 +115,13 @@ void gi_stage_direct_shadowmap(gi_frame *f)
     if (simd == RS_SIMD_AVX512) k = &gi_direct_kernels_avx512;
     if (simd == RS_SIMD_AVX2) k = &gi_direct_kernels_avx2;
 #endif
-    const gi_direct_io io = {f->scene,        &f->gbuf,    f->shadows.maps, f->shadows.count,
-                             f->area_maps.rendered ? &f->area_maps : NULL, f->width, f->direct};
+    const gi_direct_io io = {f->scene,
+                             &f->gbuf,
+                             f->shadows.maps,
+                             f->shadows.count,
+                             f->area_maps.rendered ? &f->area_maps : NULL,
+                             f->raster ? rs_context_resolve_table(f->raster) : NULL,
+                             f->width,
+                             f->direct};
     pf_jobs_parallel_for(f->jobs, k->row, (void *)&io, f->height, 1);
 }

@@ -79,29 +79,46 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
     memset(out, 0, (size_t)width * 3 * sizeof(float));
     uint32_t ng_prim = RS_GBUFFER_EMPTY;
     pf_vec3 ng = pf_v3(0.0f, 0.0f, 0.0f);
+    const size_t row = (size_t)y * width;
     for (uint32_t x0 = 0; x0 < width; x0 += SIMD_W) {
-        /* the pixels' G-buffer values (zeros past the row's end) */
+        /* the pixels' G-buffer values, zeros in the lanes without a surface
+         * (and past the row's end); the unit face normals from the
+         * rasterizer's table (rs_resolve_tri.ng: pf_scene_face_normal's
+         * operations, the same bits), else from the scene */
         float in[6][SIMD_W], ngv[3][SIMD_W], ev[3][SIMD_W];
-        uint32_t live = 0;
-        const float *planes[6] = {g->pos_x, g->pos_y, g->pos_z, g->nrm_x, g->nrm_y, g->nrm_z};
-        for (uint32_t i = 0; i < SIMD_W; i++) {
-            size_t p = (size_t)y * width + x0 + i;
-            int on = x0 + i < width && g->prim[p] != RS_GBUFFER_EMPTY;
-            for (int c = 0; c < 6; c++) in[c][i] = on ? planes[c][p] : 0.0f;
-            if (on && g->prim[p] != ng_prim) { /* runs of pixels share a triangle */
-                ng_prim = g->prim[p];
-                ng = pf_scene_face_normal(s, ng_prim);
-            }
-            ngv[0][i] = on ? ng.x : 0.0f;
-            ngv[1][i] = on ? ng.y : 0.0f;
-            ngv[2][i] = on ? ng.z : 0.0f;
-            live |= (uint32_t)on << i;
-        }
+        const uint32_t n = width - x0 < SIMD_W ? width - x0 : SIMD_W;
+        const simd_mask in_row = simd_mask_from_bits(n == SIMD_W ? SIMD_FULL : (1u << n) - 1u);
+        const simd_i prims = simd_maskz_loadu_i((const int32_t *)g->prim + row + x0, in_row);
+        const simd_mask live_lanes =
+            simd_mask_and(in_row, simd_mask_not(simd_eq_i(prims, simd_set1_i((int32_t)RS_GBUFFER_EMPTY))));
+        const uint32_t live = simd_mask_bits(live_lanes);
         if (!live) continue;
-        const simd_f px = simd_loadu_f(in[0]), py = simd_loadu_f(in[1]), pz = simd_loadu_f(in[2]);
-        const simd_f nx = simd_loadu_f(in[3]), ny = simd_loadu_f(in[4]), nz = simd_loadu_f(in[5]);
-        const simd_f gx = simd_loadu_f(ngv[0]), gy = simd_loadu_f(ngv[1]), gz = simd_loadu_f(ngv[2]);
-        const simd_mask live_lanes = simd_mask_from_bits(live);
+        const simd_f px = simd_maskz_loadu_f(g->pos_x + row + x0, live_lanes);
+        const simd_f py = simd_maskz_loadu_f(g->pos_y + row + x0, live_lanes);
+        const simd_f pz = simd_maskz_loadu_f(g->pos_z + row + x0, live_lanes);
+        const simd_f nx = simd_maskz_loadu_f(g->nrm_x + row + x0, live_lanes);
+        const simd_f ny = simd_maskz_loadu_f(g->nrm_y + row + x0, live_lanes);
+        const simd_f nz = simd_maskz_loadu_f(g->nrm_z + row + x0, live_lanes);
+        simd_f gx, gy, gz;
+        if (io->tri_table) {
+            const float *t0 = &io->tri_table[0].ng.x;
+            const simd_i idx = simd_mullo_i(prims, simd_set1_i((int32_t)(sizeof(rs_resolve_tri) / sizeof(float))));
+            gx = simd_maskz_gather_f(t0, idx, live_lanes);
+            gy = simd_maskz_gather_f(t0 + 1, idx, live_lanes);
+            gz = simd_maskz_gather_f(t0 + 2, idx, live_lanes);
+        } else {
+            for (uint32_t i = 0; i < SIMD_W; i++) {
+                uint32_t p = (uint32_t)(live >> i & 1u) ? g->prim[row + x0 + i] : RS_GBUFFER_EMPTY;
+                if (p != RS_GBUFFER_EMPTY && p != ng_prim) { /* runs of pixels share a triangle */
+                    ng_prim = p;
+                    ng = pf_scene_face_normal(s, ng_prim);
+                }
+                ngv[0][i] = p != RS_GBUFFER_EMPTY ? ng.x : 0.0f;
+                ngv[1][i] = p != RS_GBUFFER_EMPTY ? ng.y : 0.0f;
+                ngv[2][i] = p != RS_GBUFFER_EMPTY ? ng.z : 0.0f;
+            }
+            gx = simd_loadu_f(ngv[0]), gy = simd_loadu_f(ngv[1]), gz = simd_loadu_f(ngv[2]);
+        }
         simd_f e[3] = {simd_zero_f(), simd_zero_f(), simd_zero_f()};
         for (uint32_t l = 0; l < s->light_count && l < io->shadow_count; l++) {
             simd_f irr[3];
@@ -114,6 +131,8 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
                 v = rs_shadow_visibility_lanes(m, px, py, pz, gx, gy, gz, reached);
             } else { /* normal offset: the scalar lookup lane by lane */
                 float vis[SIMD_W];
+                simd_storeu_f(in[0], px), simd_storeu_f(in[1], py), simd_storeu_f(in[2], pz);
+                simd_storeu_f(ngv[0], gx), simd_storeu_f(ngv[1], gy), simd_storeu_f(ngv[2], gz);
                 uint32_t r = simd_mask_bits(reached);
                 for (int i = 0; i < SIMD_W; i++)
                     vis[i] = r >> i & 1 ? rs_shadow_visibility(m, pf_v3(in[0][i], in[1][i], in[2][i]),
@@ -125,22 +144,28 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
             simd_mask take = simd_mask_and(reached, simd_gt_f(v, simd_zero_f()));
             for (int c = 0; c < 3; c++) e[c] = simd_select_f(take, simd_add_f(e[c], simd_mul_f(irr[c], v)), e[c]);
         }
+        float *o = out + 3 * (size_t)x0;
+        if (!io->area_maps) {
+            /* direct = irradiance x albedo / pi, (e a) / pi as the scalar
+             * code rounds it; the lanes without a surface hold 0 x 0 */
+            const float *alb[3] = {g->alb_r, g->alb_g, g->alb_b};
+            for (int c = 0; c < 3; c++)
+                simd_storeu_f(ev[c], simd_mul_f(simd_mul_f(e[c], simd_maskz_loadu_f(alb[c] + row + x0, live_lanes)),
+                                                simd_set1_f(PF_INV_PI)));
+            for (uint32_t i = 0; i < n; i++) o[3 * i] = ev[0][i], o[3 * i + 1] = ev[1][i], o[3 * i + 2] = ev[2][i];
+            continue;
+        }
         for (int c = 0; c < 3; c++) simd_storeu_f(ev[c], e[c]);
+        simd_storeu_f(in[0], px), simd_storeu_f(in[1], py), simd_storeu_f(in[2], pz);
+        simd_storeu_f(in[3], nx), simd_storeu_f(in[4], ny), simd_storeu_f(in[5], nz);
         for (uint32_t i = 0; i < SIMD_W; i++) {
             if (!((live >> i) & 1u)) continue;
-            size_t p = (size_t)y * width + x0 + i;
-            float ex = ev[0][i], ey = ev[1][i], ez = ev[2][i];
-            if (io->area_maps) {
-                pf_vec3 ea = gi__direct_area_irradiance(io->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
-                                                        pf_v3(in[3][i], in[4][i], in[5][i]));
-                ex += ea.x;
-                ey += ea.y;
-                ez += ea.z;
-            }
-            float *o = out + 3 * (size_t)(x0 + i);
-            o[0] = ex * g->alb_r[p] * PF_INV_PI;
-            o[1] = ey * g->alb_g[p] * PF_INV_PI;
-            o[2] = ez * g->alb_b[p] * PF_INV_PI;
+            size_t p = row + x0 + i;
+            pf_vec3 ea = gi__direct_area_irradiance(io->area_maps, pf_v3(in[0][i], in[1][i], in[2][i]),
+                                                    pf_v3(in[3][i], in[4][i], in[5][i]));
+            o[3 * i] = (ev[0][i] + ea.x) * g->alb_r[p] * PF_INV_PI;
+            o[3 * i + 1] = (ev[1][i] + ea.y) * g->alb_g[p] * PF_INV_PI;
+            o[3 * i + 2] = (ev[2][i] + ea.z) * g->alb_b[p] * PF_INV_PI;
         }
     }
 }

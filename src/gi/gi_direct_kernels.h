@@ -19,6 +19,7 @@ typedef struct gi_direct_io {
     const rs_shadow_map *shadows;   /* SHADOW_MAPS: map l for light l */
     uint32_t shadow_count;
     const gi_area_maps *area_maps;  /* AREA_MAPS; NULL when not rendered */
+    const rs_resolve_tri *tri_table; /* the rasterizer's per-triangle table (its unit face normals), or NULL */
     uint32_t width;
     float *direct;                  /* DIRECT, 3 floats a pixel */
 } gi_direct_io;

@@ -101,6 +101,10 @@ static inline simd_mask simd_negative_i(simd_i a) { return _mm256_castsi256_ps(a
 static inline simd_f simd_i2f(simd_i a) { return _mm256_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm256_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm256_load_si256((const __m256i *)p); }
+static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)
+{
+    return _mm256_maskload_epi32((const int *)p, _mm256_castps_si256(m));
+}
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm256_loadu_si256((const __m256i *)p); }
 /* p aligned to the vector (SIMD_W * 4 bytes) */
 static inline void simd_store_i(int32_t *p, simd_i a) { _mm256_store_si256((__m256i *)p, a); }

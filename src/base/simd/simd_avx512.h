@@ -96,6 +96,10 @@ static inline simd_mask simd_negative_i(simd_i a) { return _mm512_movepi32_mask(
 static inline simd_f simd_i2f(simd_i a) { return _mm512_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm512_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm512_load_si512(p); }
+static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)
+{
+    return _mm512_maskz_loadu_epi32((__mmask16)m, p);
+}
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm512_loadu_si512(p); }
 /* p aligned to the vector (SIMD_W * 4 bytes) */
 static inline void simd_store_i(int32_t *p, simd_i a) { _mm512_store_si512(p, a); }

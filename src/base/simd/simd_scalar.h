@@ -282,6 +282,13 @@ static inline simd_i simd_f2i_trunc(simd_f a)
         r.v[l] = a.v[l] > -2147483904.0f && a.v[l] < 2147483648.0f ? (int32_t)a.v[l] : INT32_MIN;
     return r;
 }
+/* p[l] for the lanes of m, 0 elsewhere (reads nothing for the others) */
+static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)
+{
+    simd_i r;
+    for (int l = 0; l < SIMD_W; l++) r.v[l] = m >> l & 1 ? p[l] : 0;
+    return r;
+}
 static inline simd_i simd_loadu_i(const int32_t *p)
 {
     simd_i r;

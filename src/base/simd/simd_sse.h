@@ -129,6 +129,13 @@ static inline simd_mask simd_negative_i(simd_i a) { return _mm_castsi128_ps(_mm_
 static inline simd_f simd_i2f(simd_i a) { return _mm_cvtepi32_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm_load_si128((const __m128i *)p); }
+static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)
+{
+    unsigned b = (unsigned)_mm_movemask_ps(m);
+    int32_t v[4];
+    for (int l = 0; l < 4; l++) v[l] = b >> l & 1 ? p[l] : 0;
+    return _mm_loadu_si128((const __m128i *)v);
+}
 static inline simd_i simd_loadu_i(const int32_t *p) { return _mm_loadu_si128((const __m128i *)p); }
 /* p aligned to the vector (SIMD_W * 4 bytes) */
 static inline void simd_store_i(int32_t *p, simd_i a) { _mm_store_si128((__m128i *)p, a); }

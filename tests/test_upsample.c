@@ -5,7 +5,7 @@
  *   its mean relative difference per pixel under 5%;
  * - a frame pixel that is a sample (2X, 2Y) gets its sample's filtered value
  *   exactly; the indirect image is (width / 2) x (height / 2), rounded up;
- * - the same bytes with 1 and 2 threads;
+ * - the same bytes with 1 and 2 threads, and on every SIMD path;
  * - every view renders and the mosaic's pixel mapping round-trips;
  * - a scale out of range is a clear error. */
 #include <setjmp.h>
@@ -21,6 +21,7 @@
 #include "gi_frame.h"
 #include "gi_view.h"
 #include "pf_gltf.h"
+#include "pf_isa.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
 
@@ -28,7 +29,7 @@
 #define W 161 /* odd: the last sample column and row are partial */
 #define H 121
 
-static void render(tu_fx *x, uint32_t threads, uint32_t scale, int no_interleave)
+static void render_simd(tu_fx *x, uint32_t threads, uint32_t scale, int no_interleave, rs_simd simd)
 {
     tu_load(&x->scene, CORNELL);
     gi_indirect_options io;
@@ -36,8 +37,13 @@ static void render(tu_fx *x, uint32_t threads, uint32_t scale, int no_interleave
     io.vpls = 256;
     io.scale = scale;
     io.no_interleave = no_interleave;
-    tu_fx_begin(x, threads, RS_SIMD_SCALAR, W, H, &x->scene.cameras[0], &io, 1);
+    tu_fx_begin(x, threads, simd, W, H, &x->scene.cameras[0], &io, 1);
     gi_frame_render_raster(&x->f);
+}
+
+static void render(tu_fx *x, uint32_t threads, uint32_t scale, int no_interleave)
+{
+    render_simd(x, threads, scale, no_interleave, RS_SIMD_SCALAR);
 }
 
 static void test_close_to_full_resolution(void **state)
@@ -86,6 +92,34 @@ static void test_threads(void **state)
     tu_fx_end(&b);
 }
 
+/* The SIMD paths' upsampling (gi__upsample, runs of 8 or 16 pixels, and
+ * the pixel-by-pixel rest of each row) gives the scalar path's bits, at
+ * scales 2 and 3 on an odd size. */
+static void test_simd_identical(void **state)
+{
+    (void)state;
+    pf_isa isa = pf_isa_detect();
+    for (uint32_t scale = 2; scale <= 3; scale++) {
+        tu_fx a;
+        render_simd(&a, 2, scale, 0, RS_SIMD_SCALAR);
+        for (int p = 0; p < 2; p++) {
+            rs_simd simd = p ? RS_SIMD_AVX512 : RS_SIMD_AVX2;
+            if (isa < (p ? PF_ISA_AVX512 : PF_ISA_AVX2)) continue;
+            tu_fx b;
+            render_simd(&b, 2, scale, 0, simd);
+            assert_memory_equal(a.f.ind.filtered_low, b.f.ind.filtered_low,
+                                (size_t)a.f.ind.w * a.f.ind.h * 3 * sizeof(float));
+            size_t differ = 0;
+            for (size_t i = 0; i < (size_t)W * H * 3; i++)
+                differ += memcmp(&a.f.ind.filtered[i], &b.f.ind.filtered[i], sizeof(float)) != 0;
+            if (differ) fail_msg("scale %u, %s: %zu upsampled values differ from the scalar path", scale,
+                                 rs_simd_name(simd), differ);
+            tu_fx_end(&b);
+        }
+        tu_fx_end(&a);
+    }
+}
+
 static void test_views(void **state)
 {
     (void)state;
@@ -130,6 +164,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_close_to_full_resolution),
         cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_simd_identical),
         cmocka_unit_test(test_views),
         cmocka_unit_test(test_bad_scale),
     };

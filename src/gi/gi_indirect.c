@@ -983,55 +983,86 @@ typedef struct gi__upsample_io {
     float *filtered;        /* FILTERED */
     uint32_t s, w, h, W;    /* scale, reduced size, frame width */
     float a2, beta;         /* the filter's tests */
+    const gi_indirect_kernels *kern; /* the SIMD path's runs, or NULL: pixel by pixel */
 } gi__upsample_io;
+
+/* No sample passes among the four: the best of the 3 x 3 around
+ * (reduced sample X0, Y0 of frame pixel (x, y)). */
+static void gi__upsample_fallback(const gi__upsample_io *io, size_t i, uint32_t X0, uint32_t Y0, float *out)
+{
+    const rs_gbuffer *g = io->gbuf;
+    const gi__up_planes lo = io->lo;
+    pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
+    size_t best = SIZE_MAX;
+    int best_ok = 0;
+    float best_d2 = INFINITY, d2;
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+            int X = (int)X0 + dx, Y = (int)Y0 + dy;
+            if (X < 0 || Y < 0 || X >= (int)io->w || Y >= (int)io->h) continue;
+            size_t k = (size_t)Y * io->w + (size_t)X;
+            int ok = gi__up_ok(&lo, k, pos, nrm, INFINITY, io->beta, &d2);
+            if (ok > best_ok || (ok == best_ok && ok > 0 && d2 < best_d2)) best = k, best_ok = ok, best_d2 = d2;
+        }
+    if (best != SIZE_MAX) memcpy(out, lo.e + 3 * best, 3 * sizeof(float));
+}
+
+/* Frame pixel (x, y): the reference the SIMD kernel (gi__upsample,
+ * gi_indirect_kernels.c) gives the bits of. */
+static void gi__upsample_pixel(const gi__upsample_io *io, uint32_t x, uint32_t y)
+{
+    const rs_gbuffer *g = io->gbuf;
+    const gi__up_planes lo = io->lo;
+    const uint32_t s = io->s, w = io->w, h = io->h, W = io->W;
+    const float a2 = io->a2, beta = io->beta, inv_s = 1.0f / (float)s;
+    const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0;
+    const float ty = (float)(y - Y0 * s) * inv_s;
+    size_t i = (size_t)y * W + x;
+    float *out = io->filtered + 3 * i;
+    out[0] = out[1] = out[2] = 0.0f;
+    if (g->prim[i] == RS_GBUFFER_EMPTY) return;
+    pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
+    const uint32_t X0 = x / s, X1 = X0 + 1 < w ? X0 + 1 : X0;
+    const float tx = (float)(x - X0 * s) * inv_s;
+    const uint32_t xs[4] = {X0, X1, X0, X1}, ys[4] = {Y0, Y0, Y1, Y1};
+    const float bw[4] = {(1.0f - tx) * (1.0f - ty), tx * (1.0f - ty), (1.0f - tx) * ty, tx * ty};
+    float acc0 = 0.0f, acc1 = 0.0f, acc2 = 0.0f, wsum = 0.0f, d2;
+    for (int c = 0; c < 4; c++) {
+        size_t k = (size_t)ys[c] * w + xs[c];
+        if (!(bw[c] > 0.0f) || gi__up_ok(&lo, k, pos, nrm, a2, beta, &d2) != 2) continue;
+        const float *e = lo.e + 3 * k;
+        acc0 += bw[c] * e[0], acc1 += bw[c] * e[1], acc2 += bw[c] * e[2];
+        wsum += bw[c];
+    }
+    if (wsum > 0.0f) {
+        out[0] = acc0 / wsum, out[1] = acc1 / wsum, out[2] = acc2 / wsum;
+        return;
+    }
+    gi__upsample_fallback(io, i, X0, Y0, out);
+}
 
 static void gi__upsample_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
     const gi__upsample_io *io = p;
-    const rs_gbuffer *g = io->gbuf;
-    const gi__up_planes lo = io->lo;
-    float *restrict filtered = io->filtered;
-    const uint32_t s = io->s, w = io->w, h = io->h, W = io->W;
-    const float a2 = io->a2, beta = io->beta, inv_s = 1.0f / (float)s;
-    const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0;
-    const float ty = (float)(y - Y0 * s) * inv_s;
-    for (uint32_t x = 0; x < W; x++) {
-        size_t i = (size_t)y * W + x;
-        float *out = filtered + 3 * i;
-        out[0] = out[1] = out[2] = 0.0f;
-        if (g->prim[i] == RS_GBUFFER_EMPTY) continue;
-        pf_vec3 pos = pf_v3(g->pos_x[i], g->pos_y[i], g->pos_z[i]), nrm = pf_v3(g->nrm_x[i], g->nrm_y[i], g->nrm_z[i]);
-        const uint32_t X0 = x / s, X1 = X0 + 1 < w ? X0 + 1 : X0;
-        const float tx = (float)(x - X0 * s) * inv_s;
-        const uint32_t xs[4] = {X0, X1, X0, X1}, ys[4] = {Y0, Y0, Y1, Y1};
-        const float bw[4] = {(1.0f - tx) * (1.0f - ty), tx * (1.0f - ty), (1.0f - tx) * ty, tx * ty};
-        float acc0 = 0.0f, acc1 = 0.0f, acc2 = 0.0f, wsum = 0.0f, d2;
-        for (int c = 0; c < 4; c++) {
-            size_t k = (size_t)ys[c] * w + xs[c];
-            if (!(bw[c] > 0.0f) || gi__up_ok(&lo, k, pos, nrm, a2, beta, &d2) != 2) continue;
-            const float *e = lo.e + 3 * k;
-            acc0 += bw[c] * e[0], acc1 += bw[c] * e[1], acc2 += bw[c] * e[2];
-            wsum += bw[c];
-        }
-        if (wsum > 0.0f) {
-            out[0] = acc0 / wsum, out[1] = acc1 / wsum, out[2] = acc2 / wsum;
-            continue;
-        }
-        /* no sample passes among the four: the best of the 3 x 3 around */
-        size_t best = SIZE_MAX;
-        int best_ok = 0;
-        float best_d2 = INFINITY;
-        for (int dy = -1; dy <= 1; dy++)
-            for (int dx = -1; dx <= 1; dx++) {
-                int X = (int)X0 + dx, Y = (int)Y0 + dy;
-                if (X < 0 || Y < 0 || X >= (int)w || Y >= (int)h) continue;
-                size_t k = (size_t)Y * w + (size_t)X;
-                int ok = gi__up_ok(&lo, k, pos, nrm, INFINITY, beta, &d2);
-                if (ok > best_ok || (ok == best_ok && ok > 0 && d2 < best_d2)) best = k, best_ok = ok, best_d2 = d2;
+    const gi_indirect_kernels *k = io->kern;
+    uint32_t x = 0;
+    if (k) {
+        const uint32_t n = k->width;
+        const gi_upsample_in in = {io->gbuf, io->lo.px, io->lo.py, io->lo.pz, io->lo.nx, io->lo.ny, io->lo.nz,
+                                   io->lo.prim, io->lo.e, io->s, io->w, io->h, io->W, io->a2, io->beta};
+        /* runs whose reduced samples lie inside the reduced row (s >= 2:
+         * at most n consecutive reduced columns) */
+        for (; x + n <= io->W && x / io->s + n <= io->w; x += n) {
+            size_t i = (size_t)y * io->W + x;
+            uint32_t fb = k->upsample(&in, x, y, io->filtered + 3 * i);
+            for (; fb; fb &= fb - 1) {
+                uint32_t l = (uint32_t)__builtin_ctz(fb);
+                gi__upsample_fallback(io, i + l, (x + l) / io->s, y / io->s, io->filtered + 3 * (i + l));
             }
-        if (best != SIZE_MAX) memcpy(out, lo.e + 3 * best, 3 * sizeof(float));
+        }
     }
+    for (; x < io->W; x++) gi__upsample_pixel(io, x, y);
 }
 
 void gi_stage_upsample(gi_frame *f)
@@ -1047,7 +1078,8 @@ void gi_stage_upsample(gi_frame *f)
                                 ind->h,
                                 f->width,
                                 ind->alpha * ind->alpha,
-                                ind->opt.beta};
+                                ind->opt.beta,
+                                gi__kernels(f)};
     pf_jobs_parallel_for(f->jobs, gi__upsample_row, (void *)&io, f->height, 8);
 }
 

@@ -14,7 +14,10 @@
  *
  * Filter: the scalar box filter's tests and sums, lane-wise, the window in
  * the scalar loop's order; rows outside the image are skipped for every
- * lane, as the scalar loop skips them. */
+ * lane, as the scalar loop skips them.
+ *
+ * Upsampling (--indirect-scale): the joint upsampling's four samples
+ * lane-wise (gi__upsample below). */
 #include "gi_indirect_kernels.h"
 
 #include <string.h>
@@ -122,4 +125,66 @@ static void gi__filter_box(const gi_filter_in *in, int x, int y, float *out)
     }
 }
 
-const gi_indirect_kernels GI_INDIRECT_KERNELS = {SIMD_NAME, SIMD_W, gi__accumulate, gi__filter_box};
+/* The joint upsampling's four samples, lane-wise with gi__upsample_row's
+ * operations (gi_indirect.c, the reference): a sample that is skipped there
+ * adds +0 here, which changes no sum (a sum of products of non-negative
+ * weights and irradiances is never -0). The reduced samples of a run lie in
+ * at most SIMD_W consecutive reduced columns (s >= 2), so each plane is one
+ * load per reduced row and one permutation per sample instead of gathers. */
+static uint32_t gi__upsample(const gi_upsample_in *in, uint32_t x, uint32_t y, float *out)
+{
+    const rs_gbuffer *g = in->g;
+    const uint32_t s = in->s, w = in->w, h = in->h;
+    const float inv_s = 1.0f / (float)s;
+    const uint32_t Y0 = y / s, Y1 = Y0 + 1 < h ? Y0 + 1 : Y0, base = x / s;
+    const float ty = (float)(y - Y0 * s) * inv_s;
+    /* each lane's two reduced columns and its fraction, as the scalar code */
+    int32_t i0[SIMD_W], i1[SIMD_W];
+    float txa[SIMD_W];
+    for (uint32_t l = 0, X0 = base, r = x - base * s; l < SIMD_W; l++) { /* X0 = (x + l) / s, r its remainder */
+        uint32_t X1 = X0 + 1 < w ? X0 + 1 : X0;
+        i0[l] = (int32_t)(X0 - base), i1[l] = (int32_t)(X1 - base);
+        txa[l] = (float)r * inv_s; /* (float)(x + l - X0 s) * inv_s */
+        if (++r == s) r = 0, X0++;
+    }
+    const simd_i idx[2] = {simd_loadu_i(i0), simd_loadu_i(i1)};
+    const simd_f one = simd_set1_f(1.0f), zero = simd_zero_f(), tx = simd_loadu_f(txa), tyv = simd_set1_f(ty);
+    const simd_f bw[4] = {simd_mul_f(simd_sub_f(one, tx), simd_sub_f(one, tyv)), simd_mul_f(tx, simd_sub_f(one, tyv)),
+                          simd_mul_f(simd_sub_f(one, tx), tyv), simd_mul_f(tx, tyv)};
+    const size_t i = (size_t)y * in->W + x;
+    const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
+    const simd_mask covered = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)g->prim + i), empty));
+    const simd_f px = simd_loadu_f(g->pos_x + i), py = simd_loadu_f(g->pos_y + i), pz = simd_loadu_f(g->pos_z + i);
+    const simd_f nx = simd_loadu_f(g->nrm_x + i), ny = simd_loadu_f(g->nrm_y + i), nz = simd_loadu_f(g->nrm_z + i);
+    const simd_f a2 = simd_set1_f(in->a2), beta = simd_set1_f(in->beta);
+    simd_f acc[3] = {zero, zero, zero}, wsum = zero;
+    for (int r = 0; r < 2; r++) {
+        const size_t k = (size_t)(r ? Y1 : Y0) * w + base;
+        const simd_i lp = simd_loadu_i((const int32_t *)in->lprim + k);
+        const simd_f lx = simd_loadu_f(in->lpx + k), ly = simd_loadu_f(in->lpy + k), lz = simd_loadu_f(in->lpz + k);
+        const simd_f mx = simd_loadu_f(in->lnx + k), my = simd_loadu_f(in->lny + k), mz = simd_loadu_f(in->lnz + k);
+        simd_f e[3];
+        simd_load3_f(in->le + 3 * k, &e[0], &e[1], &e[2]);
+        for (int c = 0; c < 2; c++) { /* sample (X0 or X1, this row): bw[2 r + c] */
+            const simd_i ix = idx[c];
+            simd_f dx = simd_sub_f(simd_permute_f(lx, ix), px), dy = simd_sub_f(simd_permute_f(ly, ix), py);
+            simd_f dz = simd_sub_f(simd_permute_f(lz, ix), pz);
+            simd_f d2 = gi__dot3(dx, dy, dz, dx, dy, dz);
+            simd_f nd = gi__dot3(nx, ny, nz, simd_permute_f(mx, ix), simd_permute_f(my, ix), simd_permute_f(mz, ix));
+            const simd_f b = bw[2 * r + c];
+            simd_mask ok = simd_mask_and(simd_mask_and(covered, simd_gt_f(b, zero)),
+                                         simd_mask_not(simd_eq_i(simd_permute_i(lp, ix), empty)));
+            ok = simd_mask_and(ok, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
+            for (int ch = 0; ch < 3; ch++)
+                acc[ch] = simd_add_f(acc[ch], simd_select_f(ok, simd_mul_f(b, simd_permute_f(e[ch], ix)), zero));
+            wsum = simd_add_f(wsum, simd_select_f(ok, b, zero));
+        }
+    }
+    const simd_mask has = simd_gt_f(wsum, zero);
+    float o[3][SIMD_W];
+    for (int ch = 0; ch < 3; ch++) simd_storeu_f(o[ch], simd_select_f(has, simd_div_f(acc[ch], wsum), zero));
+    for (uint32_t l = 0; l < SIMD_W; l++) out[3 * l] = o[0][l], out[3 * l + 1] = o[1][l], out[3 * l + 2] = o[2][l];
+    return simd_mask_bits(simd_mask_andnot(covered, has));
+}
+
+const gi_indirect_kernels GI_INDIRECT_KERNELS = {SIMD_NAME, SIMD_W, gi__accumulate, gi__filter_box, gi__upsample};

@@ -33,6 +33,17 @@ typedef struct gi_filter_in {
     float alpha2, beta;      /* the tests: |p_j - p|^2 < alpha2, n_j . n > beta */
 } gi_filter_in;
 
+/* What the joint upsampling (step 9b, --indirect-scale s > 1) reads: the
+ * frame's G-buffer, the reduced one and the reduced irradiance, explicitly. */
+typedef struct gi_upsample_in {
+    const rs_gbuffer *g;                        /* GBUFFER, the frame's */
+    const float *lpx, *lpy, *lpz, *lnx, *lny, *lnz; /* the reduced G-buffer's planes */
+    const uint32_t *lprim;
+    const float *le;      /* FILTERED at the reduced size, 3 floats a pixel */
+    uint32_t s, w, h, W;  /* scale, reduced size, frame width */
+    float a2, beta;       /* the filter's tests */
+} gi_upsample_in;
+
 typedef struct gi_indirect_kernels {
     const char *isa;  /* SIMD_NAME of the vocabulary it was compiled with */
     uint32_t width;   /* SIMD_W: pixels per run */
@@ -47,6 +58,13 @@ typedef struct gi_indirect_kernels {
      * indirect image (every window pixel on screen horizontally); out gets 3
      * floats a pixel. */
     void (*filter_box)(const gi_filter_in *in, int x, int y, float *out);
+    /* The upsampling of `width` pixels x.. of frame row y whose reduced
+     * samples lie in columns x / s .. x / s + width - 1 of the reduced
+     * image (the caller checks): out (3 floats a pixel) gets each pixel's
+     * bilinear blend of the samples that pass, 0 elsewhere. Returns the
+     * lanes (bit i: pixel x + i) with a surface that no sample passes: the
+     * caller gives them the 3 x 3 fallback. */
+    uint32_t (*upsample)(const gi_upsample_in *in, uint32_t x, uint32_t y, float *out);
 } gi_indirect_kernels;
 
 extern const gi_indirect_kernels gi_indirect_kernels_scalar;

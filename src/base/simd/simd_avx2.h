@@ -182,6 +182,9 @@ static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
 }
 static inline simd_f simd_tile4_f(const float *p) { return _mm256_broadcast_ps((const __m128 *)p); }
 
+static inline simd_f simd_permute_f(simd_f a, simd_i idx) { return _mm256_permutevar8x32_ps(a, idx); }
+static inline simd_i simd_permute_i(simd_i a, simd_i idx) { return _mm256_permutevar8x32_epi32(a, idx); }
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm256_set1_epi64x(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

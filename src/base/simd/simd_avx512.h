@@ -181,6 +181,9 @@ static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
 }
 static inline simd_f simd_tile4_f(const float *p) { return _mm512_broadcast_f32x4(_mm_loadu_ps(p)); }
 
+static inline simd_f simd_permute_f(simd_f a, simd_i idx) { return _mm512_permutexvar_ps(idx, a); }
+static inline simd_i simd_permute_i(simd_i a, simd_i idx) { return _mm512_permutexvar_epi32(idx, a); }
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm512_set1_epi64(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

@@ -413,6 +413,20 @@ static inline simd_f simd_tile4_f(const float *p)
     return r;
 }
 
+/* lane l = a[idx[l] mod SIMD_W]: a permutation within one vector */
+static inline simd_f simd_permute_f(simd_f a, simd_i idx)
+{
+    simd_f r;
+    for (int l = 0; l < SIMD_W; l++) r.v[l] = a.v[idx.v[l] & (SIMD_W - 1)];
+    return r;
+}
+static inline simd_i simd_permute_i(simd_i a, simd_i idx)
+{
+    simd_i r;
+    for (int l = 0; l < SIMD_W; l++) r.v[l] = a.v[idx.v[l] & (SIMD_W - 1)];
+    return r;
+}
+
 /* ---- int64 lanes (wrapping) */
 static inline simd_l simd_set1_l(int64_t x)
 {

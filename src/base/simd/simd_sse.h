@@ -233,6 +233,24 @@ static inline void simd_store_rows4_f(float *p, size_t stride, simd_f a)
 }
 static inline simd_f simd_tile4_f(const float *p) { return _mm_loadu_ps(p); }
 
+static inline simd_f simd_permute_f(simd_f a, simd_i idx)
+{
+    float v[4], r[4];
+    int32_t i[4];
+    _mm_storeu_ps(v, a);
+    _mm_storeu_si128((__m128i *)i, idx);
+    for (int l = 0; l < 4; l++) r[l] = v[i[l] & 3];
+    return _mm_loadu_ps(r);
+}
+static inline simd_i simd_permute_i(simd_i a, simd_i idx)
+{
+    int32_t v[4], r[4], i[4];
+    _mm_storeu_si128((__m128i *)v, a);
+    _mm_storeu_si128((__m128i *)i, idx);
+    for (int l = 0; l < 4; l++) r[l] = v[i[l] & 3];
+    return _mm_loadu_si128((const __m128i *)r);
+}
+
 /* ---- int64 lanes */
 static inline simd_l simd_set1_l(int64_t x) { return _mm_set1_epi64x(x); }
 static inline simd_l simd_ramp_l(int64_t base, int64_t step)

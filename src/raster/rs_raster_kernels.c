@@ -160,6 +160,35 @@ static inline void rs__bands_next(rs__bands *b, int32_t *lo, int32_t *hi)
     *hi = (int32_t)r / RS_STAMP_W;
 }
 
+/* Stamps sx0..sx1 of band sy with rs__stamp's operations, for the usual
+ * case (no alpha test, no coverage count, the tile inside the image): the
+ * triangle's and the tile's constants in registers, fx stepped by 4 (exact
+ * small integers, the same values as rs__stamp's), no branch but the loop. */
+static inline void rs__band_fast(const rs__tile_ctx *c, const rs__pair *p, int32_t sy, int32_t sx0, int32_t sx1,
+                                 simd_i e[3], const simd_i stepx[3], simd_f zy)
+{
+    float *restrict depth = c->in->depth + ((size_t)sy * RS_STAMPS_X + (size_t)sx0) * SIMD_W;
+    int32_t *restrict prim = c->in->prim ? (int32_t *)c->in->prim + ((size_t)sy * RS_STAMPS_X + (size_t)sx0) * SIMD_W
+                                         : NULL;
+    const simd_f zt = p->zt, dzdx = p->dzdx, zmin = p->zmin, zmax = p->zmax, four = simd_set1_f((float)RS_STAMP_W);
+    const simd_i id = p->prim;
+    simd_f fx = simd_add_f(c->colf, simd_set1_f((float)(sx0 * RS_STAMP_W)));
+    simd_i e0 = e[0], e1 = e[1], e2 = e[2];
+    for (int32_t sx = sx0; sx <= sx1; sx++, depth += SIMD_W) {
+        simd_mask cov = simd_mask_not(simd_negative_i(simd_or_i(simd_or_i(e0, e1), e2)));
+        e0 = simd_add_i(e0, stepx[0]), e1 = simd_add_i(e1, stepx[1]), e2 = simd_add_i(e2, stepx[2]);
+        simd_f z = simd_max_f(simd_min_f(simd_add_f(simd_add_f(zt, simd_mul_f(dzdx, fx)), zy), zmax), zmin);
+        fx = simd_add_f(fx, four);
+        simd_f old = simd_load_f(depth);
+        simd_mask pass = simd_mask_and(simd_gt_f(z, old), cov);
+        simd_store_f(depth, simd_select_f(pass, z, old));
+        if (prim) {
+            simd_store_i(prim, simd_select_i(pass, id, simd_load_i(prim)));
+            prim += SIMD_W;
+        }
+    }
+}
+
 /* The stamp walk when every edge value fits 32 bits. */
 static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
 {
@@ -175,6 +204,7 @@ static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
     }
     /* bands pay off on rectangles at least 3 stamps wide and 2 high */
     int banded = p->sx1 - p->sx0 >= 2 && p->sy1 > p->sy0;
+    const int fast = !p->masked && !c->in->coverage && !c->partial;
     rs__bands bands;
     memset(&bands, 0, sizeof bands);
     if (banded) rs__bands_init(&bands, p, ax, by);
@@ -186,13 +216,16 @@ static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
             for (int k = 0; k < 3; k++)
                 e[k] = simd_add_i(erow[k], simd_set1_i((int32_t)((uint32_t)ax[k] * RS_STAMP_W * (uint32_t)lo)));
             simd_f zy = rs__zy(c, p, sy);
-            for (int32_t sx = p->sx0 + lo; sx <= p->sx0 + hi; sx++) {
-                simd_mask cov = simd_mask_not(simd_negative_i(simd_or_i(simd_or_i(e[0], e[1]), e[2])));
-                for (int k = 0; k < 3; k++) e[k] = simd_add_i(e[k], stepx[k]);
-                /* no branch on coverage: an empty stamp costs less than a
-                 * mispredicted branch */
-                rs__stamp(c, p, sx, sy, zy, rs__inside(c, sx, sy, cov));
-            }
+            if (fast)
+                rs__band_fast(c, p, sy, p->sx0 + lo, p->sx0 + hi, e, stepx, zy);
+            else
+                for (int32_t sx = p->sx0 + lo; sx <= p->sx0 + hi; sx++) {
+                    simd_mask cov = simd_mask_not(simd_negative_i(simd_or_i(simd_or_i(e[0], e[1]), e[2])));
+                    for (int k = 0; k < 3; k++) e[k] = simd_add_i(e[k], stepx[k]);
+                    /* no branch on coverage: an empty stamp costs less than a
+                     * mispredicted branch */
+                    rs__stamp(c, p, sx, sy, zy, rs__inside(c, sx, sy, cov));
+                }
         }
         for (int k = 0; k < 3; k++) erow[k] = simd_add_i(erow[k], simd_set1_i((int32_t)((uint32_t)by[k] * RS__SH)));
     }
@@ -217,6 +250,18 @@ static void rs__walk2x2(const rs__tile_ctx *c, const rs__pair *p)
     }
     int32_t x = p->sx0, y = p->sy0;
     simd_f zy0 = rs__zy(c, p, y), zy1 = rs__zy(c, p, y + 1);
+    if (!p->masked && !c->in->coverage && !c->partial) {
+        /* rs__band_fast's two bands of two stamps */
+        const simd_i zero = simd_set1_i(0);
+        const simd_i st[3] = {zero, zero, zero};
+        simd_i r0[3] = {e00, zero, zero}, r1[3] = {e01, zero, zero};
+        simd_i q0[3] = {e10, zero, zero}, q1[3] = {e11, zero, zero};
+        rs__band_fast(c, p, y, x, x, r0, st, zy0);
+        rs__band_fast(c, p, y, x + 1, x + 1, q0, st, zy0);
+        rs__band_fast(c, p, y + 1, x, x, r1, st, zy1);
+        rs__band_fast(c, p, y + 1, x + 1, x + 1, q1, st, zy1);
+        return;
+    }
     rs__stamp(c, p, x, y, zy0, rs__inside(c, x, y, simd_mask_not(simd_negative_i(e00))));
     rs__stamp(c, p, x + 1, y, zy0, rs__inside(c, x + 1, y, simd_mask_not(simd_negative_i(e10))));
     rs__stamp(c, p, x, y + 1, zy1, rs__inside(c, x, y + 1, simd_mask_not(simd_negative_i(e01))));

@@ -290,8 +290,17 @@ static void rs__resolve_band(void *p, uint32_t b, uint32_t worker)
     for (uint32_t r = 0; r < rows && y0 + r < g->height; r++)
         rs__prefetch(rc, (size_t)(y0 + r) * g->width, RS__PREFETCH_AHEAD, &last[r]);
     for (uint32_t x = 0; x < g->width; x += 4) {
-        for (uint32_t r = 0; r < rows && y0 + r < g->height; r++)
-            rs__prefetch(rc, (size_t)(y0 + r) * g->width + x + RS__PREFETCH_AHEAD, 4, &last[r]);
+        /* the table entries the block RS__PREFETCH_AHEAD pixels ahead shows:
+         * its rows' first pixels (a block rarely shows a triangle that none
+         * of them shows, and a miss there only costs time) */
+        if (rc->table && x + RS__PREFETCH_AHEAD < g->width)
+            for (uint32_t r = 0; r < rows && y0 + r < g->height; r++) {
+                uint32_t prim = g->prim[(size_t)(y0 + r) * g->width + x + RS__PREFETCH_AHEAD];
+                if (prim == last[r] || prim == RS_GBUFFER_EMPTY) continue;
+                last[r] = prim;
+                __builtin_prefetch(&rc->table[prim]);
+                __builtin_prefetch((const char *)&rc->table[prim] + 64);
+            }
         if (x + 4 <= g->width && y0 + rows <= g->height && rc->kern->group(rc, &c, x, y0)) continue;
         for (uint32_t y = y0; y < y0 + rows && y < g->height; y++)
             for (uint32_t xx = x; xx < x + 4 && xx < g->width; xx++) {

@@ -38,7 +38,7 @@ static inline simd_f rs__dot_c(simd_f dx, simd_f dy, simd_f dz, const float *bas
  * are d, on one untextured triangle (constants T, UV, base colour ALB),
  * every lane. o: depth, position, normal, albedo (10 planes). */
 static void rs__resolve_lanes(const rs__resolve_ctx *rc, const float *T, const float *UV, const float *ALB,
-                              const simd_f d[3], simd_f o[10])
+                              const simd_f d[3], simd_mask mine, simd_f o[10])
 {
     const pf_camera *cam = rc->cam;
     const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);
@@ -57,7 +57,10 @@ static void rs__resolve_lanes(const rs__resolve_ctx *rc, const float *T, const f
     v = simd_max_f(zero, simd_min_f(one, v));
     simd_f sum = simd_add_f(u, v);
     simd_mask over = simd_gt_f(sum, one);
-    if (simd_mask_any(over)) { /* the lanes past the edge opposite vertex 0 (rare): two divisions */
+    /* the lanes past the edge opposite vertex 0 (rare among the lanes that
+     * show the triangle, `mine`; the others' values are not kept): two
+     * divisions */
+    if (simd_mask_any(simd_mask_and(over, mine))) {
         u = simd_select_f(over, simd_div_f(u, sum), u);
         v = simd_select_f(over, simd_div_f(v, sum), v);
     }
@@ -134,8 +137,6 @@ static int rs__group(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32_t x, u
     }
     (void)c;
     simd_f acc[10], o[10];
-    acc[0] = simd_set1_f(INFINITY);
-    for (int k = 1; k < 10; k++) acc[k] = simd_zero_f();
     /* the lanes' rays, pf_camera_ray_dir: forward + (right sx + up sy) */
     const pf_camera *cam = rc->cam;
     simd_f sx = simd_tile4_f(rc->sx + x), sy = simd_spread4_f(rc->sy + y), d[3];
@@ -144,9 +145,19 @@ static int rs__group(const rs__resolve_ctx *rc, rs__tri_consts *c, uint32_t x, u
         d[k] = simd_add_f(simd_set1_f(fw[k]),
                           simd_add_f(simd_mul_f(simd_set1_f(rt[k]), sx), simd_mul_f(simd_set1_f(up[k]), sy)));
     const pf_material *mat = rc->scene->materials;
+    /* the first triangle's values where it shows, the empty pixel's
+     * elsewhere (depth +inf, the rest 0); then each further triangle's */
     for (int j = 0; j < n; j++) {
-        rs__resolve_lanes(rc, &tt[j]->p0.x, &uv[j][0].x, mat[tt[j]->material].base_color, d, o);
-        for (int k = 0; k < 10; k++) acc[k] = simd_select_f(lanes[j], o[k], acc[k]);
+        rs__resolve_lanes(rc, &tt[j]->p0.x, &uv[j][0].x, mat[tt[j]->material].base_color, d, lanes[j], o);
+        if (j == 0) {
+            acc[0] = simd_select_f(lanes[0], o[0], simd_set1_f(INFINITY));
+            for (int k = 1; k < 10; k++) acc[k] = simd_select_f(lanes[0], o[k], simd_zero_f());
+        } else
+            for (int k = 0; k < 10; k++) acc[k] = simd_select_f(lanes[j], o[k], acc[k]);
+    }
+    if (n == 0) {
+        acc[0] = simd_set1_f(INFINITY);
+        for (int k = 1; k < 10; k++) acc[k] = simd_zero_f();
     }
     /* the normal: pf_v3_normalize's operations, l = sqrt((x*x + y*y) + z*z),
      * n * (1 / l), 0 for l = 0 */

@@ -136,7 +136,8 @@ typedef struct softgi_desc {
     uint32_t ism_res;       /* visibility "ism" only: texels per side, a power of two 8..512; 0: 64 (--ism-res) */
     uint32_t ism_points;    /* visibility "ism" only: points a frame, 1000..1e8; 0: the default (--ism-points) */
     float ism_bias;         /* visibility "ism" only: bias scale, 1..64; 0: the default (--ism-bias) */
-    uint32_t indirect_scale; /* the indirect stages at 1/N resolution, 1..4; 0: 1 (--indirect-scale) */
+    uint32_t indirect_scale; /* the indirect stages at 1/N resolution, 1..4; 0: automatic, 2 from 1024x768
+                                up, else 1 (--indirect-scale) */
     uint32_t temporal;      /* temporal accumulation over up to N frames, 2..256; 0: off (--temporal) */
     /* anti-aliasing */
     uint32_t aa;            /* jittered samples a pixel, averaged, 1..256; 0: 1, the pixel centres (--aa) */
@@ -275,6 +276,7 @@ typedef struct softgi_info {
     float clamp_b;             /* the bounded geometry term b in 1/m^2 (infinity when off) */
     const char *visibility;    /* "paraboloid maps", "imperfect shadow maps" or "Embree rays" */
     uint32_t aa_samples;       /* jittered samples a pixel (1: none) */
+    uint32_t indirect_scale;   /* the indirect stages ran at 1/indirect_scale of the resolution */
 } softgi_info;
 
 softgi_result softgi_get_info(const softgi_context *ctx, softgi_info *info, softgi_error *err);

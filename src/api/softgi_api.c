@@ -196,7 +196,7 @@ static softgi_result api__check_frame_fields(const softgi_desc *d, softgi_error 
     API__RANGE(area_strata, 1u, 16u, "4")
     API__RANGE(area_points, 1u, 1024u, "32")
     API__RANGE(ism_points, 1000u, GI_ISM_MAX_POINTS, "the default")
-    API__RANGE(indirect_scale, 1u, GI_INDIRECT_MAX_SCALE, "1")
+    API__RANGE(indirect_scale, 1u, GI_INDIRECT_MAX_SCALE, "automatic: 2 from 1024x768 up, else 1")
     API__RANGE(temporal, 2u, GI_INDIRECT_MAX_TEMPORAL, "off")
     API__RANGE(aa, 1u, GI_AA_MAX_SAMPLES, "1")
     API__RANGE(taa, 2u, GI_AA_MAX_TAA, "off")
@@ -771,6 +771,7 @@ softgi_result softgi_get_info(const softgi_context *c, softgi_info *info, softgi
                 info->tiles_m = f->ind.m;
                 info->clamp_b = f->ind.b;
                 info->visibility = f->ind.ism ? "imperfect shadow maps" : f->ind.para ? "paraboloid maps" : "Embree rays";
+                info->indirect_scale = f->ind.scale;
             }
         }
     }

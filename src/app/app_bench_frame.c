@@ -742,9 +742,11 @@ int app_bench_frame(const pf_options *o)
     uint32_t tn = o->tiles_n ? o->tiles_n : 4, tm = o->tiles_m ? o->tiles_m : 4;
     uint32_t per_scene = nvpls * nthreads * nmodes;
     bf_result results[BF_SCENES * BF_MAX_CONFIGS];
-    printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, %s point "
-           "light,\npipelining %s, 1 warm-up frame then median of %u\n",
+    printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, indirect "
+           "light at 1/%u resolution%s,\n%s point light, pipelining %s, 1 warm-up frame then median of %u\n",
            BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm,
+           gi_indirect_scale_for(o->indirect_scale, BF_W, BF_H),
+           o->indirect_scale == GI_INDIRECT_SCALE_AUTO ? " (--indirect-scale auto)" : "",
            o->moving_light ? "moving" : "static", o->pipeline < 0 ? "off and on" : o->pipeline ? "on" : "off",
            frames);
     if (aa > 1 || o->taa)

@@ -128,8 +128,10 @@ static const pf__opt k_options[] = {
      "write every stage of the frame as an image, with captions.txt", NULL},
     {PF__OPT_DUMP_FORMAT, "--dump-format", NULL, "png|exr|both", R,
      "--dump-stages: the pictures (png, the default), the stages'\nfloat data as OpenEXR (exr), or both", NULL},
-    {PF__OPT_INDIRECT_SCALE, "--indirect-scale", NULL, "N", FRAME | BF,
-     "indirect light at 1/N of the resolution (1..4), upsampled\ngeometry-aware (default 1; docs/frame.md)", NULL},
+    {PF__OPT_INDIRECT_SCALE, "--indirect-scale", NULL, "N|auto", FRAME | BF,
+     "indirect light at 1/N of the resolution (1..4), upsampled\ngeometry-aware; auto (the default): 2 from 1024x768 "
+     "up, else 1\n(docs/frame.md)",
+     NULL},
     {PF__OPT_COMPENSATE, "--compensate", NULL, "on|off", FRAME | BF,
      "add back the light the clamp removes, gathered in screen\nspace (survey Sec. 5.2; default off; docs/frame.md)",
      NULL},
@@ -641,7 +643,10 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format '%s': expected png, exr or both", val);
         o->dump_format = k == 0 ? PF_CLI_DUMP_PNG : k == 1 ? PF_CLI_DUMP_EXR : PF_CLI_DUMP_PNG | PF_CLI_DUMP_EXR;
         break;
-    case PF__OPT_INDIRECT_SCALE: r = pf__uint(a, val, 1, GI_INDIRECT_MAX_SCALE, &o->indirect_scale, err); break;
+    case PF__OPT_INDIRECT_SCALE:
+        if (strcmp(val, "auto") == 0) o->indirect_scale = GI_INDIRECT_SCALE_AUTO;
+        else r = pf__uint(a, val, 1, GI_INDIRECT_MAX_SCALE, &o->indirect_scale, err);
+        break;
     case PF__OPT_TEMPORAL:
         r = pf__uint(a, val, 0, GI_INDIRECT_MAX_TEMPORAL, &o->temporal, err);
         if (r == PF_OK && o->temporal == 1)

@@ -82,7 +82,8 @@ typedef struct pf_options {
     uint32_t dump_format;    /* --dump-format: PF_CLI_DUMP_* bits; 0: not given (png) */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */
     int pipeline;            /* --pipeline on|off: 1, 0; -1 when not given (the command's default) */
-    uint32_t indirect_scale; /* --indirect-scale N: indirect light at 1/N resolution (0: 1) */
+    uint32_t indirect_scale; /* --indirect-scale N|auto: indirect light at 1/N resolution (0: auto,
+                                GI_INDIRECT_SCALE_AUTO) */
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
     uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */

@@ -41,7 +41,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
     if (o.visibility_ism) o.para_res = o.ism.resolution ? o.ism.resolution : GI_ISM_DEFAULT_RES;
     if (!o.para_res) o.para_res = RS_PARA_DEFAULT_RES;
-    if (!o.scale) o.scale = 1;
+    o.scale = gi_indirect_scale_for(o.scale, f->width, f->height);
     if (o.temporal == 1 || o.temporal > GI_INDIRECT_MAX_TEMPORAL)
         return pf_error_set(err, PF_ERR_ARGUMENT, "temporal accumulation over %u frames: expected 0 (off) or 2..%u",
                             o.temporal, GI_INDIRECT_MAX_TEMPORAL);

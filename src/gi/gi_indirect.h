@@ -92,12 +92,26 @@ typedef struct gi_indirect_options {
     uint32_t temporal;           /* 0: off; N >= 2: temporal accumulation of the filtered irradiance over
                                     up to N frames, with reprojection (gi_stage_temporal; beyond Laine
                                     2007) and the tiles' VPL groups rotated every frame */
-    uint32_t scale;              /* 1 (0: 1): the indirect stages run at full resolution; 2..4: at
+    uint32_t scale;              /* 1: the indirect stages run at full resolution; 2..4: at
                                     (width / scale) x (height / scale), upsampled geometry-aware
-                                    (gi_stage_upsample; beyond the papers) */
+                                    (gi_stage_upsample; beyond the papers); 0 (GI_INDIRECT_SCALE_AUTO):
+                                    2 for frames of at least GI_INDIRECT_AUTO_PIXELS, else 1 */
 } gi_indirect_options;
 
 #define GI_INDIRECT_MAX_SCALE 4u
+/* The automatic indirect scale: the indirect stages at half resolution from
+ * 1024 x 768 up (the real-time size of softgi bench frame), where the
+ * geometry-aware upsampling adds 2-5% to the indirect light's error against
+ * a low-noise ground truth and halves the frame's indirect stages
+ * (docs/perf.md); full resolution below, where it would add more. */
+#define GI_INDIRECT_SCALE_AUTO 0u
+#define GI_INDIRECT_AUTO_PIXELS (1024u * 768u)
+/* The scale `scale` (0: automatic) resolves to for a frame of w x h. */
+static inline uint32_t gi_indirect_scale_for(uint32_t scale, uint32_t w, uint32_t h)
+{
+    if (scale != GI_INDIRECT_SCALE_AUTO) return scale;
+    return (uint64_t)w * h >= GI_INDIRECT_AUTO_PIXELS ? 2u : 1u;
+}
 #define GI_INDIRECT_MAX_TEMPORAL 256u
 
 typedef struct gi_indirect {

@@ -568,13 +568,41 @@ static void test_key_budget(void **state)
     assert_int_equal(a.clip_count, 0);
 }
 
+/* scenes/anim-box (tools/make_anim_scene.py): three animations, the box, the
+ * skinned column and the morphed dome dynamic, the room static; every
+ * frame time of its sequence poses within range, the box's rotation
+ * reaching 180 degrees at t = 4. */
+static void test_anim_box_scene(void **state)
+{
+    (void)state;
+    loaded l;
+    load(&l, SOFTGI_SOURCE_DIR "/scenes/anim-box/anim-box.gltf");
+    assert_int_equal(l.anim.clip_count, 3);
+    assert_string_equal(l.anim.clips[0].name, "move");
+    assert_string_equal(l.anim.clips[1].name, "sway");
+    assert_string_equal(l.anim.clips[2].name, "breathe");
+    assert_int_equal(l.anim.prim_count, 8);
+    assert_int_equal(l.anim.dynamic_count, 3);
+    assert_true(l.scene.tri_count < 4000);
+    assert_true(pf_anim_end(&l.anim, PF_ANIM_ALL) == 4.0);
+    for (int f = 0; f < 48; f++) pose(&l, PF_ANIM_ALL, 4.0 * f / 47.0);
+    /* t = 2: the box at x = 3, turned 90 degrees; the dome's top 0.35 m up; the column straight */
+    pf_anim_moved moved[8];
+    pose_(&l, PF_ANIM_ALL, 2.0, moved, __FILE__, __LINE__);
+    assert_vec3_near(moved[5].after_min, 2.7, 0.0, 1.9);
+    assert_vec3_near(moved[5].after_max, 3.3, 0.6, 2.5);
+    assert_true(fabsf(moved[7].after_max.y - 0.35f) < 1e-5f);
+    assert_true(fabsf(moved[6].after_max.y - 2.0f) < 1e-5f);
+    unload(&l);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_static_file), cmocka_unit_test(test_linear),      cmocka_unit_test(test_cubic),
         cmocka_unit_test(test_skin),        cmocka_unit_test(test_morph),       cmocka_unit_test(test_hierarchy),
         cmocka_unit_test(test_determinism), cmocka_unit_test(test_failed_pose), cmocka_unit_test(test_find),
-        cmocka_unit_test(test_bad_files),   cmocka_unit_test(test_key_budget),
+        cmocka_unit_test(test_bad_files),   cmocka_unit_test(test_key_budget),  cmocka_unit_test(test_anim_box_scene),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

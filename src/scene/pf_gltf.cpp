@@ -1973,6 +1973,10 @@ extern "C" pf_result pf_gltf_load_memory(pf_scene *out, const void *data, size_t
 extern "C" pf_result pf_gltf_load(pf_scene *out, const char *path, const pf_gltf_options *opts, pf_error *err)
 {
     memset(out, 0, sizeof *out);
+    if (opts && opts->anim) {
+        memset(opts->anim, 0, sizeof *opts->anim);
+        opts->anim->pose_clip = PF_ANIM_STATIC;
+    }
     struct stat st;
     if (stat(path, &st) != 0) return pf_error_set(err, PF_ERR_IO, "%s: no such file", path);
     if (!S_ISREG(st.st_mode)) return pf_error_set(err, PF_ERR_IO, "%s: not a regular file", path);

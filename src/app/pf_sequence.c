@@ -616,7 +616,8 @@ double pf_sequence_time_at(const pf_sequence *seq, uint32_t frame, double start,
 {
     if (seq->frames <= 1) return start;
     const double s = (double)frame / (double)(seq->frames - 1);
-    return (1.0 - s) * start + s * end; /* exactly start and end at the ends */
+    const double t = (1.0 - s) * start + s * end; /* exactly start and end at the ends */
+    return t < start ? start : t > end ? end : t; /* never outside by a rounding */
 }
 
 static int pf__has_control(const char *p);

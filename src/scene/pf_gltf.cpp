@@ -1095,10 +1095,10 @@ struct AnimReader {
         take(uint64_t(nv) * (ap->flat ? 12 : 24), what + " (kept for posing)");
         ap->local_count = uint32_t(nv);
         ap->local_pos = alloc<pf_vec3>(nv);
-        memcpy(ap->local_pos, P.data(), nv * sizeof(pf_vec3));
+        if (nv) memcpy(ap->local_pos, P.data(), nv * sizeof(pf_vec3));
         if (!ap->flat) {
             ap->local_nrm = alloc<pf_vec3>(nv);
-            memcpy(ap->local_nrm, N.data(), nv * sizeof(pf_vec3));
+            if (nv) memcpy(ap->local_nrm, N.data(), nv * sizeof(pf_vec3));
         }
         if (ap->skin >= 0) skin_attributes(p, nv, what, ap);
         if (ap->target_count) targets(p, nv, what, ap);
@@ -1120,7 +1120,8 @@ struct AnimReader {
         } else if (ap->flat) {
             take(uint64_t(src->size()) * 4, "a flat primitive's corners");
             ap->src = alloc<uint32_t>(src->size());
-            memcpy(ap->src, src->data(), src->size() * sizeof(uint32_t));
+            if (!src->empty()) /* empty when every triangle was dropped (found by fuzz_gltf) */
+                memcpy(ap->src, src->data(), src->size() * sizeof(uint32_t));
         }
         prims.push_back(*ap);
         memset(ap, 0, sizeof *ap); /* owned by `prims` now */

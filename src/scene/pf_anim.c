@@ -311,7 +311,7 @@ static void pf__anim_morph(const pf_anim_prim *p, const float *w, uint32_t v, pf
  * where such a vector is already zero). A zero normal then takes the
  * loader's fallback (a face normal, or (0, 1, 0)). Where the loader's own
  * normalisation succeeds this gives its bits. */
-static pf_vec3 pf__anim_unit(pf_vec3 v)
+pf_vec3 pf_anim_unit(pf_vec3 v)
 {
     pf_vec3 r = pf_v3_normalize_safe(v);
     return pf_v3_is_finite(r) ? r : pf_v3(0.0f, 0.0f, 0.0f);
@@ -323,7 +323,7 @@ static void pf__anim_transform(const pf_mat4 *m, pf_vec3 p, const pf_vec3 *n, pf
 {
     *wp = pf_mat4_point(m, p);
     if (!n) return;
-    pf_vec3 r = pf__anim_unit(pf_mat4_normal(m, *n));
+    pf_vec3 r = pf_anim_unit(pf_mat4_normal(m, *n));
     if (pf_mat4_det3(m) < 0.0) r = pf_v3_scale(r, -1.0f); /* cofactor = det * M^-T */
     *wn = r;
 }
@@ -392,7 +392,7 @@ static int pf__anim_write(pf_scene *s, const pf_anim *a, const pf_anim_prim *p)
         for (uint32_t t = p->tri_first; t < p->tri_first + p->tri_count; t++) {
             const uint32_t *ix = &s->indices[3 * t];
             const pf_vec3 p0 = s->positions[ix[0]], p1 = s->positions[ix[1]], p2 = s->positions[ix[2]];
-            pf_vec3 fn = pf__anim_unit(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
+            pf_vec3 fn = pf_anim_unit(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
             if (fn.x == 0.0f && fn.y == 0.0f && fn.z == 0.0f) fn = pf_v3(0.0f, 1.0f, 0.0f); /* degenerate now */
             for (int k = 0; k < 3; k++) {
                 changed |= !pf__v3_same(s->normals[ix[k]], fn);
@@ -411,7 +411,7 @@ static int pf__anim_write(pf_scene *s, const pf_anim *a, const pf_anim_prim *p)
         for (uint32_t t = p->tri_first; t < p->tri_first + p->tri_count; t++) {
             const uint32_t *ix = &s->indices[3 * t];
             const pf_vec3 p0 = s->positions[ix[0]], p1 = s->positions[ix[1]], p2 = s->positions[ix[2]];
-            const pf_vec3 fn = pf__anim_unit(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
+            const pf_vec3 fn = pf_anim_unit(pf_v3_cross(pf_v3_sub(p1, p0), pf_v3_sub(p2, p0)));
             for (int k = 0; k < 3; k++) {
                 pf_vec3 *n = &nrm[ix[k] - p->vertex_first];
                 if (n->x == 0.0f && n->y == 0.0f && n->z == 0.0f) *n = fn;

@@ -238,6 +238,10 @@ pf_result pf_anim_pose(pf_scene *scene, pf_anim_moved *moved, uint32_t *moved_co
  * (x, y, z, w) and a scale, in double: the loader's node transform. */
 pf_mat4 pf_anim_trs_matrix(const double t[3], const double q[4], const double s[3]);
 
+/* pf_v3_normalize_safe, or zero where that is not finite (a denormal
+ * largest component without DAZ): every normal the loader and posing make. */
+pf_vec3 pf_anim_unit(pf_vec3 v);
+
 /* Evaluates the nodes (local TRS, then world matrices in `order`), morph
  * weights and skins' joint matrices for `clip` at t. */
 void pf_anim_evaluate(pf_anim *anim, int32_t clip, double t);

@@ -1319,7 +1319,7 @@ struct Builder {
                     n = WN[v];
                 } else {
                     n = pf_mat4_normal(&world, pf_v3(N[3 * v], N[3 * v + 1], N[3 * v + 2]));
-                    n = pf_v3_normalize_safe(n);
+                    n = pf_anim_unit(n); /* posing's rule (pf_anim.h): zero where not finite */
                     if (mirror) n = pf_v3_scale(n, -1.0f); /* cofactor = det * M^-T */
                 }
                 nrm.push_back(n); /* zero normals fixed below */
@@ -1334,13 +1334,16 @@ struct Builder {
                 dropped++;
                 continue;
             }
-            fn = pf_v3_normalize_safe(fn);
+            fn = pf_anim_unit(fn);
             if (flat) {
+                /* a face normal too small to normalise (only without DAZ,
+                 * which drops such a triangle above): (0, 1, 0), as posing */
+                const pf_vec3 face = fn.x == 0.0f && fn.y == 0.0f && fn.z == 0.0f ? pf_v3(0, 1, 0) : fn;
                 const uint32_t abc[3] = {a, b, c};
                 for (uint32_t k : abc) {
                     idx.push_back(uint32_t(pos.size()));
                     pos.push_back(WP[k]);
-                    nrm.push_back(fn);
+                    nrm.push_back(face);
                     uv.push_back(T.empty() ? pf_vec2{0, 0} : pf_vec2{T[2 * k], T[2 * k + 1]});
                     if (want_src) src.push_back(k);
                 }

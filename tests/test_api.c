@@ -18,6 +18,9 @@
  *   option sets (`softgi render` is itself built on the API, so these check
  *   its option mapping; the goldens elsewhere check the frame), bad values
  *   of each refused with the program's limits;
+ * - softgi_set_time against --time / --animation (the same bits), a second
+ *   pose rebuilding what it must, bad times and names refused, a pose that
+ *   would leave the coordinate range refused with the scene unchanged;
  * - softgi_dump_stages against --dump-stages (the same bytes), the progress
  *   callback (every stage once, the image unchanged), temporal
  *   anti-aliasing over successive frames (deterministic);
@@ -627,6 +630,86 @@ static void test_same_as_cli_automatic(void **state)
     expect_same_as_cli(&d, mcguire, NULL, NULL, 0, args);
 }
 
+/* ---------------------------------------------------------------- animation */
+
+#define ANIM_SKIN SOFTGI_TEST_DATA "/gltf/anim/anim_skin.gltf"
+#define ANIM_HIER SOFTGI_TEST_DATA "/gltf/anim/anim_hierarchy.gltf"
+#define ANIM_FAR SOFTGI_TEST_DATA "/gltf/anim/anim_far.gltf"
+
+/* The image of a loaded context posed at `t` of `animation` (then rendered
+ * once), its hash. */
+static uint64_t api_posed_hash(softgi_context *c, double t, const char *animation, float *rgb)
+{
+    softgi_error err;
+    ok_or_fail(softgi_set_time(c, t, animation, &err), &err);
+    softgi_target tg = {.rgb = rgb};
+    ok_or_fail(softgi_render(c, &tg, &err), &err);
+    softgi_info info;
+    ok_or_fail(softgi_get_info(c, &info, &err), &err);
+    return softgi_image_hash(rgb, info.width, info.height, 0);
+}
+
+/* softgi_set_time = `softgi render --time T --animation A`, bit for bit;
+ * a second pose rebuilds what it must (the same image as a fresh context
+ * posed there); a time that moves nothing keeps the frame going. */
+static void test_set_time(void **state)
+{
+    (void)state;
+    softgi_desc d = {.width = 96, .height = 72, .threads = 2};
+    float *cli = NULL, rgb[96 * 72 * 3];
+    uint32_t w, h;
+    const uint64_t cli_bend = cli_render(ANIM_SKIN " --size 96x72 --threads 2 --time 0.5 --animation bend -q", &cli,
+                                         &w, &h);
+    free(cli);
+    const uint64_t cli_wave = cli_render(ANIM_HIER " --size 96x72 --threads 2 --time 1 --animation 0 -q", &cli, &w,
+                                         &h);
+    free(cli);
+    const uint64_t cli_static = cli_render(ANIM_HIER " --size 96x72 --threads 2 -q", &cli, &w, &h);
+    free(cli);
+
+    softgi_error err;
+    softgi_context *c = create_or_fail(&d);
+    ok_or_fail(softgi_load_scene(c, ANIM_SKIN, &err), &err);
+    softgi_info info;
+    ok_or_fail(softgi_get_info(c, &info, &err), &err);
+    assert_int_equal(info.animations, 1);
+    assert_true(api_posed_hash(c, 0.5, "bend", rgb) == cli_bend);
+    softgi_destroy(c);
+
+    c = create_or_fail(&d);
+    ok_or_fail(softgi_load_scene(c, ANIM_HIER, &err), &err);
+    assert_true(api_posed_hash(c, 0.3, NULL, rgb) != cli_wave);
+    assert_true(api_posed_hash(c, 1.0, NULL, rgb) == cli_wave); /* rebuilt: as a fresh context at t = 1 */
+    assert_true(api_posed_hash(c, 0.0, "wave", rgb) == cli_static); /* t = 0 is the static pose here */
+    ok_or_fail(softgi_get_info(c, &info, &err), &err);
+    const uint32_t frames = info.frames;
+    ok_or_fail(softgi_set_time(c, 0.0, "0", &err), &err); /* moves nothing: the frame goes on */
+    softgi_target tg = {.rgb = rgb};
+    ok_or_fail(softgi_render(c, &tg, &err), &err);
+    ok_or_fail(softgi_get_info(c, &info, &err), &err);
+    assert_int_equal(info.frames, frames + 1);
+
+    /* refused, the context unchanged */
+    expect_error(softgi_set_time(c, NAN, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "seconds");
+    expect_error(softgi_set_time(c, -1.0, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "seconds");
+    expect_error(softgi_set_time(c, 2e6, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "seconds");
+    expect_error(softgi_set_time(c, 1.0, "walk", &err), &err, SOFTGI_ERR_ARGUMENT, "no animation named 'walk'");
+    expect_error(softgi_set_time(c, 1.0, "3", &err), &err, SOFTGI_ERR_ARGUMENT, "no animation 3");
+    expect_error(softgi_set_time(NULL, 1.0, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "NULL");
+    softgi_destroy(c);
+
+    c = create_or_fail(&d);
+    expect_error(softgi_set_time(c, 1.0, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "no scene loaded");
+    ok_or_fail(softgi_load_scene(c, NULL, &err), &err);
+    expect_error(softgi_set_time(c, 1.0, NULL, &err), &err, SOFTGI_ERR_ARGUMENT, "no animations");
+    ok_or_fail(softgi_load_scene(c, ANIM_FAR, &err), &err);
+    const uint64_t before = api_posed_hash(c, 0.0, NULL, rgb);
+    expect_error(softgi_set_time(c, 1.0, NULL, &err), &err, SOFTGI_ERR_NONFINITE, "beyond");
+    ok_or_fail(softgi_render(c, &tg, &err), &err); /* still the scene it was */
+    assert_true(softgi_image_hash(rgb, 96, 72, 0) == before);
+    softgi_destroy(c);
+}
+
 /* ---------------------------------------------------------------- reading back */
 
 static void test_stages_and_timings(void **state)
@@ -789,6 +872,7 @@ int main(void)
         cmocka_unit_test(test_same_as_cli_options),
         cmocka_unit_test(test_same_as_cli_camera_lights),
         cmocka_unit_test(test_same_as_cli_automatic),
+        cmocka_unit_test(test_set_time),
         cmocka_unit_test(test_same_as_cli_frame_options),
         cmocka_unit_test(test_same_as_cli_option_sets),
         cmocka_unit_test(test_progress),

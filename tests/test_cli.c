@@ -49,6 +49,24 @@ static void test_usage_errors(void **state)
     /* 1,000,000 paraboloid maps (31 GiB) exceed the memory budget: refused before allocating, with the hint */
     tu_softgi_expect("render --vpls 1000000 --max-memory 8G -q -o /dev/null/x.png", 1,
                      "use fewer VPLs or --visibility raytrace");
+    /* --time and --animation (pf_anim.h) */
+    tu_softgi_expect("render --time -1", 2, "--time '-1': expected a time in seconds, 0..1000000");
+    tu_softgi_expect("render --time nan", 2, "--time 'nan'");
+    tu_softgi_expect("render --time inf", 2, "--time 'inf'");
+    tu_softgi_expect("render --time 2e6", 2, "--time '2e6'");
+    tu_softgi_expect("render --time 1s", 2, "--time '1s'");
+    tu_softgi_expect("reference --animation walk", 2, "--animation: only with --time SECONDS");
+    tu_softgi_expect("sequence x.seq.json --time 1", 2, "--time does not apply to sequence");
+    tu_softgi_expect("view --time 1", 2, "--time does not apply to view");
+    tu_softgi_expect("render --time 1 -q -o /dev/null/x.png", 2, "the built-in Cornell box: the scene has no animations");
+    tu_softgi_expect("render " SOFTGI_TEST_DATA "/gltf/anim/anim_linear.gltf --time 1 --animation walk -q -o "
+                     "/dev/null/x.png",
+                     2, "no animation named 'walk' (the file has 4: 0 'slide', 1 'spin'");
+    tu_softgi_expect("render " SOFTGI_TEST_DATA "/gltf/anim/anim_linear.gltf --time 1 --animation 9 -q -o "
+                     "/dev/null/x.png",
+                     2, "no animation 9");
+    tu_softgi_expect("reference " SOFTGI_TEST_DATA "/gltf/anim/anim_far.gltf --time 1 -q -o /dev/null/x.png", 1,
+                     "every animation at 1 s puts mesh 0 primitive 0 (node 0) vertex 0 at (1e+30, 0, 0)");
     tu_softgi_expect("render --frob", 2, "unknown option '--frob'");
     tu_softgi_expect("render a.gltf b.gltf", 2, "unexpected argument");
     tu_softgi_expect("render --size", 2, "--size needs a value");
@@ -175,7 +193,7 @@ static const struct {
     {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
     {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},
     {"--moving-light", NULL, {0}},     {"--quality", NULL, {0}},        {"--aa", "4", {0}},
-    {"--taa", "8", {0}},
+    {"--taa", "8", {0}},               {"--time", "1", {0}},             {"--animation", "0", {"--time", "1"}},
 };
 
 /* `softgi CMD --help` as text (pf_cli_usage_command). */

@@ -182,6 +182,26 @@ static void test_parse_fields(void **state)
     assert_true(s.lights[1].spec.color.z == 0.25f);
     pf_sequence_free(&s);
 
+    /* "animation": a name or an index, a time range mapped onto the frames */
+    parse_ok(&s, HEAD "\"animation\": {\"play\": \"walk\", \"time\": [0.5, 2], \"comment\": \"x\"}}");
+    assert_true(s.anim_set && s.anim_time_set);
+    assert_string_equal(s.anim_name, "walk");
+    assert_int_equal(s.anim_index, -1);
+    assert_true(pf_sequence_time_at(&s, 0, s.anim_start, s.anim_end) == 0.5);
+    assert_true(pf_sequence_time_at(&s, 9, s.anim_start, s.anim_end) == 2.0);
+    assert_true(fabs(pf_sequence_time_at(&s, 3, s.anim_start, s.anim_end) - 1.0) < 1e-12);
+    pf_sequence_free(&s);
+    parse_ok(&s, HEAD "\"animation\": {\"play\": 3}}");
+    assert_true(s.anim_set && !s.anim_time_set);
+    assert_int_equal(s.anim_index, 3);
+    assert_string_equal(s.anim_name, "");
+    pf_sequence_free(&s);
+    parse_ok(&s, "{\"scene\": \"a.gltf\", \"frames\": 1, \"animation\": {}}");
+    assert_true(s.anim_set);
+    assert_int_equal(s.anim_index, -1);
+    assert_true(pf_sequence_time_at(&s, 0, 1.5, 3.0) == 1.5); /* one frame: the start */
+    pf_sequence_free(&s);
+
     /* the default name drops .seq.json */
     pf_error err;
     const char *j = "{\"scene\": \"a.gltf\", \"frames\": 1}";
@@ -232,6 +252,20 @@ static void test_bad_inputs(void **state)
         {HEAD "\"size\": [64, 99999]}", PF_ERR_PARSE, "size[1]: 99999 is out of range"},
         {HEAD "\"size\": {\"w\": 1}}", PF_ERR_PARSE, "size: expected [width, height]"},
         {HEAD "\"output\": []}", PF_ERR_PARSE, "output: expected a string, got an array"},
+        /* animation */
+        {HEAD "\"animation\": \"walk\"}", PF_ERR_PARSE, "animation: expected an object, got a string"},
+        {HEAD "\"animation\": {\"clip\": 0}}", PF_ERR_PARSE, "animation: unknown key 'clip' (expected: play, time)"},
+        {HEAD "\"animation\": {\"play\": \"\"}}", PF_ERR_PARSE, "animation.play: expected an animation's name"},
+        {HEAD "\"animation\": {\"play\": -1}}", PF_ERR_PARSE, "animation.play: -1 is out of range 0..65535"},
+        {HEAD "\"animation\": {\"play\": 2.5}}", PF_ERR_PARSE, "animation.play: expected an integer, got 2.5"},
+        {HEAD "\"animation\": {\"play\": true}}", PF_ERR_PARSE, "animation.play: expected an animation's name or "
+                                                              "index, got a boolean"},
+        {HEAD "\"animation\": {\"time\": [1]}}", PF_ERR_PARSE, "animation.time: expected an array of 2 numbers"},
+        {HEAD "\"animation\": {\"time\": [2, 1]}}", PF_ERR_PARSE, "[2, 1]: expected [start, end] seconds"},
+        {HEAD "\"animation\": {\"time\": [-1, 1]}}", PF_ERR_PARSE, "0 <= start <= end <= 1e+06"},
+        {HEAD "\"animation\": {\"time\": [0, 2e6]}}", PF_ERR_NONFINITE, "animation.time[1]: |2e+06| exceeds 1e+06"},
+        {HEAD "\"animation\": {\"time\": [0, \"1\"]}}", PF_ERR_PARSE, "animation.time[1]: expected a number"},
+        {HEAD "\"animation\": {\"play\": 0, \"play\": 1}}", PF_ERR_PARSE, "key 'play' given twice"},
         {HEAD "\"name\": \"a/b\"}", PF_ERR_PARSE, "name: expected 1 to"},
         {HEAD "\"name\": \"..\"}", PF_ERR_PARSE, "name: expected 1 to"},
         /* output: a relative folder under out/, never absolute or with '..' */
@@ -1038,6 +1072,84 @@ static void test_cli_errors(void **state)
     assert_string_equal(line, "30,20\n");
 }
 
+static int read_all(const char *path, char *buf, size_t size, size_t *n);
+
+/* "animation": the scene posed at every frame's time, rebuilt where it
+ * moved; the same bytes with 1 and 2 threads and for --frames ranges; a
+ * frame at time t equals `softgi render --time t` (both a first frame on
+ * the posed scene); bad animations refused with one line. */
+static void test_animation(void **state)
+{
+    (void)state;
+    char seq[512], d1[512], d2[512], d3[512], args[4096], out[32768], p1[1024], p2[1024];
+    snprintf(seq, sizeof seq, "%s/anim.seq.json", g_tmp);
+    snprintf(args, sizeof args,
+             "{\"scene\": \"%s/gltf/anim/anim_hierarchy.gltf\", \"frames\": 4, \"size\": [32, 24],"
+             " \"animation\": {\"play\": \"wave\", \"time\": [0, 1.5]}}",
+             SOFTGI_TEST_DATA);
+    write_file(seq, args);
+    snprintf(d1, sizeof d1, "%s/anim1", g_tmp);
+    snprintf(d2, sizeof d2, "%s/anim2", g_tmp);
+    snprintf(d3, sizeof d3, "%s/anim3", g_tmp);
+    char h1[17] = "", h2[17] = "";
+    for (int run = 0; run < 2; run++) {
+        snprintf(args, sizeof args, "sequence '%s' -o '%s' " FAST " --hash --threads %d", seq, run ? d2 : d1,
+                 run + 1);
+        int st = tu_softgi_run(args, out, sizeof out);
+        if (st != 0) fail_msg("softgi %s: exit %d\n%s", args, st, out);
+        const char *h = strstr(out, "hash ");
+        if (!h || sscanf(h, "hash %16s", run ? h2 : h1) != 1) fail_msg("no hash in:\n%s", out);
+        /* t = 0, 0.5, 1, 1.5: frames 1 and 2 move both primitives of the hand, frame 3 (after the last key) none */
+        if (!strstr(out, "frame 0001") || !strstr(out, "(2 objects moved: scene rebuilt)") ||
+            !strstr(out, "pose (+ rebuild when moved)"))
+            fail_msg("softgi %s:\n%s", args, out);
+        const char *f3 = strstr(out, "frame 0003");
+        if (!f3 || strstr(f3, "moved: scene rebuilt")) fail_msg("frame 3 (after the last key) moved:\n%s", out);
+    }
+    assert_string_equal(h1, h2);
+    /* a range: the full run's bytes */
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' " FAST " --frames 2:4 -q", seq, d3);
+    tu_softgi_expect(args, 0, "");
+    size_t n1 = 0, n2 = 0;
+    static char b1[32 * 24 * 12 + 64], b2[32 * 24 * 12 + 64];
+    for (int f = 2; f < 4; f++) {
+        snprintf(p1, sizeof p1, "%s/frame_%04d.pfm", d1, f);
+        snprintf(p2, sizeof p2, "%s/frame_%04d.pfm", d3, f);
+        assert_true(read_all(p1, b1, sizeof b1, &n1) && read_all(p2, b2, sizeof b2, &n2));
+        assert_true(n1 == n2 && !memcmp(b1, b2, n1));
+    }
+    /* frame 2 (t = 1) = `softgi render --time 1` */
+    snprintf(p2, sizeof p2, "%s/render-t1.pfm", g_tmp);
+    snprintf(args, sizeof args, "render '%s/gltf/anim/anim_hierarchy.gltf' --size 32x24 " FAST " --time 1 -q -o '%s'",
+             SOFTGI_TEST_DATA, p2);
+    tu_softgi_expect(args, 0, "");
+    snprintf(p1, sizeof p1, "%s/frame_0002.pfm", d1);
+    assert_true(read_all(p1, b1, sizeof b1, &n1) && read_all(p2, b2, sizeof b2, &n2));
+    if (!(n1 == n2 && !memcmp(b1, b2, n1))) fail_msg("%s differs from softgi render --time 1", p1);
+
+    /* refused */
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' -q", seq, d3);
+    write_file(seq, "{\"scene\": \"embedded:cornell-box\", \"frames\": 2, \"animation\": {}}");
+    tu_softgi_expect(args, 2, "anim.seq.json: animation: embedded:cornell-box: the scene has no animations");
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/gltf/anim/anim_linear.gltf\", \"frames\": 2, \"animation\": {\"play\": \"walk\"}}",
+             SOFTGI_TEST_DATA);
+    write_file(seq, text);
+    tu_softgi_expect(args, 2, "anim_linear.gltf: no animation named 'walk' (the file has 4: 0 'slide'");
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/gltf/anim/anim_linear.gltf\", \"frames\": 2, \"animation\": {\"play\": 7}}",
+             SOFTGI_TEST_DATA);
+    write_file(seq, text);
+    tu_softgi_expect(args, 2, "anim_linear.gltf: no animation 7 (the file has 4");
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/gltf/anim/anim_far.gltf\", \"frames\": 3, \"size\": [16, 12], \"animation\": {}}",
+             SOFTGI_TEST_DATA);
+    write_file(seq, text);
+    snprintf(args, sizeof args, "sequence '%s' -o '%s' -q " FAST, seq, d3);
+    tu_softgi_expect(args, 1, "anim.seq.json: frame 1: every animation at 0.5 s puts mesh 0 primitive 0 (node 0)");
+}
+
 static int read_all(const char *path, char *buf, size_t size, size_t *n)
 {
     FILE *f = fopen(path, "rb");
@@ -1192,6 +1304,7 @@ int main(void)
         cmocka_unit_test(test_reference_and_evaluate), cmocka_unit_test(test_emitters_parse),
         cmocka_unit_test(test_emitter_geometry),       cmocka_unit_test(test_emitter_apply),
         cmocka_unit_test(test_emitter_area_light),     cmocka_unit_test(test_emitter_end_to_end),
+        cmocka_unit_test(test_animation),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -203,6 +203,25 @@ typedef struct softgi_light {
  * different number rebuilds the frame at the next render. */
 softgi_result softgi_set_lights(softgi_context *ctx, const softgi_light *lights, uint32_t count, softgi_error *err);
 
+/* Poses the loaded scene's glTF animations (node translation, rotation and
+ * scale, skins, morph weights; docs/scenes.md) at `seconds` (finite,
+ * 0..1e6), as `softgi render --time SECONDS --animation ANIMATION`.
+ * `animation` NULL plays every animation of the file together (in file
+ * order: where two animate the same property the later wins); else the
+ * animation of that name, or of that index when it is all digits ("0").
+ * Before an animation's first key its first value holds, after its last key
+ * its last value. The vertex and triangle counts and order stay, so
+ * triangle ids are stable. Geometry that moved rebuilds the Embree scene
+ * and the rasterizer now and the frame at the next softgi_render (the VPL
+ * method starts afresh there); a time that moves nothing keeps them. The
+ * camera and the automatic light stay as loaded (chosen on the scene's
+ * static pose), so set the camera first to have an automatic light placed
+ * as the program places it. SOFTGI_ERR_ARGUMENT without a scene, for a
+ * scene without animations, an unknown animation or a bad time;
+ * SOFTGI_ERR_NONFINITE when the pose would put geometry beyond +-1e7 (the
+ * scene stays as it was). Holds until the next softgi_load_scene. */
+softgi_result softgi_set_time(softgi_context *ctx, double seconds, const char *animation, softgi_error *err);
+
 /* Where softgi_render writes. Either pointer may be NULL (not wanted), not
  * both. Each must hold height rows of stride elements (the last row only
  * width pixels). */
@@ -277,6 +296,7 @@ typedef struct softgi_info {
     const char *visibility;    /* "paraboloid maps", "imperfect shadow maps" or "Embree rays" */
     uint32_t aa_samples;       /* jittered samples a pixel (1: none) */
     uint32_t indirect_scale;   /* the indirect stages ran at 1/indirect_scale of the resolution */
+    uint32_t animations;       /* glTF animations of the loaded file (softgi_set_time) */
 } softgi_info;
 
 softgi_result softgi_get_info(const softgi_context *ctx, softgi_info *info, softgi_error *err);

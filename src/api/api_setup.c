@@ -9,6 +9,7 @@
 #include "gi_frame.h"
 #include "gi_indirect.h"
 #include "gi_ism.h"
+#include "pf_anim.h"
 #include "pf_budget.h"
 #include "pf_gltf.h"
 #include "rs_shadow.h"
@@ -26,12 +27,45 @@ int api_scene_has_emitters(const pf_scene *scene)
     return 0;
 }
 
-pf_result api_scene_read(pf_scene *scene, const char *path, uint64_t max_memory, pf_error *err)
+pf_result api_scene_read(pf_scene *scene, pf_anim *anim, const char *path, uint64_t max_memory, pf_error *err)
 {
-    pf_gltf_options go = {.max_memory = max_memory};
+    pf_gltf_options go = {.max_memory = max_memory, .anim = anim};
     if (path) return pf_gltf_load(scene, path, &go, err);
     return pf_gltf_load_memory(scene, softgi_api_default_scene, softgi_api_default_scene_size, NULL,
                                "embedded scenes/cornell-box", &go, err);
+}
+
+pf_result api_anim_clip(const pf_anim *anim, const char *scene_name, const char *animation, int32_t *clip,
+                        pf_error *err)
+{
+    pf_result r = PF_OK;
+    *clip = PF_ANIM_ALL;
+    if (anim->clip_count == 0) r = pf_anim_find(anim, NULL, 0, clip, err); /* "the scene has no animations" */
+    else if (animation) {
+        size_t n = strlen(animation), digits = strspn(animation, "0123456789");
+        if (n > 0 && digits == n && n <= 9) r = pf_anim_find(anim, NULL, strtoll(animation, NULL, 10), clip, err);
+        else r = pf_anim_find(anim, animation, 0, clip, err);
+    }
+    if (r != PF_OK) {
+        char m[sizeof err->message];
+        snprintf(m, sizeof m, "%s", err->message);
+        pf_error_set(err, r, "%s: %s", scene_name, m);
+    }
+    return r;
+}
+
+pf_result api_scene_pose(pf_scene *scene, pf_anim *anim, const char *scene_name, double seconds,
+                         const char *animation, uint32_t *moved, pf_error *err)
+{
+    int32_t clip;
+    pf_result r = api_anim_clip(anim, scene_name, animation, &clip, err);
+    if (r != PF_OK) return r; /* named already */
+    if ((r = pf_anim_pose(scene, NULL, moved, anim, clip, seconds, err)) != PF_OK) {
+        char m[sizeof err->message];
+        snprintf(m, sizeof m, "%s", err->message);
+        pf_error_set(err, r, "%s: %s", scene_name, m);
+    }
+    return r;
 }
 
 /* One number as the program prints it (printf "%.*g" with `digits`) and

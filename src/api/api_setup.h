@@ -4,7 +4,8 @@
  * the benchmarks, which build their frames on the modules):
  *
  *   api_scene_read        the .gltf / .glb file, or the built-in Cornell box,
- *                         under the memory budget
+ *                         under the memory budget, with its animations
+ *   api_scene_pose        the scene posed at a time (--time, --animation)
  *   api_default_camera    pf_defaults_camera as the program prints it (its
  *                         --camera text) and parses it back
  *   api_default_light     pf_defaults_light likewise (its --light text)
@@ -39,6 +40,7 @@
 
 struct gi_frame;
 struct gi_indirect_options;
+struct pf_anim;
 struct pf_jobs;
 struct pf_rt;
 struct rs_context;
@@ -51,8 +53,27 @@ struct rs_context;
 int api_scene_has_emitters(const pf_scene *scene);
 
 /* Reads `path` (NULL: the built-in Cornell box, scenes/cornell-box) into
- * `scene` with the memory budget max_memory (0: half the machine's). */
-pf_result api_scene_read(pf_scene *scene, const char *path, uint64_t max_memory, pf_error *err);
+ * `scene` with the memory budget max_memory (0: half the machine's); with
+ * `anim` not NULL, what posing it needs into *anim (pf_gltf_options.anim:
+ * empty for a file without animations). */
+pf_result api_scene_read(pf_scene *scene, struct pf_anim *anim, const char *path, uint64_t max_memory,
+                         pf_error *err);
+
+/* The animation an --animation value names ("NAME", or an index when it is
+ * all digits: "0", "2"; NULL: every animation of the file together, in file
+ * order) into *clip (pf_anim.h). PF_ERR_ARGUMENT naming the scene and
+ * listing its animations otherwise ("NAME: no animation named 'walk' (the
+ * file has 2: 0 'run', 1 'jump')", "NAME: the scene has no animations"). */
+pf_result api_anim_clip(const struct pf_anim *anim, const char *scene_name, const char *animation, int32_t *clip,
+                        pf_error *err);
+
+/* --time / softgi_set_time: `scene` posed at `seconds` of `animation`
+ * (api_anim_clip) with pf_anim_pose; *moved (may be NULL) gets how many
+ * instanced primitives moved. Errors name the scene. The automatic camera
+ * and light are not touched: they are chosen on the static pose, so an
+ * animation is framed alike at every time. */
+pf_result api_scene_pose(pf_scene *scene, struct pf_anim *anim, const char *scene_name, double seconds,
+                         const char *animation, uint32_t *moved, pf_error *err);
 
 /* The automatic camera of a validated scene without one: pf_defaults_camera
  * (its reasons into *dc when not NULL), rounded through the --camera value

@@ -10,6 +10,9 @@
  *                       api_budget_check -> pf_rt_create -> rs_context_create
  *   softgi_set_camera   pf_camera_look_at, as --camera
  *   softgi_set_lights   the scene's lights replaced, as --light
+ *   softgi_set_time     the scene posed at a time (api_scene_pose), as --time;
+ *                       Embree and the rasterizer rebuilt, the frame at the
+ *                       next render, when geometry moved
  *   softgi_render       api_frame_create at the first frame, then
  *                       gi_frame_render_raster (or _raytraced)
  *   softgi_dump_stages  gi_dump_stages, as --dump-stages
@@ -38,6 +41,7 @@
 #include "gi_frame.h"
 #include "gi_indirect.h"
 #include "gi_ism.h"
+#include "pf_anim.h"
 #include "pf_fpenv.h"
 #include "pf_imageio.h"
 #include "pf_isa.h"
@@ -82,6 +86,8 @@ struct softgi_context {
     /* scene lifetime (softgi_load_scene) */
     int loaded;
     pf_scene scene;
+    pf_anim anim;          /* what posing the scene needs (softgi_set_time) */
+    char scene_name[256];  /* the path as given, for messages */
     pf_camera camera;
     softgi_internal_notes notes; /* auto_camera, auto_light and their text */
     pf_rt *rt;
@@ -161,6 +167,7 @@ static void api__scene_free(softgi_context *c)
     c->rt = NULL;
     if (c->loaded) pf_scene_free(&c->scene);
     memset(&c->scene, 0, sizeof c->scene);
+    pf_anim_free(&c->anim);
     c->loaded = 0;
     memset(&c->notes, 0, sizeof c->notes);
     c->frames = 0;
@@ -369,9 +376,10 @@ const softgi_internal_notes *softgi_internal_notes_get(const softgi_context *c)
  * light, budget (the program's order, app_scene_load). */
 static pf_result api__scene_load(softgi_context *c, const char *path, pf_error *e)
 {
-    pf_result r = api_scene_read(&c->scene, path, c->desc.max_memory, e);
+    pf_result r = api_scene_read(&c->scene, &c->anim, path, c->desc.max_memory, e);
     if (r != PF_OK) return r;
     c->loaded = 1;
+    snprintf(c->scene_name, sizeof c->scene_name, "%s", path ? path : "the built-in Cornell box");
     if (c->scene.camera_count > 0) c->camera = c->scene.cameras[0];
     if ((r = pf_scene_validate(&c->scene, e)) != PF_OK) return r;
     softgi_internal_notes *n = &c->notes;
@@ -581,6 +589,47 @@ softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light
     return SOFTGI_OK;
 }
 
+/* Embree's scene and the rasterizer again for the posed geometry, and the
+ * frame at the next render (issue 19 item 2 will update them in place). */
+static pf_result api__rebuild(softgi_context *c, pf_error *e)
+{
+    if (c->frame_ready) gi_frame_free(&c->frame);
+    c->frame_ready = 0;
+    rs_context_destroy(c->raster);
+    c->raster = NULL;
+    pf_rt_destroy(c->rt);
+    c->rt = NULL;
+    pf_result r = pf_rt_create(&c->rt, &c->scene, c->isa, c->desc.threads, e);
+    if (r == PF_OK && !(c->desc.flags & SOFTGI_RAYTRACE))
+        r = rs_context_create(&c->raster, &c->scene, c->jobs, rs_simd_for_isa(c->isa), e);
+    return r;
+}
+
+softgi_result softgi_set_time(softgi_context *c, double seconds, const char *animation, softgi_error *err)
+{
+    if (!c) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_time: the context is NULL");
+    if (!c->loaded) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_time: no scene loaded");
+    if (!(seconds >= 0.0 && seconds <= PF_ANIM_MAX_TIME))
+        return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_time: %g seconds: must be finite and in 0..%g",
+                          seconds, PF_ANIM_MAX_TIME);
+    pf_fpenv_state env = api__fpenv_enter();
+    pf_error e;
+    uint32_t moved = 0;
+    pf_result r = api_scene_pose(&c->scene, &c->anim, c->scene_name, seconds, animation, &moved, &e);
+    int rebuilt = 0;
+    if (r == PF_OK && moved) {
+        rebuilt = 1;
+        r = api__rebuild(c, &e);
+    }
+    api__fpenv_leave(env);
+    if (r != PF_OK) {
+        if (rebuilt) api__scene_free(c); /* Embree or the rasterizer failed: no scene is left */
+        return api__fail(err, &e);
+    }
+    api__ok(err);
+    return SOFTGI_OK;
+}
+
 /* ---------------------------------------------------------------- frames */
 
 /* pf_stage_hook: a stage of the frame has finished (softgi_desc.progress). */
@@ -756,6 +805,7 @@ softgi_result softgi_get_info(const softgi_context *c, softgi_info *info, softgi
         info->auto_camera = c->notes.auto_camera;
         info->auto_light = c->notes.auto_light;
         info->warnings = c->scene.warnings;
+        info->animations = c->anim.clip_count;
         const pf_camera *cam = &c->camera;
         pf_vec3 t = pf_v3_add(cam->eye, cam->forward);
         info->camera = (softgi_camera){{cam->eye.x, cam->eye.y, cam->eye.z}, {t.x, t.y, t.z},

@@ -23,12 +23,18 @@ pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera
  * "cornell-box" for the built-in scene. */
 void app_stem(const pf_options *o, char *stem, size_t size);
 struct pf_sequence;
+struct pf_anim;
 /* app_scene_load for `softgi sequence` (and so `softgi evaluate`): the
  * sequence file's emitters, and its "lights": [], are applied
  * (pf_sequence_apply_emitters) right after the scene is read, before
- * --light, validation and the automatic camera and light. seq may be NULL. */
+ * --light, validation and the automatic camera and light. seq may be NULL.
+ * With `anim` not NULL the scene's animations are kept there (pf_anim.h,
+ * freed by the caller; empty on failure). app_scene_load and this both
+ * pose the scene at --time (api_scene_pose) after the automatic camera and
+ * light are chosen on the static pose. */
 pf_result app_scene_load_sequence(const pf_options *o, const struct pf_sequence *seq, pf_scene *scene,
-                                  pf_camera *camera, char *stem, size_t stem_size, pf_error *err);
+                                  struct pf_anim *anim, pf_camera *camera, char *stem, size_t stem_size,
+                                  pf_error *err);
 
 /* The options as the library's frame description (softgi.h): the image
  * width x height (0 x 0: 640 x 480), threads, ISA, budget, the VPL method

@@ -29,6 +29,11 @@
  * time so far and the last stage finished (app_progress.h; through
  * softgi_desc.progress, so the frame knows nothing of it).
  *
+ * --time SECONDS [--animation NAME|INDEX] poses the scene's glTF
+ * animations (softgi_set_time, pf_anim.h) after --camera and --light: the
+ * automatic camera and light are those of the static pose, so every time
+ * of an animation is framed and lit alike.
+ *
  * --aa N (gi_aa.h): N jittered samples per pixel, averaged in linear
  * radiance before anything is written; --aa 1 (the default) is the
  * unjittered frame, bit for bit.
@@ -137,6 +142,9 @@ static int app__render_frame(const pf_options *o, softgi_context *ctx, app__rend
     }
     if (o->light_count && softgi_internal_set_scene_lights(ctx, o->lights, o->light_count, &se) != SOFTGI_OK)
         return app__fail_api(&se);
+    /* --time: posed after the camera and lights, which (automatic or not)
+     * are placed on the static pose, as app_scene_load does for reference */
+    if (o->time_set && softgi_set_time(ctx, o->time, o->animation, &se) != SOFTGI_OK) return app__fail_api(&se);
     const softgi_internal_notes *n = softgi_internal_notes_get(ctx);
     const char *name = o->scene_path ? o->scene_path : "the scene";
     if (n->auto_camera) app_note_camera(o, name, &n->camera, n->camera_spec);
@@ -216,6 +224,10 @@ int app_render(const pf_options *o)
                 printf("indirect: %s, %u VPLs (%u maps rendered), %ux%u tiles, clamp b = %g, visibility %s\n",
                        info.method, info.vpls, info.maps_rendered, info.tiles_n, info.tiles_m,
                        (double)info.clamp_b, info.visibility);
+            if (o->time_set)
+                printf("animation: %s%s%s at %g s (%u in the file)\n", o->animation ? "'" : "",
+                       o->animation ? o->animation : "every animation", o->animation ? "'" : "", (double)o->time,
+                       info.animations);
             if (info.aa_samples > 1)
                 printf("anti-aliasing: %u jittered samples per pixel, averaged (the per-sample stages' times are "
                        "their sums)\n",

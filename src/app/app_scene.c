@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "pf_anim.h"
 #include "pf_sequence.h"
 #include "api_setup.h"
 #include "app.h"
@@ -110,16 +111,36 @@ void app_note_light(const pf_options *o, const char *name, const char *spec, flo
             name, spec, (double)APP_DEFAULT_IRRADIANCE, (double)median);
 }
 
+static pf_result app__scene_read(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_anim *anim,
+                                 pf_camera *camera, char *stem, size_t stem_size, pf_error *err);
+
 pf_result app_scene_load(const pf_options *o, pf_scene *scene, pf_camera *camera, char *stem, size_t stem_size,
                          pf_error *err)
 {
-    return app_scene_load_sequence(o, NULL, scene, camera, stem, stem_size, err);
+    return app_scene_load_sequence(o, NULL, scene, NULL, camera, stem, stem_size, err);
 }
 
-pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_camera *camera,
-                                  char *stem, size_t stem_size, pf_error *err)
+pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_anim *anim,
+                                  pf_camera *camera, char *stem, size_t stem_size, pf_error *err)
 {
-    pf_result r = api_scene_read(scene, o->scene_path, o->max_memory, err);
+    pf_anim own; /* --time without a caller to keep the animations: posed once, then let go */
+    memset(&own, 0, sizeof own);
+    pf_anim *a = anim ? anim : &own;
+    pf_result r = app__scene_read(o, seq, scene, a, camera, stem, stem_size, err);
+    if (r == PF_OK && o->time_set) {
+        r = api_scene_pose(scene, a, o->scene_path ? o->scene_path : "the scene", o->time, o->animation, NULL, err);
+        if (r != PF_OK) pf_scene_free(scene);
+    }
+    if (!anim || r != PF_OK) pf_anim_free(a);
+    return r;
+}
+
+/* app_scene_load_sequence up to the automatic camera and light, on the
+ * static pose. */
+static pf_result app__scene_read(const pf_options *o, const pf_sequence *seq, pf_scene *scene, pf_anim *anim,
+                                 pf_camera *camera, char *stem, size_t stem_size, pf_error *err)
+{
+    pf_result r = api_scene_read(scene, anim, o->scene_path, o->max_memory, err);
     app_stem(o, stem, stem_size);
     if (r != PF_OK) return r;
     /* a sequence file's emitters are part of the scene from here on */

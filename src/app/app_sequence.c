@@ -41,6 +41,21 @@
  * is the light. --exposure auto is picked on frame 0 and held. Instant Radiosity regenerates every VPL when a light
  * moves (the expected baseline); a moving camera alone moves none.
  *
+ * "animation" (pf_sequence.h): the scene's glTF animations are posed at
+ * each frame's time (pf_anim_pose) before it renders. The renderer cannot
+ * yet update its acceleration structures and maps for moved geometry
+ * (issue 19 item 2), so a frame whose pose moves anything rebuilds the
+ * Embree scene, the rasterizer and the frame (app__seq_rebuild): the VPL
+ * method, the shadow and emitter maps and the --temporal / --taa / pipeline
+ * histories start afresh at that frame, as at a first frame; frames whose
+ * pose moves nothing (before the first key, after the last) carry the state
+ * as usual. The first frame rendered is posed before anything is built.
+ * Rebuilding is deterministic, so --frames A:B still gives a full run's
+ * bytes. The pose's time is in the mean table as "pose (+ rebuild when
+ * moved)", and each frame's line says how many objects moved. A pose that
+ * would put geometry beyond PF_SCENE_MAX_COORD stops the run at that frame
+ * (exit 1, the manifest left "running").
+ *
  * --aa N renders every frame with N jittered samples per pixel, --taa N
  * accumulates the frames' jittered samples with reprojection (temporal
  * anti-aliasing, its history kept from frame to frame like the VPL
@@ -95,6 +110,8 @@
 #include "pf_rt.h"
 #include "pf_sequence.h"
 #include "pf_timer.h"
+#include "api_setup.h"
+#include "pf_anim.h"
 
 static int app__light_equal(const pf_light *a, const pf_light *b)
 {
@@ -195,6 +212,10 @@ typedef struct app__seq_run {
     uint32_t track_xy[2 * PF_SEQUENCE_MAX_TRACK];
     uint32_t track_count;
     app__seq_progress progress;
+    /* "animation": the scene's animations over the frames */
+    pf_anim anim;
+    int32_t clip;            /* the animation played (PF_ANIM_ALL: every one) */
+    double t_start, t_end;   /* its time at frame 0 and at the last frame */
 } app__seq_run;
 
 static void app__cleanup(app__seq_run *s)
@@ -207,6 +228,66 @@ static void app__cleanup(app__seq_run *s)
     free(s->base_lights);
     free(s->lights);
     pf_sequence_free(&s->seq);
+    pf_anim_free(&s->anim);
+}
+
+/* The file's "animation" against the loaded scene: the animation it plays
+ * and the time range mapped onto the frames (default [0, its last key]). */
+static pf_result app__seq_animation(app__seq_run *s, pf_error *err)
+{
+    const pf_sequence *seq = &s->seq;
+    pf_result r;
+    s->clip = PF_ANIM_ALL;
+    if (seq->anim_name[0]) r = pf_anim_find(&s->anim, seq->anim_name, 0, &s->clip, err);
+    else if (seq->anim_index >= 0) r = pf_anim_find(&s->anim, NULL, seq->anim_index, &s->clip, err);
+    else r = s->anim.clip_count ? PF_OK : pf_anim_find(&s->anim, NULL, 0, &s->clip, err); /* none: the message */
+    if (r != PF_OK) {
+        char m[sizeof err->message];
+        snprintf(m, sizeof m, "%s", err->message);
+        return pf_error_set(err, r, "%s: animation: %s: %s", seq->file,
+                            seq->scene_embedded ? PF_SEQUENCE_EMBEDDED_CORNELL : seq->scene_path, m);
+    }
+    s->t_start = seq->anim_time_set ? seq->anim_start : 0.0;
+    s->t_end = seq->anim_time_set ? seq->anim_end : pf_anim_end(&s->anim, s->clip);
+    return PF_OK;
+}
+
+/* The scene posed at frame f's animation time (*moved: how many instanced
+ * primitives moved), the message naming the file and the frame. */
+static pf_result app__seq_pose(app__seq_run *s, uint32_t f, uint32_t *moved, pf_error *err)
+{
+    const double t = pf_sequence_time_at(&s->seq, f, s->t_start, s->t_end);
+    pf_result r = pf_anim_pose(&s->scene, NULL, moved, &s->anim, s->clip, t, err);
+    if (r != PF_OK) {
+        char m[sizeof err->message];
+        snprintf(m, sizeof m, "%s", err->message);
+        pf_error_set(err, r, "%s: frame %u: %s", s->seq.file, f, m);
+    }
+    return r;
+}
+
+/* Embree's scene, the rasterizer and the frame made again for the posed
+ * geometry: the simplest correct way until they can be updated for moved
+ * geometry (issue 19 item 2). The frame starts afresh: the VPL method's
+ * state, the reused shadow and emitter maps, the temporal and TAA
+ * histories are rebuilt from this frame on, as at a first frame. */
+static pf_result app__seq_rebuild(app__seq_run *s, const pf_options *o, pf_isa isa, uint32_t threads,
+                                  const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err)
+{
+    if (s->frame_ready) gi_frame_free(&s->frame);
+    s->frame_ready = 0;
+    rs_context_destroy(s->raster);
+    s->raster = NULL;
+    if (s->rt) pf_rt_destroy(s->rt);
+    s->rt = NULL;
+    pf_result r = pf_rt_create(&s->rt, &s->scene, isa, threads, err);
+    if (r == PF_OK && !o->raytrace) r = rs_context_create(&s->raster, &s->scene, s->jobs, rs_simd_for_isa(isa), err);
+    softgi_desc d;
+    if (r == PF_OK) r = app_desc(o, width, height, &d, err);
+    if (r == PF_OK)
+        r = api_frame_create(&s->frame, &d, &s->scene, s->rt, s->raster, s->jobs, camera, !o->reference, 0, err);
+    s->frame_ready = r == PF_OK;
+    return r;
 }
 
 /* --reference: the frame's G-buffer (for the depth file TID reprojects
@@ -337,9 +418,12 @@ int app_sequence(const pf_options *o)
     }
     pf_camera camera;
     char stem[256];
-    if (r == PF_OK) r = app_scene_load_sequence(&so, seq, &s.scene, &camera, stem, sizeof stem, &err);
+    if (r == PF_OK)
+        r = app_scene_load_sequence(&so, seq, &s.scene, seq->anim_set ? &s.anim : NULL, &camera, stem, sizeof stem,
+                                    &err);
     if (r != PF_OK) return app__fail_run(&s, &err);
     s.scene_loaded = 1;
+    if (seq->anim_set && (r = app__seq_animation(&s, &err)) != PF_OK) return app__fail_run(&s, &err);
     t_load = pf_time_now() - t_load;
 
     /* Check every frame before rendering any: cameras and lights. */
@@ -399,7 +483,17 @@ int app_sequence(const pf_options *o)
                          seq->frames);
     if (r != PF_OK) return app__fail_run(&s, &err);
 
-    /* Embree, jobs, rasterizer, frame: once for the whole sequence. */
+    /* the frame's state runs through every frame; references stand alone */
+    const int carry = !o->reference;
+    /* Animation: posed at the first frame the loop renders before anything
+     * is built; later frames pose again and rebuild when something moved. */
+    const uint32_t f_start = carry || o->exposure_auto ? 0 : first;
+    uint32_t moved_objects = 0;
+    if (seq->anim_set && (r = app__seq_pose(&s, f_start, &moved_objects, &err)) != PF_OK)
+        return app__fail_run(&s, &err);
+
+    /* Embree, jobs, rasterizer, frame: once for the whole sequence (again
+     * after a frame's pose moves geometry). */
     double t_build = pf_time_now();
     if ((r = pf_rt_create(&s.rt, &s.scene, isa, threads, &err)) != PF_OK) return app__fail_run(&s, &err);
     s.jobs = pf_jobs_create(threads);
@@ -436,8 +530,6 @@ int app_sequence(const pf_options *o)
     double render_sum = 0.0, write_sum = 0.0;
     uint64_t moved_sum = 0;
     float exposure = o->exposure; /* --exposure auto: picked on frame 0 and held, so the PNGs do not flicker */
-    /* the frame's state runs through every frame; references stand alone */
-    const int carry = !o->reference;
     app__seq_progress *prog = &s.progress;
     app_progress_begin(&prog->bar, "sequence", o->quiet);
     prog->total = carry ? end : end - first + (o->exposure_auto && first > 0);
@@ -447,6 +539,16 @@ int app_sequence(const pf_options *o)
         prog->frame = f;
         prog->stages = 0;
         app__seq_progress_show(prog, 0.0, NULL);
+        /* the animation at frame f: what moved rebuilds Embree, the
+         * rasterizer and the frame (app__seq_rebuild) */
+        moved_objects = 0;
+        double t_pose = pf_time_now();
+        if (seq->anim_set && f != f_start) {
+            r = app__seq_pose(&s, f, &moved_objects, &err);
+            if (r == PF_OK && moved_objects) r = app__seq_rebuild(&s, o, isa, threads, &camera, width, height, &err);
+            if (r != PF_OK) break;
+        }
+        t_pose = (pf_time_now() - t_pose) * 1e3;
         /* camera and lights of frame f (checked above) */
         pf_vec3 eye, target;
         float fovy;
@@ -488,6 +590,7 @@ int app_sequence(const pf_options *o)
             continue;
         }
         moved_sum += moved;
+        if (seq->anim_set) pf_stage_add(&total, "pose (+ rebuild when moved)", t_pose);
         for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
         /* write */
         t0 = pf_time_now();
@@ -515,6 +618,8 @@ int app_sequence(const pf_options *o)
             if (fr->indirect)
                 printf("  VPLs %u, moved %u, maps %u", fr->ind.vpls.count, moved, fr->ind.maps_rendered);
             if (lights_changed) printf("  (%u light%s moved)", lights_changed, lights_changed > 1 ? "s" : "");
+            if (moved_objects)
+                printf("  (%u object%s moved: scene rebuilt)", moved_objects, moved_objects > 1 ? "s" : "");
             printf("\n");
         }
     }

@@ -7,6 +7,7 @@
  * command (-o is a file for render and a folder for sequence); the rows of
  * one name share its id and whether it takes a value. */
 #include "pf_cli.h"
+#include "pf_anim.h"
 #include "pf_budget.h"
 #include "pf_imageio.h"
 #include "gi_aa.h"
@@ -29,6 +30,7 @@ typedef enum pf__opt_id {
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
     PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
+    PF__OPT_TIME, PF__OPT_ANIMATION,
     PF__OPT_COUNT
 } pf__opt_id;
 
@@ -85,6 +87,14 @@ static const pf__opt k_options[] = {
      "dir:dx,dy,dz:r,g,b:E (E: W/m^2)\n"
      "repeatable; lights given replace the scene's lights",
      NULL},
+    {PF__OPT_TIME, "--time", NULL, "SECONDS", R | F,
+     "pose the scene's glTF animations at SECONDS (0..1000000): node\ntransforms, skins and morph weights; before "
+     "an animation's first\nkey its first value, after its last key its last (docs/scenes.md)",
+     "sequence files play animations with their \"animation\" key (docs/formats.md)"},
+    {PF__OPT_ANIMATION, "--animation", NULL, "NAME|INDEX", R | F,
+     "with --time: play only the animation of that name (or index, when\nit is all digits; default: every "
+     "animation of the file together)",
+     "sequence files play animations with their \"animation\" key (docs/formats.md)"},
     {PF__OPT_SHADOW_SIZE, "--shadow-size", NULL, "N", FRAME, "direct-light shadow map resolution (default 1024)", NULL},
     {PF__OPT_MAX_MEMORY, "--max-memory", NULL, "SIZE", SCENE,
      "memory budget, e.g. 8G or 512M (default: half of this\nmachine's memory); larger scenes and frames are refused",
@@ -690,6 +700,14 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
     case PF__OPT_PARA_LOD:
         r = pf__float_option(a, val, 0.0f, RS_PARA_MAX_LOD, "a number in 0..16", &o->para_lod, err);
         break;
+    case PF__OPT_TIME:
+        r = pf__float_option(a, val, 0.0f, (float)PF_ANIM_MAX_TIME, "a time in seconds, 0..1000000", &o->time, err);
+        o->time_set = 1;
+        break;
+    case PF__OPT_ANIMATION:
+        o->animation = val;
+        if (!val[0]) r = pf_error_set(err, PF_ERR_ARGUMENT, "--animation '': expected an animation's name or index");
+        break;
     case PF__OPT_HELP: o->help = 1; break;
     case PF__OPT_VERSION: o->version = 1; break;
     case PF__OPT_QUALITY: break; /* refused by every command pf_cli parses (pf__check_command) */
@@ -755,6 +773,8 @@ static pf_result pf__check_combinations(const pf_options *o, pf_error *err)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--track-spp: only with sequence --reference");
     if (o->indirect_only && o->direct_only)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--indirect-only and --direct-only exclude each other");
+    if (o->animation && !o->time_set)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--animation: only with --time SECONDS");
     if (o->dump_format && !o->dump_dir)
         return pf_error_set(err, PF_ERR_ARGUMENT, "--dump-format: only with --dump-stages DIR");
     if (o->reference && (o->aa || o->taa))

@@ -21,7 +21,10 @@
  *   --light dir:dx,dy,dz:r,g,b:E                 (E in W/m^2)
  * --light may repeat; given lights replace the scene's own lights. Without
  * them a scene gets an automatic camera and light (src/scene/pf_defaults.h).
- * --exposure takes STOPS or "auto" (exposure_auto; the PNG only). */
+ * --exposure takes STOPS or "auto" (exposure_auto; the PNG only).
+ * --time SECONDS [--animation NAME|INDEX] (render, reference) poses the
+ * scene's glTF animations (pf_anim.h) after the automatic camera and light
+ * are chosen on the static pose. */
 #ifndef PF_CLI_H
 #define PF_CLI_H
 
@@ -103,6 +106,9 @@ typedef struct pf_options {
     pf_isa isa;
     float exposure; /* stops; PNG scale 2^exposure */
     int exposure_auto; /* --exposure auto: picked from the image (pf_defaults_exposure); exposure is then 0 */
+    int time_set;           /* --time SECONDS: the scene's animations posed at `time` (render, reference) */
+    float time;             /* seconds, 0..PF_ANIM_MAX_TIME */
+    const char *animation;  /* --animation NAME|INDEX (with --time); NULL: every animation together */
     int has_camera;
     pf_vec3 camera_eye, camera_target;
     float camera_fovy_deg;

@@ -610,6 +610,58 @@ pf_result pf_sequence_apply_emitters(const pf_sequence *seq, pf_scene *scene, pf
     return PF_OK;
 }
 
+/* ---------------------------------------------------------------- animation */
+
+double pf_sequence_time_at(const pf_sequence *seq, uint32_t frame, double start, double end)
+{
+    if (seq->frames <= 1) return start;
+    const double s = (double)frame / (double)(seq->frames - 1);
+    const double t = (1.0 - s) * start + s * end; /* exactly start and end at the ends */
+    return t < start ? start : t > end ? end : t; /* never outside by a rounding */
+}
+
+static int pf__has_control(const char *p);
+
+static pf_result pf__animation(const pf__sq *c, pf_sequence *s, const cJSON *v)
+{
+    if (!cJSON_IsObject(v))
+        return pf__sq_fail(c, PF_ERR_PARSE, "animation", "expected an object, got %s", pf__type_name(v));
+    static const char *const keys[] = {"play", "time"};
+    pf_result r = pf__check_keys(c, v, "animation", keys, 2);
+    if (r != PF_OK) return r;
+    s->anim_set = 1;
+    s->anim_index = -1;
+    const cJSON *play = pf__get(v, "play");
+    if (play && cJSON_IsString(play)) {
+        const char *nm = play->valuestring;
+        if (!nm[0] || strlen(nm) >= sizeof s->anim_name || pf__has_control(nm))
+            return pf__sq_fail(c, PF_ERR_PARSE, "animation.play",
+                               "expected an animation's name (1 to %zu characters, no control characters) or index",
+                               sizeof s->anim_name - 1);
+        snprintf(s->anim_name, sizeof s->anim_name, "%s", nm);
+    } else if (play) {
+        uint32_t idx;
+        if (!cJSON_IsNumber(play))
+            return pf__sq_fail(c, PF_ERR_PARSE, "animation.play", "expected an animation's name or index, got %s",
+                               pf__type_name(play));
+        if ((r = pf__uint(c, play, "animation.play", 0, 65535, &idx)) != PF_OK) return r;
+        s->anim_index = (int32_t)idx;
+    }
+    const cJSON *time = pf__get(v, "time");
+    if (time) {
+        float t[2];
+        if ((r = pf__floats(c, time, "animation.time", 2, PF_SEQUENCE_MAX_TIME, t)) != PF_OK) return r;
+        if (!(t[0] >= 0.0f && t[0] <= t[1]))
+            return pf__sq_fail(c, PF_ERR_PARSE, "animation.time",
+                               "[%g, %g]: expected [start, end] seconds with 0 <= start <= end <= %g", (double)t[0],
+                               (double)t[1], PF_SEQUENCE_MAX_TIME);
+        s->anim_time_set = 1;
+        s->anim_start = t[0];
+        s->anim_end = t[1];
+    }
+    return PF_OK;
+}
+
 /* ---------------------------------------------------------------- top level */
 
 /* Folder of `file` with a trailing slash ("" for a bare name). */
@@ -670,9 +722,9 @@ static pf_result pf__output(const pf__sq *c, const cJSON *v, char *dst, size_t s
 static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
 {
     if (!cJSON_IsObject(root)) return pf__sq_fail(c, PF_ERR_PARSE, NULL, "expected a JSON object at the top, got %s", pf__type_name(root));
-    static const char *const keys[] = {"name",   "scene",  "frames",   "size", "output",
-                                       "camera", "lights", "emitters", "track"};
-    pf_result r = pf__check_keys(c, root, "", keys, 9);
+    static const char *const keys[] = {"name",   "scene",  "frames",   "size",  "output",
+                                       "camera", "lights", "emitters", "track", "animation"};
+    pf_result r = pf__check_keys(c, root, "", keys, 10);
     if (r != PF_OK) return r;
 
     const cJSON *v = pf__get(root, "name");
@@ -711,6 +763,7 @@ static pf_result pf__top(const pf__sq *c, pf_sequence *s, const cJSON *root)
     if ((v = pf__get(root, "camera")) && (r = pf__camera(c, s, v)) != PF_OK) return r;
     if ((v = pf__get(root, "lights")) && (r = pf__lights(c, s, v)) != PF_OK) return r;
     if ((v = pf__get(root, "emitters")) && (r = pf__emitters(c, s, v)) != PF_OK) return r;
+    if ((v = pf__get(root, "animation")) && (r = pf__animation(c, s, v)) != PF_OK) return r;
     if (s->lights_replace && s->light_count == 0 && s->emitter_count == 0)
         return pf__sq_fail(c, PF_ERR_PARSE, "lights",
                            "is empty, which means no punctual light: give \"emitters\" to light the scene, or leave "

@@ -38,6 +38,12 @@
  *        "emission": [r, g, b],              seen from the emitting side; emission
  *        "two_sided": false}                 is radiance W/(sr m^2); two_sided
  *     ],                                     (default false): emits from both faces
+ *     "animation": {"play": "Walk",          optional: play the scene's glTF animations
+ *                   "time": [0, 2]},          (pf_anim.h) over the frames; "play" a
+ *                                            name or an index (absent: every animation
+ *                                            together), "time" [start, end] seconds
+ *                                            mapped onto frames 0 .. frames-1 (absent:
+ *                                            [0, the played animations' last key])
  *     "track": [[x, y], ...]                 optional pixels for `softgi compare
  *   }                                        --track` (at most PF_SEQUENCE_MAX_TRACK)
  *
@@ -63,6 +69,15 @@
  * direction, color, intensity, inner_cone_deg, outer_cone_deg; each field is
  * its own track over the keys that name it, and a field no key names keeps
  * the light's own value.
+ *
+ * Animation: frame f of N plays time t = (1 - s) start + s end with
+ * s = f / (N - 1) in double (exactly start at frame 0 and end at frame
+ * N - 1; N = 1: start), pf_sequence_time_at. "play" is a string (1 to 63
+ * characters, no control characters) naming an animation or an integer
+ * 0..65535 indexing one; whether the scene has it is checked when the scene
+ * is loaded (app_sequence.c). "time" holds two finite numbers with
+ * 0 <= start <= end <= PF_SEQUENCE_MAX_TIME (the animation layer's limit).
+ * Keys other than "play", "time" and "comment" are errors.
  *
  * Interpolation (pf_sequence_track_eval): keys sorted by frame (strictly
  * increasing in the file, within [0, frames)); before the first key and
@@ -114,6 +129,7 @@
 #define PF_SEQUENCE_MAX_EMITTERS 16u /* quads; the papers use one */
 #define PF_SEQUENCE_MAX_SIZE 16384u
 #define PF_SEQUENCE_MAX_FILE (16u << 20) /* bytes */
+#define PF_SEQUENCE_MAX_TIME 1.0e6       /* seconds: PF_ANIM_MAX_TIME (pf_anim.h) */
 /* intensity x colour per channel, W/sr (W/m^2 directional): the renderer's
  * one limit (PF_MAX_RADIANCE, pf_scene.h), the same as for glTF and --light
  * lights; far above any physical light in any unit the scenes use (the
@@ -172,6 +188,12 @@ typedef struct pf_sequence {
     pf_sequence_emitter emitters[PF_SEQUENCE_MAX_EMITTERS];
     uint32_t track_count;
     uint32_t track[PF_SEQUENCE_MAX_TRACK][2]; /* x, y */
+    /* "animation": the scene's glTF animations played over the frames */
+    int anim_set;                 /* the key is given */
+    char anim_name[64];           /* "play" as a name; empty: an index or every animation */
+    int32_t anim_index;           /* "play" as an index; -1: a name or every animation */
+    int anim_time_set;            /* "time" given; else [0, the played animations' end] */
+    double anim_start, anim_end;  /* seconds */
 } pf_sequence;
 
 /* ---------------------------------------------------------------- the frames' folder
@@ -219,6 +241,10 @@ pf_result pf_sequence_apply_emitters(const pf_sequence *seq, pf_scene *scene, pf
 /* Track value at `frame` (dim floats into out); a track without keys
  * leaves out untouched. */
 void pf_sequence_track_eval(const pf_sequence_track *track, uint32_t frame, float *out);
+
+/* The animation time (seconds) of `frame`: start at frame 0, end at the
+ * last frame, linear between (see "Animation" above). */
+double pf_sequence_time_at(const pf_sequence *seq, uint32_t frame, double start, double end);
 
 /* Eye, target and fovy (degrees) at `frame`. Returns 0 (and leaves the
  * outputs) when the sequence has no camera keys. */

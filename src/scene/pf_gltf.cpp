@@ -12,6 +12,7 @@
  * flat normals where NORMAL is missing. Then materials, the textures they
  * use (mips built here), cameras and KHR_lights_punctual lights. */
 #include "pf_gltf.h"
+#include "pf_anim.h"
 #include "pf_budget.h"
 #include "pf_decode.h"
 
@@ -170,6 +171,12 @@ void check_references(const cJSON *obj, const std::string &where, int depth)
             for (const cJSON *e = c->child; e; e = e->next, i++) check_index(e, fmt("%s[%d]", at.c_str(), i));
         } else if (k && (strcmp(k, "attributes") == 0) && cJSON_IsObject(c)) {
             for (const cJSON *e = c->child; e; e = e->next) check_index(e, at + "." + e->string);
+        } else if (k && strcmp(k, "targets") == 0 && cJSON_IsArray(c)) { /* morph targets: attribute -> accessor */
+            int i = 0;
+            for (const cJSON *t = c->child; t; t = t->next, i++)
+                if (cJSON_IsObject(t))
+                    for (const cJSON *e = t->child; e; e = e->next)
+                        check_index(e, fmt("%s[%d].%s", at.c_str(), i, e->string));
         } else if (cJSON_IsArray(c)) {
             int i = 0;
             for (const cJSON *e = c->child; e; e = e->next, i++)
@@ -364,6 +371,7 @@ int type_components(int type)
     case TINYGLTF_TYPE_VEC2: return 2;
     case TINYGLTF_TYPE_VEC3: return 3;
     case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT4: return 16; /* inverseBindMatrices; float only, so no column padding */
     default: return 0;
     }
 }
@@ -470,9 +478,34 @@ const tinygltf::Accessor &get_accessor(const tinygltf::Model &m, int index, cons
     return a;
 }
 
+/* Which component types an accessor may have where it is read. */
+enum Components {
+    kFloat,             /* float only (positions, normals, times, matrices) */
+    kFloatOrNormalized, /* float or normalized (u)byte/(u)short (uvs, rotations, morph weights) */
+    kFloatOrUnorm,      /* float or normalized unsigned byte/short (WEIGHTS_n) */
+    kJointIndex         /* unsigned byte/short, not normalized (JOINTS_n), read as exact floats */
+};
+
+bool components_ok(const tinygltf::Accessor &a, Components c)
+{
+    const int t = a.componentType;
+    const bool unorm = a.normalized && (t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                        t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+    const bool snorm = a.normalized && (t == TINYGLTF_COMPONENT_TYPE_BYTE || t == TINYGLTF_COMPONENT_TYPE_SHORT);
+    switch (c) {
+    case kFloat: return t == TINYGLTF_COMPONENT_TYPE_FLOAT;
+    case kFloatOrNormalized: return t == TINYGLTF_COMPONENT_TYPE_FLOAT || unorm || snorm;
+    case kFloatOrUnorm: return t == TINYGLTF_COMPONENT_TYPE_FLOAT || unorm;
+    case kJointIndex:
+        return !a.normalized &&
+               (t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+    }
+    return false;
+}
+
 /* Reads a float-valued accessor (positions, normals, uvs) with `ncomp`
  * components, honouring byteStride, normalisation and sparse substitution. */
-std::vector<float> read_floats(const tinygltf::Model &m, int index, int ncomp, bool allow_normalized_ints,
+std::vector<float> read_floats(const tinygltf::Model &m, int index, int ncomp, Components comps,
                                size_t implicit_limit, const std::string &what)
 {
     const tinygltf::Accessor &a = get_accessor(m, index, what);
@@ -484,12 +517,7 @@ std::vector<float> read_floats(const tinygltf::Model &m, int index, int ncomp, b
     if (type_components(a.type) != ncomp)
         fail(PF_ERR_ACCESSOR, fmt("%s must have %d components per element", where.c_str(), ncomp));
     size_t csize = component_size(a.componentType);
-    bool ok_type = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT ||
-                   (allow_normalized_ints && a.normalized &&
-                    (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-                     a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
-                     a.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
-                     a.componentType == TINYGLTF_COMPONENT_TYPE_SHORT));
+    bool ok_type = components_ok(a, comps);
     if (!ok_type || csize == 0)
         fail(PF_ERR_ACCESSOR, fmt("%s has component type %d, which is not allowed here", where.c_str(),
                                   a.componentType));
@@ -556,14 +584,18 @@ std::vector<uint32_t> read_indices(const tinygltf::Model &m, int index, const st
 
 /* ---------------------------------------------------------------- nodes */
 
-pf_mat4 node_local(const tinygltf::Node &n, int index)
+/* Node `index`'s static transform (glTF 2.0 Sec. 3.5.3): its matrix, or
+ * T R S with the quaternion normalised, checked finite. The TRS (or the
+ * matrix) also goes into *rest, which posing starts from (pf_anim.h); both
+ * build the matrix with pf_anim_trs_matrix, so they agree bit for bit. */
+pf_mat4 node_local(const tinygltf::Node &n, int index, pf_anim_node *rest)
 {
     pf_mat4 r = pf_mat4_identity();
+    double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
     if (!n.matrix.empty()) {
         if (n.matrix.size() != 16) fail(PF_ERR_PARSE, fmt("node %d: matrix must have 16 numbers", index));
         for (int i = 0; i < 16; i++) r.m[i] = n.matrix[size_t(i)];
     } else {
-        double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
         if (!n.translation.empty()) {
             if (n.translation.size() != 3) fail(PF_ERR_PARSE, fmt("node %d: translation must have 3 numbers", index));
             for (int i = 0; i < 3; i++) t[i] = n.translation[size_t(i)];
@@ -580,20 +612,545 @@ pf_mat4 node_local(const tinygltf::Node &n, int index)
             if (n.scale.size() != 3) fail(PF_ERR_PARSE, fmt("node %d: scale must have 3 numbers", index));
             for (int i = 0; i < 3; i++) s[i] = n.scale[size_t(i)];
         }
-        double x = q[0], y = q[1], z = q[2], w = q[3];
-        double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
-                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
-        for (int c = 0; c < 3; c++)
-            for (int rr = 0; rr < 3; rr++) r.m[c * 4 + rr] = rot[c * 3 + rr] * s[c];
-        r.m[12] = t[0];
-        r.m[13] = t[1];
-        r.m[14] = t[2];
+        r = pf_anim_trs_matrix(t, q, s);
     }
     for (double v : r.m)
         if (!std::isfinite(v)) fail(PF_ERR_NONFINITE, fmt("node %d has a non-finite transform", index));
+    if (rest) {
+        rest->has_matrix = !n.matrix.empty();
+        rest->matrix = r;
+        memcpy(rest->t, t, sizeof t);
+        memcpy(rest->r, q, sizeof q);
+        memcpy(rest->s, s, sizeof s);
+    }
     return r;
 }
+
+/* ---------------------------------------------------------------- animation
+ * What posing needs (pf_anim.h): every node's static transform and the
+ * walk order, the morph weights of the mesh nodes, the skins the scene
+ * uses, the animations' channels and samplers, and per instanced primitive
+ * its place in the scene and, when something deforms or moves it, its own
+ * data. All of it read and checked here (glTF 2.0 Sec. 3.7.2.2, 3.7.3,
+ * 3.11), everything kept counted against the memory budget. A channel that
+ * animates a node outside the scene moves nothing and is not read. */
+
+struct AnimReader {
+    const tinygltf::Model &m;
+    size_t implicit_limit;
+    pf_budget *budget;
+    bool keep;              /* the caller wants the pf_anim (pf_gltf_options.anim) */
+    std::string *warnings;  /* the Builder's */
+    pf_anim a;              /* owned until release() */
+    std::vector<pf_anim_prim> prims;
+    std::vector<char> trs_animated, weights_animated, moves, skin_moves;
+    std::vector<int> sampler_use; /* per sampler of the clip being read: path and dim it was read for */
+
+    AnimReader(const tinygltf::Model &model, size_t limit, pf_budget *b, bool k, std::string *w)
+        : m(model), implicit_limit(limit), budget(b), keep(k), warnings(w)
+    {
+        memset(&a, 0, sizeof a);
+        a.pose_clip = PF_ANIM_STATIC;
+    }
+    ~AnimReader()
+    {
+        for (pf_anim_prim &p : prims) free_prim(&p);
+        pf_anim_free(&a);
+    }
+    AnimReader(const AnimReader &) = delete;
+    AnimReader &operator=(const AnimReader &) = delete;
+
+    static void free_prim(pf_anim_prim *p)
+    {
+        free(p->local_pos);
+        free(p->local_nrm);
+        free(p->src);
+        free(p->target_pos);
+        free(p->target_nrm);
+        free(p->joint);
+        free(p->weight);
+        p->local_pos = p->local_nrm = p->target_pos = p->target_nrm = nullptr;
+        p->src = nullptr;
+        p->joint = nullptr;
+        p->weight = nullptr;
+    }
+
+    void warn(const std::string &w)
+    {
+        if (warnings->size() < 900) *warnings += w + "\n";
+    }
+
+    /* Bytes for `what` from the budget, before they are allocated. */
+    void take(uint64_t bytes, const std::string &what)
+    {
+        pf_error e;
+        if (pf_budget_take(budget, bytes, what.c_str(), &e) != PF_OK) fail(e.code, e.message);
+        a.memory_bytes += bytes;
+    }
+
+    template <typename T> static T *alloc(size_t n)
+    {
+        T *p = static_cast<T *>(calloc(n ? n : 1, sizeof(T)));
+        if (!p) throw std::bad_alloc();
+        return p;
+    }
+
+    /* ------------------------------------------------ nodes and morph weights */
+
+    /* Morph targets of mesh `mi`: the same number in every primitive. */
+    uint32_t mesh_targets(int mi)
+    {
+        const tinygltf::Mesh &mesh = m.meshes[size_t(mi)];
+        size_t n = mesh.primitives.empty() ? 0 : mesh.primitives[0].targets.size();
+        for (size_t p = 1; p < mesh.primitives.size(); p++)
+            if (mesh.primitives[p].targets.size() != n)
+                fail(PF_ERR_PARSE, fmt("mesh %d: primitive %zu has %zu morph targets and primitive 0 has %zu (glTF "
+                                       "2.0 Sec. 3.7.2.2: every primitive of a mesh has the same number)",
+                                       mi, p, mesh.primitives[p].targets.size(), n));
+        if (n > PF_ANIM_MAX_TARGETS)
+            fail(PF_ERR_UNSUPPORTED, fmt("mesh %d has %zu morph targets; softgi reads at most %u", mi, n,
+                                         PF_ANIM_MAX_TARGETS));
+        return uint32_t(n);
+    }
+
+    /* The static weights of node `ni` (node.weights, else mesh.weights, else 0). */
+    void node_weights(int ni, pf_anim_node *an)
+    {
+        const tinygltf::Node &n = m.nodes[size_t(ni)];
+        const tinygltf::Mesh &mesh = m.meshes[size_t(n.mesh)];
+        const uint32_t count = mesh_targets(n.mesh);
+        if (!n.weights.empty() && n.weights.size() != count)
+            fail(PF_ERR_PARSE, fmt("node %d: weights has %zu numbers, but its mesh %d has %u morph targets", ni,
+                                   n.weights.size(), n.mesh, count));
+        if (!mesh.weights.empty() && mesh.weights.size() != count)
+            fail(PF_ERR_PARSE, fmt("mesh %d: weights has %zu numbers, but it has %u morph targets", n.mesh,
+                                   mesh.weights.size(), count));
+        if (!count) return;
+        take(uint64_t(count) * 8, fmt("node %d's morph weights", ni));
+        an->weight_count = count;
+        an->rest_weights = alloc<float>(count);
+        an->weights = alloc<float>(count);
+        const std::vector<double> &w = !n.weights.empty() ? n.weights : mesh.weights;
+        for (uint32_t k = 0; k < count && !w.empty(); k++) {
+            if (!std::isfinite(float(w[k])))
+                fail(PF_ERR_NONFINITE, fmt("node %d: morph weight %u (%g) is not finite", ni, k, w[k]));
+            an->rest_weights[k] = float(w[k]);
+        }
+    }
+
+    /* The nodes as the walk left them: order (parents first), parents, the
+     * static transforms; the mesh nodes' weights and the skins they use. */
+    void nodes(const std::vector<int> &order, const std::vector<int> &parent, const std::vector<pf_anim_node> &rest)
+    {
+        const size_t n = m.nodes.size();
+        take(uint64_t(n) * (sizeof(pf_anim_node) + sizeof(pf_mat4) + 10 * sizeof(double)) + order.size() * 4,
+             "the node hierarchy");
+        a.node_count = uint32_t(n);
+        a.nodes = alloc<pf_anim_node>(n);
+        a.world = alloc<pf_mat4>(n);
+        a.trs = alloc<double>(n * 10);
+        a.order = alloc<uint32_t>(order.size());
+        a.order_count = uint32_t(order.size());
+        a.skin_count = uint32_t(m.skins.size());
+        a.skins = alloc<pf_anim_skin>(m.skins.size());
+        for (size_t i = 0; i < n; i++) {
+            pf_anim_node &an = a.nodes[i];
+            an = rest[i];
+            an.weight_count = 0, an.rest_weights = an.weights = nullptr;
+            an.parent = parent[i];
+            a.world[i] = pf_mat4_identity();
+        }
+        for (size_t o = 0; o < order.size(); o++) {
+            const int ni = order[o];
+            a.order[o] = uint32_t(ni);
+            a.nodes[ni].in_scene = 1;
+            const tinygltf::Node &nd = m.nodes[size_t(ni)];
+            if (nd.mesh < 0) continue;
+            if (size_t(nd.mesh) >= m.meshes.size())
+                fail(PF_ERR_INDEX_RANGE, fmt("node %d uses mesh %d, but the file has %zu", ni, nd.mesh, m.meshes.size()));
+            node_weights(ni, &a.nodes[ni]);
+            if (nd.skin < 0) continue;
+            if (size_t(nd.skin) >= m.skins.size())
+                fail(PF_ERR_INDEX_RANGE, fmt("node %d uses skin %d, but the file has %zu", ni, nd.skin, m.skins.size()));
+            a.skins[nd.skin].used = 1;
+        }
+    }
+
+    /* ------------------------------------------------ skins */
+
+    void skin(int si)
+    {
+        const tinygltf::Skin &gs = m.skins[size_t(si)];
+        pf_anim_skin &sk = a.skins[si];
+        if (gs.joints.empty()) fail(PF_ERR_PARSE, fmt("skin %d has no joints", si));
+        if (gs.joints.size() > PF_ANIM_MAX_JOINTS)
+            fail(PF_ERR_UNSUPPORTED,
+                 fmt("skin %d has %zu joints; softgi reads at most %u", si, gs.joints.size(), PF_ANIM_MAX_JOINTS));
+        const size_t nj = gs.joints.size();
+        take(uint64_t(nj) * (4 + 2 * sizeof(pf_mat4)), fmt("skin %d's %zu joints", si, nj));
+        sk.joints = alloc<uint32_t>(nj);
+        sk.ibm = alloc<pf_mat4>(nj);
+        sk.joint_mats = alloc<pf_mat4>(nj);
+        sk.joint_count = uint32_t(nj);
+        for (size_t j = 0; j < nj; j++) {
+            const int node = gs.joints[j];
+            if (node < 0 || size_t(node) >= m.nodes.size())
+                fail(PF_ERR_INDEX_RANGE,
+                     fmt("skin %d: joint %zu is node %d, but the file has %zu", si, j, node, m.nodes.size()));
+            if (!a.nodes[node].in_scene)
+                fail(PF_ERR_PARSE, fmt("skin %d: joint %zu is node %d, which is not in the scene", si, j, node));
+            sk.joints[j] = uint32_t(node);
+            sk.ibm[j] = pf_mat4_identity();
+        }
+        if (gs.inverseBindMatrices < 0) return; /* identity (glTF 2.0 Sec. 3.7.3.1) */
+        std::string what = fmt("skin %d inverseBindMatrices", si);
+        std::vector<float> F = read_floats(m, gs.inverseBindMatrices, 16, kFloat, implicit_limit, what);
+        if (F.size() / 16 < nj)
+            fail(PF_ERR_ACCESSOR, fmt("skin %d: inverseBindMatrices has %zu matrices for %zu joints", si,
+                                      F.size() / 16, nj));
+        for (size_t j = 0; j < nj; j++)
+            for (int e = 0; e < 16; e++) {
+                const float v = F[j * 16 + size_t(e)];
+                if (!std::isfinite(v))
+                    fail(PF_ERR_NONFINITE, fmt("skin %d: inverse bind matrix %zu is not finite", si, j));
+                sk.ibm[j].m[e] = v;
+            }
+    }
+
+    /* ------------------------------------------------ animations */
+
+    static pf_anim_interp interpolation(const std::string &s, const std::string &where)
+    {
+        if (s == "LINEAR") return PF_ANIM_LINEAR;
+        if (s == "STEP") return PF_ANIM_STEP;
+        if (s == "CUBICSPLINE") return PF_ANIM_CUBICSPLINE;
+        fail(PF_ERR_PARSE, fmt("%s: interpolation '%.40s' (glTF 2.0 has LINEAR, STEP and CUBICSPLINE)", where.c_str(),
+                               s.c_str()));
+    }
+
+    /* Sampler `gs` read for `path` with `dim` floats per value: times finite,
+     * >= 0, strictly increasing, at most PF_ANIM_MAX_TIME; values finite,
+     * exactly as many as the keys need (glTF 2.0 Sec. 3.11, Appendix C). */
+    void sampler(const tinygltf::AnimationSampler &gs, pf_anim_path path, uint32_t dim, const std::string &where,
+                 pf_anim_sampler *out)
+    {
+        out->interp = interpolation(gs.interpolation, where);
+        out->dim = dim;
+        const int ncomp = path == PF_ANIM_WEIGHTS ? 1 : int(dim);
+        const tinygltf::Accessor &in = get_accessor(m, gs.input, where + " input");
+        const tinygltf::Accessor &ou = get_accessor(m, gs.output, where + " output");
+        take((uint64_t(in.count) + uint64_t(ou.count) * uint64_t(ncomp)) * 4,
+             fmt("%s's %zu keys", where.c_str(), in.count));
+        std::vector<float> T = read_floats(m, gs.input, 1, kFloat, implicit_limit, where + " input");
+        if (T.empty()) fail(PF_ERR_ACCESSOR, where + ": the input accessor has no keys");
+        for (size_t k = 0; k < T.size(); k++) {
+            if (!std::isfinite(T[k]) || T[k] < 0.0f || double(T[k]) > PF_ANIM_MAX_TIME)
+                fail(PF_ERR_NONFINITE, fmt("%s: input time %zu is %g; times are finite seconds in 0..%g", where.c_str(),
+                                           k, double(T[k]), PF_ANIM_MAX_TIME));
+            if (k > 0 && !(T[k] > T[k - 1]))
+                fail(PF_ERR_PARSE, fmt("%s: input time %zu (%g) is not after time %zu (%g); times must increase "
+                                       "strictly",
+                                       where.c_str(), k, double(T[k]), k - 1, double(T[k - 1])));
+        }
+        const Components comps = path == PF_ANIM_ROTATION || path == PF_ANIM_WEIGHTS ? kFloatOrNormalized : kFloat;
+        std::vector<float> V = read_floats(m, gs.output, ncomp, comps, implicit_limit, where + " output");
+        const int cubic = out->interp == PF_ANIM_CUBICSPLINE;
+        const uint64_t want = uint64_t(T.size()) * (cubic ? 3u : 1u) * dim;
+        if (uint64_t(V.size()) != want)
+            fail(PF_ERR_ACCESSOR, fmt("%s: output has %zu numbers, but %zu keys need %llu (%s%s)", where.c_str(),
+                                      V.size(), T.size(), (unsigned long long)want,
+                                      cubic ? "in-tangent, value and out-tangent per key" : "one value per key",
+                                      path == PF_ANIM_WEIGHTS ? fmt(", %u weights each", dim).c_str() : ""));
+        for (size_t i = 0; i < V.size(); i++)
+            if (!std::isfinite(V[i]))
+                fail(PF_ERR_NONFINITE, fmt("%s: output value %zu (key %zu) is not finite", where.c_str(), i,
+                                           i / (dim * (cubic ? 3u : 1u))));
+        if (path == PF_ANIM_ROTATION)
+            for (size_t k = 0; k < T.size(); k++) {
+                const float *q = &V[(k * (cubic ? 3u : 1u) + (cubic ? 1u : 0u)) * 4];
+                if (q[0] == 0.0f && q[1] == 0.0f && q[2] == 0.0f && q[3] == 0.0f)
+                    fail(PF_ERR_NONFINITE, fmt("%s: rotation key %zu is the zero quaternion", where.c_str(), k));
+            }
+        out->times = alloc<float>(T.size());
+        memcpy(out->times, T.data(), T.size() * sizeof(float));
+        out->values = alloc<float>(V.size());
+        memcpy(out->values, V.data(), V.size() * sizeof(float));
+        out->key_count = uint32_t(T.size());
+    }
+
+    static bool parse_path(const std::string &s, pf_anim_path *p)
+    {
+        if (s == "translation") *p = PF_ANIM_TRANSLATION;
+        else if (s == "rotation") *p = PF_ANIM_ROTATION;
+        else if (s == "scale") *p = PF_ANIM_SCALE;
+        else if (s == "weights") *p = PF_ANIM_WEIGHTS;
+        else return false;
+        return true;
+    }
+
+    /* Channel ci of animation ai into clip c, or nothing when it moves
+     * nothing the scene shows. */
+    void channel(size_t ai, size_t ci, pf_anim_clip *c, std::vector<std::pair<int, int>> *seen)
+    {
+        const tinygltf::Animation &ga = m.animations[ai];
+        const tinygltf::AnimationChannel &ch = ga.channels[ci];
+        std::string where = fmt("animation %zu channel %zu", ai, ci);
+        if (ch.target_node < 0) {
+            warn(where + ": no target node (KHR_animation_pointer is not read): ignored");
+            return;
+        }
+        if (size_t(ch.target_node) >= m.nodes.size())
+            fail(PF_ERR_INDEX_RANGE,
+                 fmt("%s targets node %d, but the file has %zu", where.c_str(), ch.target_node, m.nodes.size()));
+        pf_anim_path path;
+        if (!parse_path(ch.target_path, &path)) {
+            if (ch.target_path == "pointer") {
+                warn(where + ": path 'pointer' (KHR_animation_pointer) is not read: ignored");
+                return;
+            }
+            fail(PF_ERR_PARSE, fmt("%s: target path '%.40s' (glTF 2.0 has translation, rotation, scale and weights)",
+                                   where.c_str(), ch.target_path.c_str()));
+        }
+        const std::pair<int, int> target(ch.target_node, int(path));
+        for (const std::pair<int, int> &s : *seen)
+            if (s == target)
+                fail(PF_ERR_PARSE, fmt("%s: node %d's %s is animated twice in one animation (glTF 2.0 Sec. 3.11)",
+                                       where.c_str(), ch.target_node, ch.target_path.c_str()));
+        seen->push_back(target);
+        if (ch.sampler < 0 || size_t(ch.sampler) >= ga.samplers.size())
+            fail(PF_ERR_INDEX_RANGE, fmt("%s uses sampler %d, but animation %zu has %zu", where.c_str(), ch.sampler, ai,
+                                         ga.samplers.size()));
+        const pf_anim_node &node = a.nodes[ch.target_node];
+        if (path != PF_ANIM_WEIGHTS && !m.nodes[size_t(ch.target_node)].matrix.empty())
+            fail(PF_ERR_PARSE, fmt("%s animates node %d's %s, but node %d has a matrix (glTF 2.0 Sec. 3.11: an "
+                                   "animated node has translation, rotation and scale)",
+                                   where.c_str(), ch.target_node, ch.target_path.c_str(), ch.target_node));
+        if (!node.in_scene) return; /* moves nothing the scene shows */
+        if (path == PF_ANIM_WEIGHTS && node.weight_count == 0)
+            fail(PF_ERR_PARSE, fmt("%s animates node %d's morph weights, but its mesh has no morph targets",
+                                   where.c_str(), ch.target_node));
+        const uint32_t dim = path == PF_ANIM_WEIGHTS ? node.weight_count : path == PF_ANIM_ROTATION ? 4u : 3u;
+        const int use = int(path) << 16 | int(dim);
+        int &used = sampler_use[size_t(ch.sampler)];
+        if (used == 0) {
+            sampler(ga.samplers[size_t(ch.sampler)], path, dim, fmt("animation %zu sampler %d", ai, ch.sampler),
+                    &c->samplers[ch.sampler]);
+            used = use;
+        } else if (used != use) {
+            fail(PF_ERR_ACCESSOR, fmt("%s: sampler %d also animates a %s of %d numbers", where.c_str(), ch.sampler,
+                                      (used >> 16) == PF_ANIM_WEIGHTS ? "weights" : "transform", used & 0xffff));
+        }
+        pf_anim_channel &out = c->channels[c->channel_count++];
+        out.sampler = uint32_t(ch.sampler);
+        out.node = uint32_t(ch.target_node);
+        out.path = path;
+        (path == PF_ANIM_WEIGHTS ? weights_animated : trs_animated)[size_t(ch.target_node)] = 1;
+    }
+
+    void animations()
+    {
+        trs_animated.assign(m.nodes.size(), 0);
+        weights_animated.assign(m.nodes.size(), 0);
+        const size_t n = m.animations.size();
+        take(uint64_t(n) * sizeof(pf_anim_clip), "the animations");
+        a.clips = alloc<pf_anim_clip>(n);
+        a.clip_count = uint32_t(n);
+        for (size_t ai = 0; ai < n; ai++) {
+            const tinygltf::Animation &ga = m.animations[ai];
+            pf_anim_clip &c = a.clips[ai];
+            snprintf(c.name, sizeof c.name, "%s", ga.name.c_str());
+            take(uint64_t(ga.samplers.size()) * sizeof(pf_anim_sampler) +
+                     uint64_t(ga.channels.size()) * sizeof(pf_anim_channel),
+                 fmt("animation %zu", ai));
+            c.samplers = alloc<pf_anim_sampler>(ga.samplers.size());
+            c.sampler_count = uint32_t(ga.samplers.size());
+            c.channels = alloc<pf_anim_channel>(ga.channels.size());
+            sampler_use.assign(ga.samplers.size(), 0);
+            std::vector<std::pair<int, int>> seen;
+            for (size_t ci = 0; ci < ga.channels.size(); ci++) channel(ai, ci, &c, &seen);
+            c.start = c.end = 0.0f;
+            bool any = false;
+            for (uint32_t s = 0; s < c.sampler_count; s++) {
+                const pf_anim_sampler &sm = c.samplers[s];
+                if (!sm.key_count) continue;
+                const float t0 = sm.times[0], t1 = sm.times[sm.key_count - 1];
+                c.start = !any || t0 < c.start ? t0 : c.start;
+                c.end = !any || t1 > c.end ? t1 : c.end;
+                any = true;
+            }
+        }
+    }
+
+    /* ------------------------------------------------ the whole set-up, before the primitives */
+
+    void setup(const std::vector<int> &order, const std::vector<int> &parent, const std::vector<pf_anim_node> &rest)
+    {
+        nodes(order, parent, rest);
+        for (size_t si = 0; si < m.skins.size(); si++)
+            if (a.skins[si].used) skin(int(si));
+        animations();
+        /* what an animation can move: a node whose TRS or an ancestor's is animated */
+        moves.assign(m.nodes.size(), 0);
+        for (uint32_t o = 0; o < a.order_count; o++) {
+            const uint32_t ni = a.order[o];
+            const int p = a.nodes[ni].parent;
+            moves[ni] = trs_animated[ni] || (p >= 0 && moves[size_t(p)]);
+        }
+        skin_moves.assign(m.skins.size(), 0);
+        for (size_t si = 0; si < m.skins.size(); si++)
+            for (uint32_t j = 0; j < a.skins[si].joint_count && !skin_moves[si]; j++)
+                skin_moves[si] = moves[a.skins[si].joints[j]];
+        pf_anim_evaluate(&a, PF_ANIM_STATIC, 0.0); /* the static pose the primitives are flattened in */
+    }
+
+    /* ------------------------------------------------ primitives */
+
+    /* JOINTS_n / WEIGHTS_n of a skinned primitive (glTF 2.0 Sec. 3.7.3.3). */
+    void skin_attributes(const tinygltf::Primitive &p, size_t nv, const std::string &what, pf_anim_prim *ap)
+    {
+        const pf_anim_skin &sk = a.skins[ap->skin];
+        uint32_t sets = 0;
+        while (sets < PF_ANIM_MAX_SETS && p.attributes.count(fmt("JOINTS_%u", sets))) sets++;
+        if (sets == PF_ANIM_MAX_SETS && p.attributes.count(fmt("JOINTS_%u", sets)))
+            fail(PF_ERR_UNSUPPORTED, what + fmt(": more than %u JOINTS_n sets", PF_ANIM_MAX_SETS));
+        if (sets == 0)
+            fail(PF_ERR_ACCESSOR, what + fmt(": node %u uses skin %d, but the primitive has no JOINTS_0 (glTF 2.0 "
+                                              "Sec. 3.7.3.3: a skinned primitive has JOINTS_0 and WEIGHTS_0)",
+                                              ap->node, ap->skin));
+        if (p.attributes.count(fmt("WEIGHTS_%u", sets)))
+            fail(PF_ERR_ACCESSOR, what + fmt(": WEIGHTS_%u without JOINTS_%u", sets, sets));
+        const size_t per = size_t(4) * sets;
+        take(uint64_t(nv) * per * 6, what + " joints and weights");
+        ap->joint_sets = sets;
+        ap->joint = alloc<uint16_t>(nv * per);
+        ap->weight = alloc<float>(nv * per);
+        for (uint32_t s = 0; s < sets; s++) {
+            auto wt = p.attributes.find(fmt("WEIGHTS_%u", s));
+            if (wt == p.attributes.end()) fail(PF_ERR_ACCESSOR, what + fmt(": JOINTS_%u without WEIGHTS_%u", s, s));
+            std::vector<float> J = read_floats(m, p.attributes.at(fmt("JOINTS_%u", s)), 4, kJointIndex,
+                                               implicit_limit, what + fmt(" JOINTS_%u", s));
+            std::vector<float> W = read_floats(m, wt->second, 4, kFloatOrUnorm, implicit_limit,
+                                               what + fmt(" WEIGHTS_%u", s));
+            if (J.size() != nv * 4 || W.size() != nv * 4)
+                fail(PF_ERR_ACCESSOR, what + fmt(": JOINTS_%u or WEIGHTS_%u count differs from POSITION count", s, s));
+            for (size_t v = 0; v < nv; v++)
+                for (size_t k = 0; k < 4; k++) {
+                    const float j = J[v * 4 + k], w = W[v * 4 + k];
+                    if (!(j < float(sk.joint_count)))
+                        fail(PF_ERR_INDEX_RANGE, what + fmt(": JOINTS_%u of vertex %zu names joint %g, but skin %d "
+                                                            "has %u joints",
+                                                            s, v, double(j), ap->skin, sk.joint_count));
+                    if (!std::isfinite(w))
+                        fail(PF_ERR_NONFINITE, what + fmt(": WEIGHTS_%u of vertex %zu is not finite", s, v));
+                    ap->joint[v * per + s * 4 + k] = uint16_t(j);
+                    ap->weight[v * per + s * 4 + k] = w;
+                }
+        }
+    }
+
+    /* POSITION and NORMAL deltas of the morph targets (TANGENT is not read). */
+    void targets(const tinygltf::Primitive &p, size_t nv, const std::string &what, pf_anim_prim *ap)
+    {
+        bool any_pos = false, any_nrm = false;
+        for (const std::map<std::string, int> &tg : p.targets) {
+            any_pos |= tg.count("POSITION") != 0;
+            any_nrm |= !ap->flat && tg.count("NORMAL") != 0;
+        }
+        take(uint64_t(nv) * ap->target_count * 12 * (uint64_t(any_pos) + uint64_t(any_nrm)),
+             what + " morph targets");
+        if (any_pos) ap->target_pos = alloc<pf_vec3>(nv * ap->target_count);
+        if (any_nrm) ap->target_nrm = alloc<pf_vec3>(nv * ap->target_count);
+        for (uint32_t k = 0; k < ap->target_count; k++)
+            for (const auto &attr : p.targets[k]) {
+                pf_vec3 *dst = attr.first == "POSITION" ? ap->target_pos
+                               : attr.first == "NORMAL" ? ap->target_nrm
+                                                        : nullptr;
+                if (!dst) continue;
+                std::string w = what + fmt(" target %u %s", k, attr.first.c_str());
+                std::vector<float> D = read_floats(m, attr.second, 3, kFloat, implicit_limit, w);
+                if (D.size() != nv * 3) fail(PF_ERR_ACCESSOR, w + ": count differs from POSITION count");
+                for (size_t v = 0; v < nv; v++) {
+                    const pf_vec3 d = pf_v3(D[3 * v], D[3 * v + 1], D[3 * v + 2]);
+                    if (!pf_v3_is_finite(d)) fail(PF_ERR_NONFINITE, w + fmt(" %zu is not finite", v));
+                    dst[size_t(k) * nv + v] = d;
+                }
+            }
+    }
+
+    /* What deforms the primitive (its node's skin, its morph targets),
+     * whether an animation can move it, and its own data when either needs
+     * them. Returns whether it is deformed (posed by pf_anim_prim_deform). */
+    bool prepare(const tinygltf::Primitive &p, int node, const std::vector<float> &P, const std::vector<float> &N,
+                 const std::string &what, pf_anim_prim *ap)
+    {
+        const size_t nv = P.size() / 3;
+        const tinygltf::Node &nd = m.nodes[size_t(node)];
+        ap->target_count = a.nodes[node].weight_count; /* = p.targets.size() (mesh_targets) */
+        ap->skin = nd.skin >= 0 ? nd.skin : -1;
+        ap->flat = N.empty();
+        const bool deformed = ap->skin >= 0 || ap->target_count > 0;
+        ap->dynamic = (ap->target_count && weights_animated[size_t(node)]) ||
+                      (ap->skin >= 0 ? skin_moves[size_t(ap->skin)] : moves[size_t(node)]);
+        if (!deformed && !(ap->dynamic && keep)) return false;
+        take(uint64_t(nv) * (ap->flat ? 12 : 24), what + " (kept for posing)");
+        ap->local_count = uint32_t(nv);
+        ap->local_pos = alloc<pf_vec3>(nv);
+        if (nv) memcpy(ap->local_pos, P.data(), nv * sizeof(pf_vec3));
+        if (!ap->flat) {
+            ap->local_nrm = alloc<pf_vec3>(nv);
+            if (nv) memcpy(ap->local_nrm, N.data(), nv * sizeof(pf_vec3));
+        }
+        if (ap->skin >= 0) skin_attributes(p, nv, what, ap);
+        if (ap->target_count) targets(p, nv, what, ap);
+        return deformed;
+    }
+
+    /* The primitive flattened: kept (its place, and its data when dynamic)
+     * or let go. */
+    void finish(pf_anim_prim *ap, std::vector<uint32_t> *src)
+    {
+        if (!keep) {
+            free_prim(ap);
+            return;
+        }
+        if (!ap->dynamic) {
+            free_prim(ap);
+            ap->local_count = 0;
+            ap->target_count = ap->joint_sets = 0;
+        } else if (ap->flat) {
+            take(uint64_t(src->size()) * 4, "a flat primitive's corners");
+            ap->src = alloc<uint32_t>(src->size());
+            if (!src->empty()) /* empty when every triangle was dropped (found by fuzz_gltf) */
+                memcpy(ap->src, src->data(), src->size() * sizeof(uint32_t));
+        }
+        prims.push_back(*ap);
+        memset(ap, 0, sizeof *ap); /* owned by `prims` now */
+    }
+
+    /* Hands the pf_anim to the caller (keep) or frees it. */
+    void release(pf_anim *out)
+    {
+        if (!keep || a.clip_count == 0) return; /* no animation: nothing to pose, nothing kept */
+        uint32_t max_local = 0, dynamic = 0;
+        for (const pf_anim_prim &p : prims) {
+            dynamic += p.dynamic != 0;
+            if (p.dynamic && p.local_count > max_local) max_local = p.local_count;
+        }
+        take(uint64_t(prims.size()) * sizeof(pf_anim_prim) + uint64_t(max_local) * 24, "posing's scratch");
+        a.scratch_pos = alloc<pf_vec3>(max_local);
+        a.scratch_nrm = alloc<pf_vec3>(max_local);
+        a.prims = alloc<pf_anim_prim>(prims.size());
+        if (!prims.empty()) memcpy(a.prims, prims.data(), prims.size() * sizeof(pf_anim_prim));
+        a.prim_count = uint32_t(prims.size());
+        prims.clear();
+        a.dynamic_count = dynamic;
+        a.max_local = max_local;
+        a.pose_clip = PF_ANIM_STATIC;
+        a.pose_time = 0.0;
+        *out = a;
+        memset(&a, 0, sizeof a);
+    }
+};
 
 /* ---------------------------------------------------------------- builder */
 
@@ -612,6 +1169,12 @@ struct Builder {
     int default_material = -1; /* index of the glTF default material, made on demand */
     size_t skipped_prims = 0;
     const pf_budget *budget = nullptr; /* triangles are checked against it as they are added */
+    AnimReader *anim = nullptr;        /* skins, morph targets, what posing keeps */
+    /* the walk (walk_nodes): the scene's nodes in visiting order, each one's
+     * parent (-1: a root), static transform and world matrix */
+    std::vector<int> order{}, parent{};
+    std::vector<pf_anim_node> rest{};
+    std::vector<pf_mat4> world{};
 
     void warn(const std::string &w)
     {
@@ -630,7 +1193,8 @@ struct Builder {
         return uint32_t(mat);
     }
 
-    void add_primitive(const tinygltf::Primitive &p, const pf_mat4 &world, int mesh_index, size_t prim_index)
+    void add_primitive(const tinygltf::Primitive &p, const pf_mat4 &world, int mesh_index, size_t prim_index,
+                       int node_index)
     {
         std::string what = fmt("mesh %d primitive %zu", mesh_index, prim_index);
         int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
@@ -650,17 +1214,17 @@ struct Builder {
             return;
         }
         uint32_t material = material_for(p.material);
-        std::vector<float> P = read_floats(m, pit->second, 3, false, implicit_limit, what + " POSITION");
+        std::vector<float> P = read_floats(m, pit->second, 3, kFloat, implicit_limit, what + " POSITION");
         size_t nv = P.size() / 3;
         std::vector<float> N, T;
         auto nit = p.attributes.find("NORMAL");
         if (nit != p.attributes.end()) {
-            N = read_floats(m, nit->second, 3, false, implicit_limit, what + " NORMAL");
+            N = read_floats(m, nit->second, 3, kFloat, implicit_limit, what + " NORMAL");
             if (N.size() != P.size()) fail(PF_ERR_ACCESSOR, what + ": NORMAL count differs from POSITION count");
         }
         auto tit = p.attributes.find("TEXCOORD_0");
         if (tit != p.attributes.end()) {
-            T = read_floats(m, tit->second, 2, true, implicit_limit, what + " TEXCOORD_0");
+            T = read_floats(m, tit->second, 2, kFloatOrNormalized, implicit_limit, what + " TEXCOORD_0");
             if (T.size() / 2 != nv) fail(PF_ERR_ACCESSOR, what + ": TEXCOORD_0 count differs from POSITION count");
         }
         std::vector<uint32_t> I;
@@ -705,37 +1269,60 @@ struct Builder {
                 fail(e.code, e.message);
         }
 
-        bool mirror = pf_mat4_det3(&world) < 0.0;
-        /* World-space positions of this primitive. */
-        std::vector<pf_vec3> WP(nv);
-        for (size_t v = 0; v < nv; v++) {
-            pf_vec3 lp = pf_v3(P[3 * v], P[3 * v + 1], P[3 * v + 2]);
-            if (!pf_v3_is_finite(lp))
-                fail(PF_ERR_NONFINITE, what + fmt(": POSITION %zu is not finite", v));
-            WP[v] = pf_mat4_point(&world, lp);
-            if (!pf_v3_is_finite(WP[v]) || fabsf(WP[v].x) > PF_SCENE_MAX_COORD ||
-                fabsf(WP[v].y) > PF_SCENE_MAX_COORD || fabsf(WP[v].z) > PF_SCENE_MAX_COORD)
-                fail(PF_ERR_NONFINITE, what + fmt(": POSITION %zu lands at (%g, %g, %g), beyond the supported "
-                                                  "range |x| <= %g",
-                                                  v, double(WP[v].x), double(WP[v].y), double(WP[v].z),
-                                                  double(PF_SCENE_MAX_COORD)));
-        }
         for (size_t v = 0; v < N.size() / 3; v++)
             if (!std::isfinite(N[3 * v]) || !std::isfinite(N[3 * v + 1]) || !std::isfinite(N[3 * v + 2]))
                 fail(PF_ERR_NONFINITE, what + fmt(": NORMAL %zu is not finite", v));
         for (size_t v = 0; v < T.size(); v++)
             if (!std::isfinite(T[v])) fail(PF_ERR_NONFINITE, what + fmt(": TEXCOORD_0 %zu is not finite", v / 2));
+        for (size_t v = 0; v < nv; v++)
+            if (!pf_v3_is_finite(pf_v3(P[3 * v], P[3 * v + 1], P[3 * v + 2])))
+                fail(PF_ERR_NONFINITE, what + fmt(": POSITION %zu is not finite", v));
 
+        /* Skin and morph targets (pf_anim.h): a deformed primitive is
+         * flattened in the static pose by the code that poses it later. */
+        pf_anim_prim ap;
+        memset(&ap, 0, sizeof ap);
+        ap.node = uint32_t(node_index), ap.mesh = uint32_t(mesh_index), ap.prim = uint32_t(prim_index);
+        struct PrimGuard {
+            pf_anim_prim *p;
+            ~PrimGuard() { AnimReader::free_prim(p); }
+        } prim_guard{&ap};
+        const bool deformed = anim->prepare(p, node_index, P, N, what, &ap);
+        const bool mirror = ap.skin < 0 && pf_mat4_det3(&world) < 0.0; /* skinned: the file's winding */
         const bool flat = N.empty();
+        /* World-space positions (and, deformed, normals) of this primitive. */
+        std::vector<pf_vec3> WP(nv), WN(deformed && !flat ? nv : 0);
+        uint32_t bad = UINT32_MAX;
+        if (deformed) {
+            bad = pf_anim_prim_deform(&anim->a, &ap, WP.data(), flat ? nullptr : WN.data());
+        } else {
+            for (size_t v = 0; v < nv && bad == UINT32_MAX; v++) {
+                WP[v] = pf_mat4_point(&world, pf_v3(P[3 * v], P[3 * v + 1], P[3 * v + 2]));
+                if (!pf_scene_coord_ok(WP[v])) bad = uint32_t(v);
+            }
+        }
+        if (bad != UINT32_MAX)
+            fail(PF_ERR_NONFINITE, what + fmt(": POSITION %u lands at (%g, %g, %g), beyond the supported range |x| <= %g",
+                                              bad, double(WP[bad].x), double(WP[bad].y), double(WP[bad].z),
+                                              double(PF_SCENE_MAX_COORD)));
+
         /* Vertex ids of this primitive in the scene arrays (welded case). */
         uint32_t base = uint32_t(pos.size());
+        const size_t first_tri = idx.size() / 3;
+        std::vector<uint32_t> src; /* flat and kept for posing: the file vertex of each corner */
+        const bool want_src = flat && anim->keep && ap.dynamic;
         if (!flat) {
             for (size_t v = 0; v < nv; v++) {
                 pos.push_back(WP[v]);
-                pf_vec3 n = pf_mat4_normal(&world, pf_v3(N[3 * v], N[3 * v + 1], N[3 * v + 2]));
-                n = pf_v3_normalize_safe(n);
-                if (mirror) n = pf_v3_scale(n, -1.0f); /* cofactor = det * M^-T */
-                nrm.push_back(n);                      /* zero normals fixed below */
+                pf_vec3 n;
+                if (deformed) {
+                    n = WN[v];
+                } else {
+                    n = pf_mat4_normal(&world, pf_v3(N[3 * v], N[3 * v + 1], N[3 * v + 2]));
+                    n = pf_anim_unit(n); /* posing's rule (pf_anim.h): zero where not finite */
+                    if (mirror) n = pf_v3_scale(n, -1.0f); /* cofactor = det * M^-T */
+                }
+                nrm.push_back(n); /* zero normals fixed below */
                 uv.push_back(T.empty() ? pf_vec2{0, 0} : pf_vec2{T[2 * v], T[2 * v + 1]});
             }
         }
@@ -747,14 +1334,18 @@ struct Builder {
                 dropped++;
                 continue;
             }
-            fn = pf_v3_normalize_safe(fn);
+            fn = pf_anim_unit(fn);
             if (flat) {
+                /* a face normal too small to normalise (only without DAZ,
+                 * which drops such a triangle above): (0, 1, 0), as posing */
+                const pf_vec3 face = fn.x == 0.0f && fn.y == 0.0f && fn.z == 0.0f ? pf_v3(0, 1, 0) : fn;
                 const uint32_t abc[3] = {a, b, c};
                 for (uint32_t k : abc) {
                     idx.push_back(uint32_t(pos.size()));
                     pos.push_back(WP[k]);
-                    nrm.push_back(fn);
+                    nrm.push_back(face);
                     uv.push_back(T.empty() ? pf_vec2{0, 0} : pf_vec2{T[2 * k], T[2 * k + 1]});
+                    if (want_src) src.push_back(k);
                 }
             } else {
                 const uint32_t abc[3] = {a, b, c};
@@ -770,6 +1361,13 @@ struct Builder {
         if (!flat)
             for (size_t v = base; v < nrm.size(); v++)
                 if (nrm[v].x == 0.0f && nrm[v].y == 0.0f && nrm[v].z == 0.0f) nrm[v] = pf_v3(0, 1, 0);
+        /* where it lies in the scene, for posing */
+        ap.vertex_first = base;
+        ap.vertex_count = uint32_t(pos.size() - base);
+        ap.tri_first = uint32_t(first_tri);
+        ap.tri_count = uint32_t(idx.size() / 3 - first_tri);
+        ap.mirror = mirror;
+        anim->finish(&ap, &src);
     }
 
     void add_camera(int cam_index, const pf_mat4 &world, int node_index)
@@ -858,19 +1456,30 @@ struct Builder {
         lights.push_back(out);
     }
 
-    void walk(const std::vector<int> &roots)
+    /* Pass 1: the node forest from the scene's roots, depth first in file
+     * order (explicit stack, cycle and depth checks): order, parents,
+     * static transforms and world matrices. */
+    void walk_nodes(const std::vector<int> &roots)
     {
         struct Item {
             int node;
             int depth;
-            pf_mat4 parent;
+            int parent;
         };
         std::vector<Item> stack;
         /* Roots are pushed in reverse so nodes are visited in file order. */
-        for (size_t i = roots.size(); i-- > 0;) stack.push_back({roots[i], 0, pf_mat4_identity()});
+        for (size_t i = roots.size(); i-- > 0;) stack.push_back({roots[i], 0, -1});
         std::vector<int> path_depth(m.nodes.size(), -1); /* depth at which a node is on the current path */
         std::vector<char> seen(m.nodes.size(), 0);       /* glTF nodes form disjoint trees */
         std::vector<int> path;                           /* nodes on the path, by depth */
+        parent.assign(m.nodes.size(), -1);
+        world.assign(m.nodes.size(), pf_mat4_identity());
+        rest.resize(m.nodes.size());
+        for (pf_anim_node &r : rest) {
+            memset(&r, 0, sizeof r);
+            r.matrix = pf_mat4_identity();
+            r.r[3] = 1.0, r.s[0] = r.s[1] = r.s[2] = 1.0;
+        }
         while (!stack.empty()) {
             Item it = stack.back();
             stack.pop_back();
@@ -893,18 +1502,32 @@ struct Builder {
             path.push_back(it.node);
 
             const tinygltf::Node &n = m.nodes[size_t(it.node)];
-            pf_mat4 local = node_local(n, it.node);
-            pf_mat4 world = pf_mat4_mul(&it.parent, &local);
+            pf_mat4 local = node_local(n, it.node, &rest[size_t(it.node)]);
+            const pf_mat4 up = it.parent >= 0 ? world[size_t(it.parent)] : pf_mat4_identity();
+            world[size_t(it.node)] = pf_mat4_mul(&up, &local);
+            parent[size_t(it.node)] = it.parent;
+            order.push_back(it.node);
+            for (size_t c = n.children.size(); c-- > 0;) stack.push_back({n.children[c], it.depth + 1, it.node});
+        }
+    }
+
+    /* Pass 2, in the walk's order: every node's mesh primitives, camera and
+     * light, flattened into world space. */
+    void add_nodes()
+    {
+        for (int node : order) {
+            const tinygltf::Node &n = m.nodes[size_t(node)];
+            const pf_mat4 &w = world[size_t(node)];
             if (n.mesh >= 0) {
                 if (size_t(n.mesh) >= m.meshes.size())
                     fail(PF_ERR_INDEX_RANGE,
-                         fmt("node %d uses mesh %d, but the file has %zu", it.node, n.mesh, m.meshes.size()));
+                         fmt("node %d uses mesh %d, but the file has %zu", node, n.mesh, m.meshes.size()));
                 const tinygltf::Mesh &mesh = m.meshes[size_t(n.mesh)];
-                for (size_t p = 0; p < mesh.primitives.size(); p++) add_primitive(mesh.primitives[p], world, n.mesh, p);
+                for (size_t p = 0; p < mesh.primitives.size(); p++)
+                    add_primitive(mesh.primitives[p], w, n.mesh, p, node);
             }
-            add_camera(n.camera, world, it.node);
-            add_light(n, world, it.node);
-            for (size_t c = n.children.size(); c-- > 0;) stack.push_back({n.children[c], it.depth + 1, world});
+            add_camera(n.camera, w, node);
+            add_light(n, w, node);
         }
     }
 };
@@ -1033,7 +1656,11 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
             if (!is_child[i]) roots.push_back(int(i));
     }
     b.budget = budget;
-    b.walk(roots);
+    AnimReader anim(m, b.implicit_limit, budget, opts.anim != nullptr, &b.warnings);
+    b.anim = &anim;
+    b.walk_nodes(roots);
+    anim.setup(b.order, b.parent, b.rest);
+    b.add_nodes();
     check_camera_ranges(b.cameras, b.pos);
     {
         pf_error e;
@@ -1042,6 +1669,19 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
                            fmt("the scene's %llu triangles", (unsigned long long)tris).c_str(), &e) != PF_OK)
             fail(e.code, e.message);
     }
+    /* what posing needs, for the caller (pf_gltf_options.anim) */
+    pf_anim kept;
+    memset(&kept, 0, sizeof kept);
+    kept.pose_clip = PF_ANIM_STATIC;
+    struct AnimGuard {
+        pf_anim *a;
+        bool keep;
+        ~AnimGuard()
+        {
+            if (!keep) pf_anim_free(a);
+        }
+    } anim_guard{&kept, false};
+    anim.release(&kept);
 
     /* Materials: the file's, plus the glTF default material if used. */
     size_t nmat = m.materials.size() + (b.default_material >= 0 ? 1 : 0);
@@ -1228,7 +1868,7 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
     }
     guard.keep = true;
     s.dropped_degenerate = b.dropped;
-    s.memory_bytes = pf_budget_mul(s.tri_count, PF_BUDGET_BYTES_PER_TRIANGLE) + texel_bytes;
+    s.memory_bytes = pf_budget_mul(s.tri_count, PF_BUDGET_BYTES_PER_TRIANGLE) + texel_bytes + kept.memory_bytes;
     if (b.dropped) b.warn(fmt("%u zero-area triangles dropped", b.dropped));
     snprintf(s.warnings, sizeof s.warnings, "%s", b.warnings.c_str());
     pf_error e;
@@ -1237,6 +1877,10 @@ void build_scene(pf_scene *out, const tinygltf::Model &m, const pf_gltf_options 
         fail(e.code, e.message);
     }
     *out = s;
+    if (opts.anim) {
+        *opts.anim = kept;
+        anim_guard.keep = true;
+    }
 }
 
 std::string first_line(const std::string &s)
@@ -1252,6 +1896,10 @@ pf_result load(pf_scene *out, const unsigned char *data, size_t size, const char
     pf_gltf_options opts;
     memset(&opts, 0, sizeof opts);
     if (opts_in) opts = *opts_in;
+    if (opts.anim) {
+        memset(opts.anim, 0, sizeof *opts.anim);
+        opts.anim->pose_clip = PF_ANIM_STATIC;
+    }
     const char *nm = name ? name : "(memory)";
     if (size > 0xffffffffu) return pf_error_set(err, PF_ERR_UNSUPPORTED, "%s: files over 4 GiB are not supported", nm);
     if (size == 0) return pf_error_set(err, PF_ERR_PARSE, "%s: the file is empty", nm);
@@ -1329,6 +1977,10 @@ extern "C" pf_result pf_gltf_load_memory(pf_scene *out, const void *data, size_t
 extern "C" pf_result pf_gltf_load(pf_scene *out, const char *path, const pf_gltf_options *opts, pf_error *err)
 {
     memset(out, 0, sizeof *out);
+    if (opts && opts->anim) {
+        memset(opts->anim, 0, sizeof *opts->anim);
+        opts->anim->pose_clip = PF_ANIM_STATIC;
+    }
     struct stat st;
     if (stat(path, &st) != 0) return pf_error_set(err, PF_ERR_IO, "%s: no such file", path);
     if (!S_ISREG(st.st_mode)) return pf_error_set(err, PF_ERR_IO, "%s: not a regular file", path);

@@ -13,7 +13,16 @@
  *   load), alphaMode/alphaCutoff, emissiveFactor (x emissive_strength),
  *   doubleSided; primitives without a material get the glTF default material;
  * - perspective cameras (orthographic ones are skipped with a warning);
- * - KHR_lights_punctual point, spot and directional lights.
+ * - KHR_lights_punctual point, spot and directional lights;
+ * - skins (JOINTS_n / WEIGHTS_n, inverseBindMatrices) and morph targets
+ *   (POSITION and NORMAL deltas, node and mesh weights): skinned and morphed
+ *   primitives are flattened in the file's static pose (joints at their
+ *   node transforms, the default weights), as glTF 2.0 Sec. 3.7.3 and
+ *   3.7.2.2 define them; a skinned mesh node's own transform is ignored;
+ * - animations (glTF 2.0 Sec. 3.11), checked here and kept, with the rest
+ *   pose of everything they can move, in pf_gltf_options.anim, so that
+ *   pf_anim_pose can pose the flattened scene at a time (pf_anim.h). The
+ *   scene as loaded is the static pose: no animation applied.
  *
  * Every index, offset and count in the file is checked before use: a bad file
  * gives a pf_error naming the file, the object and what is wrong, never a
@@ -30,10 +39,15 @@
 extern "C" {
 #endif
 
+struct pf_anim;
+
 typedef struct pf_gltf_options {
     /* Zero-initialised means defaults. */
     int ignore_textures; /* skip images entirely (albedo = factor) */
     uint64_t max_memory; /* memory budget in bytes (pf_budget.h); 0: the default */
+    struct pf_anim *anim; /* not NULL: filled with what posing the scene at a time needs (pf_anim.h),
+                             freed by pf_anim_free; empty (zero animations) for a file without
+                             animations, and on failure */
 } pf_gltf_options;
 
 /* Loads `path` (.gltf or .glb, decided by content) into *out (zeroed first).

@@ -6,7 +6,11 @@
  * (pf_gltf.h): any input gives PF_OK or a pf_error, never a crash, a leak,
  * an out-of-bounds access or undefined behaviour; a failed load leaves the
  * scene empty and says why; a successful one passes pf_scene_validate,
- * since the renderer trusts loaded scenes.
+ * since the renderer trusts loaded scenes. The animations are kept
+ * (pf_gltf_options.anim) and every animation posed at a few times
+ * (check_poses): each pose succeeds with a valid scene of the same counts
+ * and triangles, the same bits when repeated, or fails leaving the scene
+ * as it was, and the static pose gives back the loaded bytes.
  *
  * And: the loader never opens a file outside its base folder. At start-up
  * the target makes
@@ -48,6 +52,7 @@
 #include <string>
 #include <vector>
 
+#include "pf_anim.h"
 #include "pf_gltf.h"
 
 #ifndef SOFTGI_FUZZ_SEEDS
@@ -317,12 +322,63 @@ int LLVMFuzzerInitialize(int *, char ***)
     return 0;
 }
 
+/* The pose contract (pf_anim.h) on a loaded scene: every pose succeeds or
+ * fails with PF_ERR_NONFINITE leaving the scene as it was; a posed scene
+ * validates with the same counts and triangles; the static pose gives back
+ * the loaded bytes; the same time twice, the same bytes. */
+void check_poses(pf_scene *scene, pf_anim *anim)
+{
+    const size_t nv = scene->vertex_count, nt = scene->tri_count;
+    std::vector<pf_vec3> p0(scene->positions, scene->positions + nv), n0(scene->normals, scene->normals + nv);
+    std::vector<uint32_t> i0(scene->indices, scene->indices + 3 * nt);
+    const double end = pf_anim_end(anim, PF_ANIM_ALL);
+    const double times[] = {0.0, 0.37 * end, 0.5 * end, end, end + 1.0, 3.0};
+    std::vector<pf_anim_moved> moved(anim->prim_count + 1);
+    for (int32_t clip = PF_ANIM_ALL; clip < int32_t(anim->clip_count) && clip < 4; clip++)
+        for (double t : times) {
+            std::vector<pf_vec3> before(scene->positions, scene->positions + nv);
+            pf_error e = {};
+            pf_result r = pf_anim_pose(scene, moved.data(), nullptr, anim, clip, t, &e);
+            if (r != PF_OK) {
+                if (r != PF_ERR_NONFINITE || !e.message[0] ||
+                    memcmp(before.data(), scene->positions, nv * sizeof(pf_vec3))) {
+                    fprintf(stderr, "fuzz_gltf: a failed pose (%d '%s') changed the scene\n", (int)r, e.message);
+                    abort();
+                }
+                continue;
+            }
+            pf_error verr = {};
+            if (scene->vertex_count != nv || scene->tri_count != nt ||
+                memcmp(i0.data(), scene->indices, i0.size() * sizeof(uint32_t)) ||
+                pf_scene_validate(scene, &verr) != PF_OK) {
+                fprintf(stderr, "fuzz_gltf: clip %d at %g: the posed scene is broken: %s\n", clip, t, verr.message);
+                abort();
+            }
+            std::vector<pf_vec3> at(scene->positions, scene->positions + nv);
+            if (pf_anim_pose(scene, nullptr, nullptr, anim, clip, t, &e) != PF_OK ||
+                memcmp(at.data(), scene->positions, nv * sizeof(pf_vec3))) {
+                fprintf(stderr, "fuzz_gltf: clip %d at %g posed twice differs\n", clip, t);
+                abort();
+            }
+        }
+    pf_error e = {};
+    if (pf_anim_pose(scene, nullptr, nullptr, anim, PF_ANIM_STATIC, 0.0, &e) != PF_OK ||
+        memcmp(p0.data(), scene->positions, nv * sizeof(pf_vec3)) ||
+        memcmp(n0.data(), scene->normals, nv * sizeof(pf_vec3))) {
+        fprintf(stderr, "fuzz_gltf: the static pose differs from the loaded scene (%s)\n", e.message);
+        abort();
+    }
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pf_scene scene;
+    pf_anim anim;
     pf_error err = {};
+    pf_gltf_options opts = {};
+    opts.anim = &anim;
     g_watch = 1;
-    pf_result r = pf_gltf_load_memory(&scene, data, size, g_base.c_str(), "fuzz", nullptr, &err);
+    pf_result r = pf_gltf_load_memory(&scene, data, size, g_base.c_str(), "fuzz", &opts, &err);
     g_watch = 0;
     if (getenv("FUZZ_GLTF_VERBOSE"))
         fprintf(stderr, "fuzz_gltf: %s (%u triangles, %u images)\n", r == PF_OK ? "PF_OK" : err.message,
@@ -334,11 +390,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             fprintf(stderr, "fuzz_gltf: loaded scene fails pf_scene_validate: %s\n", verr.message);
             abort();
         }
+        check_poses(&scene, &anim);
     } else if (scene.tri_count != 0 || scene.positions != nullptr || scene.materials != nullptr ||
-               err.message[0] == '\0') {
+               err.message[0] == '\0' || anim.clip_count != 0 || anim.nodes != nullptr || anim.prims != nullptr) {
         fprintf(stderr, "fuzz_gltf: failed load (%d) left a non-empty scene or no message\n", (int)r);
         abort(); /* failure must leave *out empty and say why */
     }
+    pf_anim_free(&anim);
     pf_scene_free(&scene);
     return 0;
 }

@@ -17,6 +17,8 @@
  *     base light, or fails with a message; what evaluates is finite, its
  *     intensity x colour in [0, PF_SEQUENCE_MAX_EMISSION], directions unit,
  *     spot cones ordered within 90 degrees;
+ *   - "animation": a name or an index, 0 <= start <= end <= the limit,
+ *     frame times exactly start and end at the ends and non-decreasing;
  *   - pf_sequence_track_eval (a binary search) equals a linear walk over the
  *     keys, bit for bit;
  *   - "emitters": at most PF_SEQUENCE_MAX_EMITTERS, each accepted again by
@@ -213,6 +215,24 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (s.lights_replace && s.light_count == 0) CHECK(s.emitter_count > 0);
     if (s.emitter_count) check_emitters(&s);
     for (uint32_t i = 0; i < s.track_count && s.width; i++) CHECK(s.track[i][0] < s.width && s.track[i][1] < s.height);
+    /* "animation": a name xor an index (or neither), times within the limit,
+     * frame times from start (frame 0) to end (the last frame), monotonic */
+    if (s.anim_set) {
+        CHECK(!(s.anim_name[0] && s.anim_index >= 0) && s.anim_index >= -1 && s.anim_index <= 65535);
+        for (const char *p = s.anim_name; *p; p++) CHECK((unsigned char)*p >= 0x20 && *p != 0x7f);
+        const double t0 = s.anim_time_set ? s.anim_start : 0.0, t1 = s.anim_time_set ? s.anim_end : 1.0;
+        CHECK(t0 >= 0.0 && t0 <= t1 && t1 <= PF_SEQUENCE_MAX_TIME);
+        CHECK(pf_sequence_time_at(&s, 0, t0, t1) == t0);
+        CHECK(s.frames == 1 || pf_sequence_time_at(&s, s.frames - 1, t0, t1) == t1);
+        double prev = t0;
+        for (uint32_t f = 1; f < s.frames && f < 64; f++) {
+            double t = pf_sequence_time_at(&s, f, t0, t1);
+            CHECK(t >= prev - 1e-12 * (t1 + 1.0) && t >= t0 && t <= t1); /* monotonic up to rounding */
+            prev = t;
+        }
+    } else {
+        CHECK(!s.anim_name[0] && !s.anim_time_set);
+    }
 
     /* scene lights of each type to animate */
     pf_light bases[3];

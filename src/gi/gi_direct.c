@@ -20,6 +20,12 @@
 #include "gi_light.h"
 #include "simd.h" /* SIMD_X86 */
 
+/* 1 if the box [lo, hi] lies inside [blo, bhi]. */
+static int gi__box_inside(pf_vec3 lo, pf_vec3 hi, pf_vec3 blo, pf_vec3 bhi)
+{
+    return lo.x >= blo.x && lo.y >= blo.y && lo.z >= blo.z && hi.x <= bhi.x && hi.y <= bhi.y && hi.z <= bhi.z;
+}
+
 void gi_stage_shadow_maps(gi_frame *f)
 {
     const pf_scene *s = f->scene;
@@ -27,6 +33,7 @@ void gi_stage_shadow_maps(gi_frame *f)
     memset(&desc, 0, sizeof desc);
     desc.size = f->shadow_size;
     pf_error err;
+    gi_motion_stats *ms = &f->motion_stats;
     if (!f->shadows_rendered || f->shadow_light_count != s->light_count || f->shadows.count != s->light_count) {
         /* first frame, or lights added/removed: all maps */
         if (f->shadows_rendered) {
@@ -37,12 +44,25 @@ void gi_stage_shadow_maps(gi_frame *f)
             }
         }
         rs_shadow_set_render(f->raster, &f->shadows, NULL);
+        f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     } else {
         /* only the lights that changed: their map's kind, matrices and range
-         * follow the light; static lights keep last frame's maps */
+         * follow the light; static lights keep last frame's maps, drawn
+         * again where moved geometry can change them (gi_motion.h): only
+         * the tiles its bounds project to, or, for a directional light
+         * whose box the posed scene left, a new box drawn whole */
+        const gi_moved_box *mb = &f->moved_shadows;
+        const int left = mb->pending && !gi__box_inside(s->bounds_min, s->bounds_max, f->shadow_bounds_lo,
+                                                         f->shadow_bounds_hi);
         for (uint32_t i = 0; i < s->light_count; i++) {
-            if (memcmp(&f->shadow_lights[i], &s->lights[i], sizeof(pf_light)) == 0) continue;
             rs_shadow_map *m = &f->shadows.maps[i];
+            int changed = memcmp(&f->shadow_lights[i], &s->lights[i], sizeof(pf_light)) != 0;
+            if (!changed && left && m->kind == RS_SHADOW_ORTHO) changed = 1, ms->shadow_faces_whole++;
+            if (!changed) {
+                if (mb->pending)
+                    ms->shadow_faces += rs_shadow_render_box(f->raster, m, 1, mb->lo, mb->hi, &ms->shadow_texels, NULL);
+                continue;
+            }
             if (rs_shadow_map_update(m, s, i, &desc, &err) != PF_OK) {
                 fprintf(stderr, "softgi: shadow map of light %u: %s\n", i, err.message);
                 memset(m, 0, sizeof *m);
@@ -50,7 +70,9 @@ void gi_stage_shadow_maps(gi_frame *f)
             }
             rs_shadow_render(f->raster, m, 1, NULL);
         }
+        if (left) f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     }
+    f->moved_shadows.pending = 0;
     if (!f->shadow_lights || f->shadow_light_count != s->light_count) { /* only when the lights were added or removed */
         pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
         if (!copy) {
@@ -67,7 +89,8 @@ void gi_stage_shadow_maps(gi_frame *f)
 void gi_stage_area_shadow_maps(gi_frame *f)
 {
     gi_area_maps *m = &f->area_maps;
-    if (m->count == 0 || m->rendered) return; /* emitters do not move: drawn once */
+    gi_moved_box *mb = &f->moved_area;
+    if (m->count == 0 || (m->rendered && !mb->pending)) return; /* drawn once, again where geometry moved */
     pf_vec3 pos[64], nrm[64];
     size_t map = (size_t)RS_PARA_DEFAULT_RES * RS_PARA_DEFAULT_RES;
     for (uint32_t k0 = 0; k0 < m->count; k0 += 64) {
@@ -76,9 +99,17 @@ void gi_stage_area_shadow_maps(gi_frame *f)
             pos[k] = m->frames[k0 + k].o;
             nrm[k] = m->frames[k0 + k].n;
         }
-        rs_para_render(m->atlas + k0 * map, m->para, f->jobs, pos, nrm, n, m->range, NULL);
+        if (!m->rendered) {
+            rs_para_render(m->atlas + k0 * map, m->para, f->jobs, pos, nrm, n, m->range, NULL);
+        } else {
+            rs_para_stats st;
+            rs_para_render_box(m->atlas + k0 * map, m->para, f->jobs, pos, nrm, NULL, n, m->range, mb->lo, mb->hi,
+                               &st);
+            f->motion_stats.area_maps += st.maps;
+        }
     }
     m->rendered = 1;
+    mb->pending = 0;
 }
 
 /* Irradiance at (pos, nrm) from the K emitter points, each visible per its

@@ -135,6 +135,7 @@ pf_result gi_frame_set_area_sampling(gi_frame *f, uint32_t strata, uint32_t poin
     if (points < 1 || points > GI_AREA_MAX_POINTS)
         return pf_error_set(err, PF_ERR_ARGUMENT, "area-light points %u: expected 1..%u", points, GI_AREA_MAX_POINTS);
     f->area_strata = strata;
+    f->area_points = points;
     return gi__area_maps_init(f, points, err);
 }
 
@@ -236,6 +237,8 @@ void gi_frame_free(gi_frame *f)
     gi__area_maps_free(&f->area_maps);
     gi_area_lights_free(&f->area);
     gi_aa_free(&f->aa);
+    free(f->motion.tri_moved);
+    free(f->motion.ranges);
     pf_arena_release(&f->mem); /* direct, final */
     memset(f, 0, sizeof *f);
 }
@@ -390,6 +393,7 @@ void gi_frame_render_raytraced(gi_frame *f)
 void gi_frame_render_raster(gi_frame *f)
 {
     memset(&f->times, 0, sizeof f->times);
+    memset(&f->motion_stats, 0, sizeof f->motion_stats);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     const uint32_t N = f->aa.samples;
     for (uint32_t k = 0; k < N; k++) {

@@ -65,6 +65,7 @@
 #include "gi_aa.h"
 #include "gi_area.h"
 #include "gi_indirect.h"
+#include "gi_motion.h"
 #include "rs_paraboloid.h"
 
 /* The frame's named buffers: every intermediate result a stage writes, so
@@ -211,6 +212,15 @@ typedef struct gi_frame {
     float *final;  /* RGB, width*height*3 */
     pf_stage_times times;
     gi_aa aa;      /* anti-aliasing: samples per pixel, the sample being rendered, TAA (gi_aa.h) */
+    /* moved geometry (gi_motion.h, gi_frame_geometry_moved): what the
+     * stages have yet to catch up with */
+    uint32_t area_points;        /* K as set (area_maps.count is 0 without emitters) */
+    gi_motion motion;            /* for the VPL method: cleared after each update */
+    gi_moved_box moved_shadows;  /* for gi_stage_shadow_maps */
+    gi_moved_box moved_area;     /* for gi_stage_area_shadow_maps */
+    gi_moved_box moved_maps;     /* for gi_stage_vpl_shadow_maps */
+    pf_vec3 shadow_bounds_lo, shadow_bounds_hi; /* the scene's bounds the directional maps were set up for */
+    gi_motion_stats motion_stats; /* what the last frame redid for moved geometry */
 } gi_frame;
 
 /* What a frame is set up with (sokol style: zero means the default). */
@@ -262,6 +272,15 @@ pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint
  * anti-aliasing sample (gi_aa.h); gi_camera_ray's bits for (0, 0). */
 pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y, float jx,
                         float jy);
+
+/* Tells the frame that the scene's geometry moved in place (pf_anim_pose's
+ * report: `count` entries, those with `moved` set). The caller has already
+ * brought Embree (pf_rt_update) and the rasterizer (rs_context_update) up to
+ * date; the frame updates its own paraboloid contexts and ISM points now
+ * and marks what its next stages must draw again (gi_motion.h says what and
+ * how). Fails on a range outside the scene (nothing changed then) or out of
+ * memory (the frame's copies are then part-updated: make the frame again). */
+pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err);
 
 /* Stages. */
 void gi_stage_gbuffer_raytrace(gi_frame *f);

@@ -219,12 +219,23 @@ static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vp
     gi__vpl_check(ind, out);
 }
 
+/* The method has seen the moves (gi_vpl_inputs.motion): the record starts
+ * afresh. */
+static void gi__motion_seen(gi_motion *m)
+{
+    if (m->moved) memset(m->tri_moved, 0, m->tri_count);
+    for (uint32_t k = 0; k < m->range_count; k++) m->ranges[k].moved = 0;
+    m->moved = 0;
+    m->emitters = 0;
+}
+
 void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     gi_vpl_inputs in = {f->scene,        f->rt,          f->jobs,   &f->camera, ind->frame, ind->opt.vpls,
-                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area};
+                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area, &f->motion};
     gi__vpl_update_into(ind, &in, &ind->vpls);
+    gi__motion_seen(&f->motion);
     ind->frame++;
     ind->have_set = 1;
     ind->maps_current = 0;
@@ -269,7 +280,7 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
                         ind->frame,      ind->opt.vpls,
                         ind->opt.bounces, gbuffer_ready ? &f->gbuf : NULL,
                         f->width,        f->height,
-                        &f->area};
+                        &f->area,        &f->motion};
     ind->pipe_in = in;
     ind->frame++;
     ind->pipe_ms = 0.0;
@@ -283,6 +294,7 @@ void gi_stage_vpl_update_end(gi_frame *f)
     if (!ind->pending) return;
     ind->pending = 0;
     ind->next_ready = 1; /* swapped in at the next frame's begin, so `vpls` stays this frame's set */
+    gi__motion_seen(&f->motion); /* the job has read it */
     pf_stage_add(&f->times, gi_stage_get(GI_STAGE_VPL_UPDATE)->name, ind->pipe_ms);
 }
 
@@ -303,14 +315,34 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         ind->atlas_slots = N;
         return;
     }
+    if (!ind->para) return;
+    /* Moved geometry (gi_motion.h): the maps of the VPLs that keep theirs
+     * are drawn again over the texels through which the moved bounds can be
+     * seen, before the new and moved VPLs' maps are drawn whole. */
+    uint32_t N = ind->vpls.count, todo = 0;
+    gi_moved_box *mb = &f->moved_maps;
+    if (mb->pending) {
+        for (uint32_t i = 0; i < N && i < ind->atlas_slots; i++) {
+            if (ind->vpls.v[i].moved && !ind->maps_current) continue; /* drawn whole below */
+            ind->map_pos[todo] = ind->vpls.v[i].pos; /* what its map was drawn for (not moved) */
+            ind->map_nrm[todo] = ind->vpls.v[i].nrm;
+            ind->map_slot[todo++] = i;
+        }
+        rs_para_stats st;
+        rs_para_render_box(ind->atlas, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
+                           ind->range, mb->lo, mb->hi, &st);
+        f->motion_stats.vpl_maps += (uint32_t)st.maps;
+        f->motion_stats.vpl_texels += st.texels_tested;
+        mb->pending = 0;
+        todo = 0;
+    }
     /* pipelined frame 1 shades with frame 0's set again: its maps are there */
-    if (!ind->para || ind->maps_current) return;
+    if (ind->maps_current) return;
     ind->maps_current = 1;
     /* The slots whose VPL is new or moved are listed (map_pos, map_nrm,
      * map_slot: the k-th map to render and its slot) and rendered straight
      * into their slots by one call, which spreads them over the workers
      * however scattered the slots are; unmoved VPLs keep last frame's maps. */
-    uint32_t N = ind->vpls.count, todo = 0;
     for (uint32_t i = 0; i < N; i++) {
         if (!ind->vpls.v[i].moved && i < ind->atlas_slots) continue;
         ind->map_pos[todo] = ind->vpls.v[i].pos;

@@ -26,6 +26,7 @@ struct gi_ism {
     gi_ism_options opt;
     uint32_t tri_count;
     gi__ism_tri *tris;
+    double *tri_area;   /* A_i */
     float *density;     /* expected points per frame of each triangle: P A_i / A */
     gi__ism_item *items;
     uint32_t item_count;
@@ -88,6 +89,58 @@ static pf_result gi__ism_make_items(gi_ism *m)
     return PF_OK;
 }
 
+/* Triangles [t0, t1) of the scene as (v0, e1, e2) and their areas. */
+static void gi__ism_triangles(gi_ism *m, const pf_scene *scene, uint32_t t0, uint32_t t1)
+{
+    for (uint32_t t = t0; t < t1; t++) {
+        const uint32_t *ix = scene->indices + 3 * (size_t)t;
+        pf_vec3 a = scene->positions[ix[0]], b = scene->positions[ix[1]], c = scene->positions[ix[2]];
+        pf_vec3 e1 = pf_v3_sub(b, a), e2 = pf_v3_sub(c, a);
+        gi__ism_tri *T = &m->tris[t];
+        T->v0[0] = a.x, T->v0[1] = a.y, T->v0[2] = a.z;
+        T->e1[0] = e1.x, T->e1[1] = e1.y, T->e1[2] = e1.z;
+        T->e2[0] = e2.x, T->e2[1] = e2.y, T->e2[2] = e2.z;
+        m->tri_area[t] = 0.5 * (double)pf_v3_length(pf_v3_cross(e1, e2));
+    }
+}
+
+/* The densities, each triangle's share of the P points (Barak 2013 Sec.
+ * 5.2: "calculate the triangle surface area, set the number of points to be
+ * generated"), and the splat job items, from the areas. The total is summed
+ * in triangle order in double, each share from the area rounded to float. */
+static pf_result gi__ism_densities(gi_ism *m, pf_error *err)
+{
+    double total = 0.0;
+    for (uint32_t t = 0; t < m->tri_count; t++) total += m->tri_area[t];
+    if (!(total > 0.0)) return pf_error_set(err, PF_ERR_ARGUMENT, "ISM: the scene's triangles have no area");
+    m->area = total;
+    for (uint32_t t = 0; t < m->tri_count; t++)
+        m->density[t] = (float)((double)m->opt.points * (double)(float)m->tri_area[t] / total);
+    free(m->items);
+    m->items = NULL;
+    m->item_count = 0; /* nothing splats until the items are made */
+    if (gi__ism_make_items(m) != PF_OK) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs");
+    return PF_OK;
+}
+
+pf_result gi_ism_update(gi_ism *m, const pf_scene *scene, const pf_anim_moved *moved, uint32_t count, pf_error *err)
+{
+    if (scene->tri_count != m->tri_count)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "ISM update: the scene has %u triangles, the ISMs were made for %u",
+                            scene->tri_count, m->tri_count);
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < count; k++) {
+        const pf_anim_moved *mv = &moved[k];
+        if (!mv->moved) continue;
+        if (mv->tri_first > m->tri_count || mv->tri_count > m->tri_count - mv->tri_first)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "ISM update: triangles %u..+%u outside the scene's %u",
+                                mv->tri_first, mv->tri_count, m->tri_count);
+        gi__ism_triangles(m, scene, mv->tri_first, mv->tri_first + mv->tri_count);
+        n++;
+    }
+    return n ? gi__ism_densities(m, err) : PF_OK;
+}
+
 pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_options *opt_in, uint32_t threads,
                         pf_error *err)
 {
@@ -117,11 +170,12 @@ pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_option
     const uint32_t R = o.resolution;
     m->tris = malloc(sizeof(gi__ism_tri) * scene->tri_count);
     m->density = malloc(sizeof(float) * scene->tri_count);
+    m->tri_area = malloc(sizeof(double) * scene->tri_count);
     m->template_map = malloc(rs_para_map_bytes(R));
     m->scratch = calloc(threads, sizeof(float *));
     m->row_lo = malloc(sizeof(int) * R);
     m->row_hi = malloc(sizeof(int) * R);
-    int ok = m->tris && m->density && m->template_map && m->scratch && m->row_lo && m->row_hi;
+    int ok = m->tris && m->density && m->tri_area && m->template_map && m->scratch && m->row_lo && m->row_hi;
     for (uint32_t w = 0; ok && w < threads; w++) {
         m->scratch[w] = calloc(gi_ism_pull_push_scratch_floats(R), sizeof(float));
         ok = m->scratch[w] != NULL;
@@ -130,32 +184,11 @@ pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_option
         gi_ism_destroy(m);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs");
     }
-    /* triangles as (v0, e1, e2) and their areas; the density is the share
-     * of the P points (Barak 2013 Sec. 5.2: "calculate the triangle surface
-     * area, set the number of points to be generated") */
-    double total = 0.0;
-    for (uint32_t t = 0; t < scene->tri_count; t++) {
-        const uint32_t *ix = scene->indices + 3 * (size_t)t;
-        pf_vec3 a = scene->positions[ix[0]], b = scene->positions[ix[1]], c = scene->positions[ix[2]];
-        pf_vec3 e1 = pf_v3_sub(b, a), e2 = pf_v3_sub(c, a);
-        gi__ism_tri *T = &m->tris[t];
-        T->v0[0] = a.x, T->v0[1] = a.y, T->v0[2] = a.z;
-        T->e1[0] = e1.x, T->e1[1] = e1.y, T->e1[2] = e1.z;
-        T->e2[0] = e2.x, T->e2[1] = e2.y, T->e2[2] = e2.z;
-        double area = 0.5 * (double)pf_v3_length(pf_v3_cross(e1, e2));
-        m->density[t] = (float)area; /* areas for now */
-        total += area;
-    }
-    if (!(total > 0.0)) {
+    gi__ism_triangles(m, scene, 0, scene->tri_count);
+    pf_result r = gi__ism_densities(m, err);
+    if (r != PF_OK) {
         gi_ism_destroy(m);
-        return pf_error_set(err, PF_ERR_ARGUMENT, "ISM: the scene's triangles have no area");
-    }
-    m->area = total;
-    for (uint32_t t = 0; t < scene->tri_count; t++)
-        m->density[t] = (float)((double)o.points * (double)m->density[t] / total);
-    if (gi__ism_make_items(m) != PF_OK) {
-        gi_ism_destroy(m);
-        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs");
+        return r;
     }
     for (uint32_t j = 0; j < R; j++) {
         m->row_lo[j] = (int)R, m->row_hi[j] = -1;
@@ -178,7 +211,7 @@ void gi_ism_destroy(gi_ism *m)
         for (uint32_t w = 0; w < m->workers; w++) free(m->scratch[w]);
     free(m->scratch);
     free(m->items);
-    free(m->tris), free(m->density), free(m->template_map), free(m->row_lo), free(m->row_hi);
+    free(m->tris), free(m->density), free(m->tri_area), free(m->template_map), free(m->row_lo), free(m->row_hi);
     free(m);
 }
 

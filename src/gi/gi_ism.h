@@ -78,6 +78,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pf_anim.h"
 #include "pf_jobs.h"
 #include "pf_result.h"
 #include "pf_scene.h"
@@ -138,6 +139,17 @@ typedef struct gi_ism gi_ism;
 pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_options *opt, uint32_t threads,
                         pf_error *err);
 void gi_ism_destroy(gi_ism *ism);
+/* The triangles the ranges reported moved (pf_anim_pose: the scene's
+ * positions changed in place) copied again with their areas, and every
+ * triangle's point count recomputed from the new total area: a deforming
+ * triangle gets points in proportion to its posed area, as Barak 2013 Sec. 5
+ * generates them per triangle per frame. Renders after it give the bytes of
+ * ISMs created afresh from the posed scene (tests/test_moving.c). Fails for
+ * a range outside the scene, a scene whose triangles lost all area or out
+ * of memory (the ISMs then keep the old triangles' points but must not be
+ * used: make them again). */
+pf_result gi_ism_update(gi_ism *ism, const pf_scene *scene, const pf_anim_moved *moved, uint32_t count,
+                        pf_error *err);
 uint32_t gi_ism_resolution(const gi_ism *ism);
 uint32_t gi_ism_points(const gi_ism *ism);
 float gi_ism_bias_scale(const gi_ism *ism);

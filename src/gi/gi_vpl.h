@@ -25,6 +25,7 @@
 #include "pf_timer.h"
 #include "rs_gbuffer.h"
 #include "gi_area.h"
+#include "gi_motion.h"
 
 /* The albedo a VPL takes from a textured surface (one rule for every
  * method): the base-colour texture blurred to mip level 4 (1/16 of its
@@ -68,6 +69,9 @@ typedef struct gi_vpl_inputs {
     const rs_gbuffer *gbuf;
     uint32_t width, height;
     const gi_area_lights *area; /* the scene's emissive triangles (count may be 0); never NULL */
+    /* What geometry moved since this method's last update (gi_motion.h);
+     * NULL: nothing did. Each method says in its file how it reacts. */
+    const gi_motion *motion;
 } gi_vpl_inputs;
 
 /* Method parameters from `--param KEY=VALUE` (repeatable). A method reads

@@ -320,6 +320,11 @@ rs_resolve_tri *rs_resolve_table_create(const pf_scene *scene)
     return table;
 }
 
+void rs_resolve_table_update(rs_resolve_tri *table, const pf_scene *scene, uint32_t first, uint32_t count)
+{
+    for (uint32_t t = first; t < first + count && t < scene->tri_count; t++) rs__tri_fill(&table[t], scene, t);
+}
+
 void rs_resolve_table_destroy(rs_resolve_tri *table) { free(table); }
 
 void rs_gbuffer_resolve(rs_gbuffer *g, const pf_scene *scene, const pf_camera *cam, pf_jobs *jobs)

@@ -75,6 +75,9 @@ typedef struct rs_resolve_tri {
 
 /* NULL when out of memory. */
 rs_resolve_tri *rs_resolve_table_create(const pf_scene *scene);
+/* Refills the entries of triangles [first, first + count) from the scene
+ * (their positions or normals changed). */
+void rs_resolve_table_update(rs_resolve_tri *table, const pf_scene *scene, uint32_t first, uint32_t count);
 void rs_resolve_table_destroy(rs_resolve_tri *table);
 
 /* The same as rs_gbuffer_resolve, bit for bit (tests/test_raster.c

@@ -565,6 +565,35 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     return PF_OK;
 }
 
+pf_result rs_para_context_update(rs_para_context *ctx, const pf_scene *scene, const pf_anim_moved *moved,
+                                 uint32_t count, pf_error *err)
+{
+    if (ctx->lod_groups)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "paraboloid maps: levels of detail cannot follow moving geometry; make the context again");
+    if (scene->tri_count != ctx->tri_count)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: the scene has %u triangles, the maps %u",
+                            scene->tri_count, ctx->tri_count);
+    for (uint32_t m = 0; m < count; m++) {
+        const pf_anim_moved *r = &moved[m];
+        if ((uint64_t)r->tri_first + r->tri_count > scene->tri_count)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: range %u (triangles %u+%u) is outside the scene",
+                                m, r->tri_first, r->tri_count);
+    }
+    for (uint32_t m = 0; m < count; m++) {
+        const pf_anim_moved *r = &moved[m];
+        if (!r->moved || r->tri_count == 0) continue;
+        for (uint32_t t = r->tri_first; t < r->tri_first + r->tri_count; t++) {
+            const uint32_t *i = &scene->indices[3 * t];
+            rs__fill_tri(ctx, t, scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]]);
+        }
+        for (uint32_t c = r->tri_first / ctx->cluster_size; c <= (r->tri_first + r->tri_count - 1) / ctx->cluster_size;
+             c++)
+            rs__cluster_sphere(ctx, &ctx->clusters[c]);
+    }
+    return PF_OK;
+}
+
 void rs_para_context_destroy(rs_para_context *ctx)
 {
     if (!ctx) return;
@@ -940,7 +969,7 @@ static void rs__sort_clusters(rs__scratch *sc, uint32_t n)
 /* Draws one cluster: front end, then setup and scan of every survivor.
  * Returns the texel rectangle written to (for the tile maxima). */
 static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
-                                 const rs__cluster *cl)
+                                 const rs__cluster *cl, rs__rect limit)
 {
     rs__rect dirty = {(int32_t)ctx->res, -1, (int32_t)ctx->res, -1};
     rs__batch *b = &sc->batch;
@@ -969,7 +998,9 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
                 continue;
             }
         }
-        if (!rs__setup_triangle(ctx, f, b, k, &s, &rect) || rs__rect_empty(rect)) continue;
+        if (!rs__setup_triangle(ctx, f, b, k, &s, &rect)) continue;
+        rect = rs__rect_meet(rect, limit);
+        if (rs__rect_empty(rect)) continue;
         sc->stats.triangles_drawn++;
         sc->stats.texels_tested += kern->scan(ctx, sc, &s, rect);
         dirty = (rs__rect){rect.i0 < dirty.i0 ? rect.i0 : dirty.i0, rect.i1 > dirty.i1 ? rect.i1 : dirty.i1,
@@ -978,10 +1009,15 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
     return dirty;
 }
 
+/* Renders one map, or with `limit` not covering the whole map only the
+ * texels of that rectangle (the others keep their codes in `out`): every
+ * texel's depth is the nearest hit over all triangles whatever else is
+ * drawn, so the rectangle's codes are those of a whole render. */
 static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, pf_vec3 nrm, float range,
-                           uint16_t *out)
+                           uint16_t *out, rs__rect limit)
 {
     const uint32_t R = ctx->res;
+    if (rs__rect_empty(limit)) return;
     rs_para_frame f = rs_para_frame_make(pos, nrm);
     for (size_t k = 0; k < (size_t)R * R; k++) sc->depth[k] = INFINITY;
     for (uint32_t k = 0; k < ctx->tiles * ctx->tiles; k++) {
@@ -1017,6 +1053,11 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
                 sc->stats.clusters_behind++;
                 continue;
             }
+            sc->crect[c] = rs__rect_meet(sc->crect[c], limit);
+            if (rs__rect_empty(sc->crect[c])) {
+                sc->stats.clusters_behind++; /* outside the re-rendered rectangle */
+                continue;
+            }
             float k = sc->cnear[c] * key_scale;
             /* a cluster reaching behind the map's origin has a negative near
              * distance (key 0: first); converting a negative or NaN float to
@@ -1037,14 +1078,14 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
         }
         const rs__cluster *cl = &ctx->clusters[c];
         sc->stats.triangles_in += cl->count;
-        rs__rect dirty = rs__draw_cluster(ctx, sc, &f, cl);
+        rs__rect dirty = rs__draw_cluster(ctx, sc, &f, cl, limit);
         if (!rs__rect_empty(dirty)) rs__dirty_tiles(ctx, sc, dirty);
     }
 
     /* 4. quantise */
     float scale = RS_PARA_CODES / range;
-    for (uint32_t j = 0; j < R; j++)
-        for (uint32_t i = 0; i < R; i++) {
+    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++)
+        for (uint32_t i = (uint32_t)limit.i0; i <= (uint32_t)limit.i1; i++) {
             size_t idx = (size_t)j * R + i;
             int inside = (int32_t)i >= ctx->row_lo[j] && (int32_t)i <= ctx->row_hi[j];
             out[idx] = inside ? rs__quantise_one(sc->depth[idx], scale) : RS_PARA_OUTSIDE;
@@ -1059,15 +1100,33 @@ typedef struct rs__job {
     const pf_vec3 *positions, *normals;
     const uint32_t *slots; /* NULL: map k in slot k */
     float range;
+    const rs__cluster *box; /* not NULL: re-render only the texels this sphere can be seen through */
+    pf_vec3 lo, hi;         /* with box: the world box the sphere bounds */
 } rs__job;
 
 static void rs__map_job(void *p, uint32_t item, uint32_t worker)
 {
     rs__job *job = p;
-    size_t texels = (size_t)job->ctx->res * job->ctx->res;
+    const rs_para_context *ctx = job->ctx;
+    size_t texels = (size_t)ctx->res * ctx->res;
     size_t slot = job->slots ? job->slots[item] : item;
+    rs__rect limit = {0, (int32_t)ctx->res - 1, 0, (int32_t)ctx->res - 1};
+    if (job->box) {
+        rs_para_frame f = rs_para_frame_make(job->positions[item], job->normals[item]);
+        /* every corner of the box behind the tangent plane (a margin of 1e-6
+         * of the distance for the float error of z): nothing changes */
+        int front = 0;
+        for (int k = 0; k < 8 && !front; k++) {
+            float c[3];
+            rs__local_f(&f, k & 1 ? job->hi.x : job->lo.x, k & 2 ? job->hi.y : job->lo.y, k & 4 ? job->hi.z : job->lo.z,
+                        c);
+            front = c[2] >= -1e-6f * sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        }
+        float near;
+        if (!front || !rs__cluster_bound(ctx, &f, job->box, &limit, &near)) return;
+    }
     rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
-                   job->atlas + texels * slot);
+                   job->atlas + texels * slot, limit);
 }
 
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
@@ -1076,9 +1135,35 @@ void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const 
     rs_para_render_slots(atlas, ctx, jobs, positions, normals, NULL, count, range, stats);
 }
 
+static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                            const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
+                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, rs_para_stats *stats);
+
 void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                           const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
                           rs_para_stats *stats)
+{
+    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, NULL, pf_v3(0, 0, 0), pf_v3(0, 0, 0),
+                    stats);
+}
+
+void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                        const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
+                        pf_vec3 hi, rs_para_stats *stats)
+{
+    /* the box's bounding sphere, radius rounded up as the clusters' are */
+    rs__cluster box = {0};
+    box.cx = 0.5f * (lo.x + hi.x), box.cy = 0.5f * (lo.y + hi.y), box.cz = 0.5f * (lo.z + hi.z);
+    double dx = (double)hi.x - box.cx, dy = (double)hi.y - box.cy, dz = (double)hi.z - box.cz;
+    double ex = (double)box.cx - lo.x, ey = (double)box.cy - lo.y, ez = (double)box.cz - lo.z;
+    dx = dx > ex ? dx : ex, dy = dy > ey ? dy : ey, dz = dz > ez ? dz : ez;
+    box.r = nextafterf((float)(sqrt(dx * dx + dy * dy + dz * dz) * (1.0 + 1e-6)), INFINITY);
+    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, &box, lo, hi, stats);
+}
+
+static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                            const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
+                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, rs_para_stats *stats)
 {
     assert(range > 0.0f);
     uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
@@ -1089,7 +1174,7 @@ void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, 
         jobs = NULL;
     }
     for (uint32_t k = 0; k < ctx->scratch_count; k++) memset(&ctx->scratch[k]->stats, 0, sizeof(rs_para_stats));
-    rs__job job = {ctx, atlas, positions, normals, slots, range};
+    rs__job job = {ctx, atlas, positions, normals, slots, range, box, lo, hi};
     if (jobs)
         pf_jobs_parallel_for(jobs, rs__map_job, &job, count, 1);
     else

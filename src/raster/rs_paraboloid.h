@@ -88,6 +88,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pf_anim.h"
 #include "pf_jobs.h"
 #include "pf_result.h"
 #include "pf_rt.h"
@@ -177,6 +178,25 @@ void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const 
 void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                           const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
                           rs_para_stats *stats);
+
+/* rs_para_render_slots restricted to what moved geometry can change: for
+ * each map, only the texels through which the world box [lo, hi] (the moved
+ * geometry's bounds before and after it moved) can be seen from the VPL (the
+ * cap of the box's bounding sphere) are rendered again; maps the box lies
+ * behind are not touched. Each such texel gets exactly the code a whole
+ * render gives (its depth is the nearest hit over all triangles), so the
+ * maps equal maps rendered afresh (tests/test_paraboloid.c). */
+void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                        const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
+                        pf_vec3 hi, rs_para_stats *stats);
+
+/* Brings the context's copy of the triangles and its cluster spheres up to
+ * date after the scene's positions changed in place (pf_anim_pose) for the
+ * ranges reported moved. Fails for a context with levels of detail (their
+ * simplified meshes cannot follow: make the context again) or a range
+ * outside the scene. */
+pf_result rs_para_context_update(rs_para_context *ctx, const pf_scene *scene, const pf_anim_moved *moved,
+                                 uint32_t count, pf_error *err);
 
 /* The reference: the same maps traced with Embree, one ray per inside texel
  * centre along its direction (pf_rt_intersect, 8-wide packets), quantised the

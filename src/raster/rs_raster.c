@@ -81,7 +81,8 @@ typedef struct rs__list {
 
 struct rs_scratch {
     uint32_t chunk_count;
-    rs__vtx *vtx; /* vertex_count: clip position and, inside the frustum, the snapped screen position */
+    rs__vtx *vtx; /* vtx_cap + 1: clip position and, inside the frustum, the snapped screen position */
+    uint32_t vtx_cap;
     uint8_t *cluster_visible;
     rs__chunk *chunks; /* chunk_count */
     rs__list *lists; /* per worker: a tile's triangles for the kernel, grown with the largest tile */
@@ -101,7 +102,10 @@ struct rs_context {
      * position once (the conference room: 994K vertices, 194K positions). */
     uint32_t weld_count;
     pf_vec3 *weld_pos;
-    uint32_t *weld_idx; /* 3 per triangle, into weld_pos */
+    uint32_t *weld_idx;  /* 3 per triangle, into weld_pos */
+    uint32_t *weld_of;   /* per scene vertex: its welded position (rs_context_update) */
+    uint32_t *weld_refs; /* per welded position: how many scene vertices share it */
+    uint32_t *weld_seen; /* rs_context_update's scratch, per welded position (zero between calls) */
     uint32_t cluster_count, chunk_count;
     rs__cluster *clusters;
     rs_scratch *scratch; /* for rs_render */
@@ -116,6 +120,10 @@ typedef struct rs__pass_state {
     const rs_pass *pass;
     rs_target *t;
     uint32_t tiles_x, tiles_y;
+    /* the tiles the pass draws: [rtx0, rtx1) x [rty0, rty1) (all of them but
+     * for rs_render_rect), and their pixels [rpx0, rpx1] x [rpy0, rpy1] */
+    uint32_t rtx0, rty0, rtx1, rty1;
+    int64_t rpx0, rpy0, rpx1, rpy1;
     float gx, gy; /* guard band in NDC units */
     rs_simd simd;
 } rs__pass_state;
@@ -206,6 +214,7 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
     rs_scratch *s = calloc(1, sizeof *s);
     if (!s) return NULL;
     s->vtx = malloc(sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
+    s->vtx_cap = ctx->weld_count;
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
     s->chunk_count = ctx->chunk_count;
     size_t chunk_bytes = sizeof(rs__chunk) * (ctx->chunk_count ? ctx->chunk_count : 1);
@@ -238,12 +247,14 @@ static int rs__weld(rs_context *ctx)
     const pf_scene *sc = ctx->scene;
     uint32_t n = sc->vertex_count, cap = 16;
     while (cap < 2 * n) cap *= 2;
-    uint32_t *table = malloc(sizeof(uint32_t) * cap), *remap = malloc(sizeof(uint32_t) * (n ? n : 1));
-    ctx->weld_pos = malloc(sizeof(pf_vec3) * ((size_t)n + 1));
-    ctx->weld_idx = malloc(sizeof(uint32_t) * 3 * ((size_t)sc->tri_count + 1));
-    if (!table || !remap || !ctx->weld_pos || !ctx->weld_idx) {
+    uint32_t *table = malloc(sizeof(uint32_t) * cap), *remap = ctx->weld_of;
+    if (!remap) remap = ctx->weld_of = malloc(sizeof(uint32_t) * (n ? n : 1));
+    if (!ctx->weld_pos) ctx->weld_pos = malloc(sizeof(pf_vec3) * ((size_t)n + 1));
+    if (!ctx->weld_idx) ctx->weld_idx = malloc(sizeof(uint32_t) * 3 * ((size_t)sc->tri_count + 1));
+    if (!ctx->weld_refs) ctx->weld_refs = calloc((size_t)n + 1, sizeof(uint32_t));
+    if (!ctx->weld_seen) ctx->weld_seen = calloc((size_t)n + 1, sizeof(uint32_t));
+    if (!table || !remap || !ctx->weld_pos || !ctx->weld_idx || !ctx->weld_refs || !ctx->weld_seen) {
         free(table);
-        free(remap);
         return 0;
     }
     memset(table, 0xff, sizeof(uint32_t) * cap);
@@ -269,9 +280,26 @@ static int rs__weld(rs_context *ctx)
     }
     for (size_t i = 0; i < 3 * (size_t)sc->tri_count; i++) ctx->weld_idx[i] = remap[sc->indices[i]];
     ctx->weld_count = count;
+    memset(ctx->weld_refs, 0, sizeof(uint32_t) * ((size_t)n + 1));
+    for (uint32_t v = 0; v < n; v++) ctx->weld_refs[remap[v]]++;
     free(table);
-    free(remap);
     return 1;
+}
+
+/* The box of culling cluster c from the scene's positions. */
+static void rs__cluster_box(rs_context *ctx, uint32_t c)
+{
+    const pf_scene *scene = ctx->scene;
+    pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
+    uint32_t t1 = (c + 1) * RS_CLUSTER < scene->tri_count ? (c + 1) * RS_CLUSTER : scene->tri_count;
+    for (uint32_t t = c * RS_CLUSTER; t < t1; t++)
+        for (int k = 0; k < 3; k++) {
+            pf_vec3 p = scene->positions[scene->indices[3 * t + k]];
+            lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+            hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+        }
+    ctx->clusters[c].lo = lo;
+    ctx->clusters[c].hi = hi;
 }
 
 pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err)
@@ -286,18 +314,7 @@ pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jo
     ctx->chunk_count = (scene->tri_count + RS_CHUNK - 1) / RS_CHUNK;
     ctx->clusters = calloc(ctx->cluster_count ? ctx->cluster_count : 1, sizeof *ctx->clusters);
     if (!ctx->clusters || !rs__weld(ctx)) goto oom;
-    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
-        pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
-        uint32_t t1 = (c + 1) * RS_CLUSTER < scene->tri_count ? (c + 1) * RS_CLUSTER : scene->tri_count;
-        for (uint32_t t = c * RS_CLUSTER; t < t1; t++)
-            for (int k = 0; k < 3; k++) {
-                pf_vec3 p = scene->positions[scene->indices[3 * t + k]];
-                lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
-                hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
-            }
-        ctx->clusters[c].lo = lo;
-        ctx->clusters[c].hi = hi;
-    }
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) rs__cluster_box(ctx, c);
     ctx->scratch = rs_scratch_create(ctx);
     ctx->resolve_table = rs_resolve_table_create(scene);
     ctx->tri_masked = malloc(scene->tri_count ? scene->tri_count : 1);
@@ -318,9 +335,64 @@ void rs_context_destroy(rs_context *ctx)
     free(ctx->clusters);
     free(ctx->weld_pos);
     free(ctx->weld_idx);
+    free(ctx->weld_of);
+    free(ctx->weld_refs);
+    free(ctx->weld_seen);
     rs_resolve_table_destroy(ctx->resolve_table);
     free(ctx->tri_masked);
     free(ctx);
+}
+
+pf_result rs_context_update(rs_context *ctx, const pf_anim_moved *moved, uint32_t count, pf_error *err)
+{
+    const pf_scene *sc = ctx->scene;
+    for (uint32_t m = 0; m < count; m++) {
+        const pf_anim_moved *r = &moved[m];
+        if ((uint64_t)r->vertex_first + r->vertex_count > sc->vertex_count ||
+            (uint64_t)r->tri_first + r->tri_count > sc->tri_count)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "rasterizer update: range %u (vertices %u+%u, triangles %u+%u) "
+                                "is outside the scene", m, r->vertex_first, r->vertex_count, r->tri_first, r->tri_count);
+    }
+    /* 1. welded positions: a moved vertex's welded position takes its new
+     * place unless that position is shared with a vertex that stayed or
+     * moved elsewhere; then the scene is welded again */
+    int reweld = 0;
+    for (uint32_t m = 0; m < count && !reweld; m++) {
+        if (!moved[m].moved) continue;
+        for (uint32_t v = moved[m].vertex_first; v < moved[m].vertex_first + moved[m].vertex_count; v++) {
+            uint32_t id = ctx->weld_of[v];
+            if (ctx->weld_seen[id]++ == 0) ctx->weld_pos[id] = sc->positions[v];
+            else if (memcmp(&ctx->weld_pos[id], &sc->positions[v], sizeof(pf_vec3)) != 0) reweld = 1;
+        }
+    }
+    for (uint32_t m = 0; m < count; m++) {
+        if (!moved[m].moved) continue;
+        for (uint32_t v = moved[m].vertex_first; v < moved[m].vertex_first + moved[m].vertex_count; v++) {
+            uint32_t id = ctx->weld_of[v];
+            if (ctx->weld_seen[id] && ctx->weld_seen[id] != ctx->weld_refs[id]) reweld = 1;
+            ctx->weld_seen[id] = 0;
+        }
+    }
+    if (reweld) {
+        uint32_t before = ctx->weld_count;
+        if (!rs__weld(ctx)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory welding moved vertices");
+        if (ctx->weld_count > before) { /* a vertex split off: the scratch's vertex records grow */
+            rs__vtx *v = realloc(ctx->scratch->vtx, sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
+            if (!v) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's vertices");
+            ctx->scratch->vtx = v;
+        }
+        ctx->scratch->vtx_cap = ctx->weld_count;
+    }
+    /* 2. the culling clusters' boxes and 3. the resolve's table entries of
+     * the moved triangles */
+    for (uint32_t m = 0; m < count; m++) {
+        const pf_anim_moved *r = &moved[m];
+        if (!r->moved || r->tri_count == 0) continue;
+        for (uint32_t c = r->tri_first / RS_CLUSTER; c <= (r->tri_first + r->tri_count - 1) / RS_CLUSTER; c++)
+            rs__cluster_box(ctx, c);
+        rs_resolve_table_update(ctx->resolve_table, sc, r->tri_first, r->tri_count);
+    }
+    return PF_OK;
 }
 
 rs_simd rs_context_simd(const rs_context *ctx) { return ctx->simd; }
@@ -555,8 +627,8 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
     if (py0 < 0) py0 = 0;
     if (px1 > (int64_t)t->width - 1) px1 = (int64_t)t->width - 1;
     if (py1 > (int64_t)t->height - 1) py1 = (int64_t)t->height - 1;
-    if (px0 > px1 || py0 > py1) {
-        ch->stats.triangles_culled++; /* falls between pixel centres or off screen */
+    if (px0 > px1 || py0 > py1 || px1 < st->rpx0 || px0 > st->rpx1 || py1 < st->rpy0 || py0 > st->rpy1) {
+        ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_rect's tiles */
         return;
     }
     int64_t X[3] = {sv[0].X, sv[1].X, sv[2].X}, Y[3] = {sv[0].Y, sv[1].Y, sv[2].Y};
@@ -646,8 +718,12 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
     r->prim = prim;
     uint32_t ti = ch->tri_count++;
     ch->stats.triangles_binned++;
+    /* binned into the tiles it meets that the pass draws (the box is kept
+     * whole: the kernels' classification reads it) */
     uint32_t tx0 = (uint32_t)px0 / RS_TILE, tx1 = (uint32_t)px1 / RS_TILE;
     uint32_t ty0 = (uint32_t)py0 / RS_TILE, ty1 = (uint32_t)py1 / RS_TILE;
+    tx0 = tx0 > st->rtx0 ? tx0 : st->rtx0, tx1 = tx1 < st->rtx1 - 1 ? tx1 : st->rtx1 - 1;
+    ty0 = ty0 > st->rty0 ? ty0 : st->rty0, ty1 = ty1 < st->rty1 - 1 ? ty1 : st->rty1 - 1;
     uint32_t need = ch->entry_count + (tx1 - tx0 + 1) * (ty1 - ty0 + 1);
     if (!rs__grow((void **)&ch->entries, &ch->entry_cap, need, sizeof(uint64_t))) {
         ch->failed = 1;
@@ -916,10 +992,17 @@ static void rs__setup_job(void *p, uint32_t item, uint32_t worker)
     rs__setup_bin(p, item);
 }
 
+/* The item-th tile the pass draws (row by row over its tile rectangle). */
+static uint32_t rs__pass_tile(const rs__pass_state *st, uint32_t item)
+{
+    uint32_t w = st->rtx1 - st->rtx0;
+    return (st->rty0 + item / w) * st->tiles_x + st->rtx0 + item % w;
+}
+
 static void rs__tile_job(void *p, uint32_t item, uint32_t worker)
 {
     rs__pass_state *st = p;
-    rs__raster_tile(st, item, &st->s->lists[worker]);
+    rs__raster_tile(st, rs__pass_tile(st, item), &st->s->lists[worker]);
 }
 
 /* One tile list per thread that may run tile jobs (grown once: a scratch
@@ -935,6 +1018,14 @@ static int rs__lists(rs_scratch *s, uint32_t count)
     return 1;
 }
 
+/* Limits a pass to the tiles [tx0, tx1) x [ty0, ty1) (non-empty, inside). */
+static void rs__pass_rect(rs__pass_state *st, uint32_t tx0, uint32_t ty0, uint32_t tx1, uint32_t ty1)
+{
+    st->rtx0 = tx0, st->rty0 = ty0, st->rtx1 = tx1, st->rty1 = ty1;
+    st->rpx0 = (int64_t)tx0 * RS_TILE, st->rpy0 = (int64_t)ty0 * RS_TILE;
+    st->rpx1 = (int64_t)tx1 * RS_TILE - 1, st->rpy1 = (int64_t)ty1 * RS_TILE - 1;
+}
+
 static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t,
                      rs_simd simd)
 {
@@ -946,6 +1037,7 @@ static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, c
     st->t = t;
     st->tiles_x = (t->width + RS_TILE - 1) / RS_TILE;
     st->tiles_y = (t->height + RS_TILE - 1) / RS_TILE;
+    rs__pass_rect(st, 0, 0, st->tiles_x, st->tiles_y);
     st->gx = 2.0f * RS_GUARD / (float)t->width;
     st->gy = 2.0f * RS_GUARD / (float)t->height;
     st->simd = simd;
@@ -996,30 +1088,51 @@ static void rs__finish_stats(const rs__pass_state *st, rs_stats *out)
     }
 }
 
-void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *stats)
+/* rs_render and rs_render_rect: the pass over the tiles st was limited to. */
+static void rs__render(rs_context *ctx, rs__pass_state *st, rs_stats *stats)
 {
-    rs__pass_state st;
-    if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
-    uint32_t tiles = st.tiles_x * st.tiles_y;
+    uint32_t tiles = (st->rtx1 - st->rtx0) * (st->rty1 - st->rty0);
     pf_jobs *jobs = ctx->jobs;
     if (!rs__lists(ctx->scratch, pf_jobs_thread_count(jobs))) {
         ctx->scratch->failed_pass++; /* nothing drawn (rs_context_status) */
         return;
     }
     uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
-    pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, &st, nv, 1, NULL, 0);
-    pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, &st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
+    pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, st, nv, 1, NULL, 0);
+    pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
     pf_job_id deps[2] = {vj, cj};
-    pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, &st, ctx->chunk_count, 1, deps, 2);
-    pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, &st, tiles, 1, &sj, 1);
+    pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, st, ctx->chunk_count, 1, deps, 2);
+    pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, st, tiles, 1, &sj, 1);
     pf_jobs_wait(jobs, tj);
-    rs__finish_status(&st);
-    rs__finish_stats(&st, stats);
+    rs__finish_status(st);
+    rs__finish_stats(st, stats);
+}
+
+void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *stats)
+{
+    rs__pass_state st;
+    if (rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) rs__render(ctx, &st, stats);
+}
+
+void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *t, uint32_t x0, uint32_t y0, uint32_t x1,
+                    uint32_t y1, rs_stats *stats)
+{
+    rs__pass_state st;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
+    x1 = x1 < t->width ? x1 : t->width, y1 = y1 < t->height ? y1 : t->height;
+    if (x0 >= x1 || y0 >= y1) return;
+    rs__pass_rect(&st, x0 / RS_TILE, y0 / RS_TILE, (x1 + RS_TILE - 1) / RS_TILE, (y1 + RS_TILE - 1) / RS_TILE);
+    rs__render(ctx, &st, stats);
 }
 
 void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t, rs_stats *stats)
 {
     rs__pass_state st;
+    if (s->vtx_cap < ctx->weld_count) { /* made before an update split vertices: rs_scratch_create again */
+        s->failed_pass++;
+        return;
+    }
     if (!rs__begin(&st, ctx, s, pass, t, ctx->simd)) return;
     if (!rs__lists(s, 1)) {
         s->failed_pass++;
@@ -1029,7 +1142,7 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
     uint32_t tiles = st.tiles_x * st.tiles_y;
-    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, k, &s->lists[0]);
+    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, rs__pass_tile(&st, k), &s->lists[0]);
     rs__finish_status(&st);
     rs__finish_stats(&st, stats);
 }

@@ -50,6 +50,7 @@
 
 #include "pf_isa.h"
 #include "pf_jobs.h"
+#include "pf_anim.h"
 #include "pf_scene.h"
 #include "rs_gbuffer.h"
 
@@ -117,10 +118,29 @@ rs_simd rs_context_simd(const rs_context *ctx);
 const rs_resolve_tri *rs_context_resolve_table(const rs_context *ctx);
 /* Switches the SIMD path (tests compare paths on one context). */
 void rs_context_set_simd(rs_context *ctx, rs_simd simd);
+/* Brings the context up to date after the scene's positions and normals
+ * changed in place (pf_anim_pose, with the same vertex and triangle counts):
+ * for the ranges reported moved, the welded positions (welding the scene
+ * again only when a moved vertex shared its position with one that did not
+ * move alike), the culling clusters' boxes and the resolve's per-triangle
+ * table. Every later pass then gives the bytes a context made afresh from
+ * the posed scene gives (tests/test_raster.c). A scratch of
+ * rs_scratch_create made before must be made again when the update welded
+ * again (rs_render_serial then refuses it: rs_scratch_status). Fails on a
+ * range outside the scene or out of memory. */
+pf_result rs_context_update(rs_context *ctx, const pf_anim_moved *moved, uint32_t count, pf_error *err);
 
 /* Rasterizes the whole scene into `target` (cleared first), in parallel over
  * the context's jobs, deterministic for any thread count and SIMD path. */
 void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *target, rs_stats *stats);
+/* rs_render limited to the 64 x 64 tiles that meet the pixel rectangle
+ * [x0, x1) x [y0, y1) (clamped to the target; empty: nothing): only those
+ * tiles are cleared and drawn, each with the bytes rs_render gives it, and
+ * the rest of the target keeps what it holds. For re-rendering the part of
+ * a map that moved geometry can change (rs_shadow_render_box). Triangles
+ * outside those tiles are dropped at setup (counted as culled in stats). */
+void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *target, uint32_t x0, uint32_t y0, uint32_t x1,
+                    uint32_t y1, rs_stats *stats);
 
 /* The same for a single-threaded caller that already runs inside a job (used
  * to render many small maps at once, one per job item): no jobs are

@@ -148,6 +148,16 @@ static inline void rs_shadow_set_render(rs_context *ctx, rs_shadow_set *set, rs_
     rs_shadow_render(ctx, set->maps, set->count, stats);
 }
 
+/* rs_shadow_render restricted to what geometry inside the world box
+ * [lo, hi] can change (a moved object's bounds before and after it moved):
+ * per face, the tiles that meet the box's projection are drawn again
+ * (rs_render_rect), faces the box lies outside of are not touched, so each
+ * map equals one rendered afresh (tests/test_moving.c). Returns how many
+ * faces were drawn again; *texels (may be NULL) is increased by the texels
+ * they drew. */
+uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t count, pf_vec3 lo, pf_vec3 hi,
+                              uint64_t *texels, rs_stats *stats);
+
 /* The face of a cube map that world point p projects to (major axis of
  * p - eye; ties to x, then y, then z). */
 uint32_t rs_shadow_cube_face(pf_vec3 eye, pf_vec3 p);

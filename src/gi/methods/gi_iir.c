@@ -44,9 +44,10 @@
  *     from stable per-sample values (a hash of its VPL id), fixed for its
  *     life. So the distribution is managed over directions only; the
  *     points are plain Monte Carlo. Its flux is its Voronoi-area fraction of
- *     pi Le / pdf_area (an unbiased share of the emitters' power). Emitters
- *     do not move in softgi, so these VPLs stay valid (the shadow ray from
- *     the emission point is still cast) and only recalcMin churns.
+ *     pi Le / pdf_area (an unbiased share of the emitters' power). While
+ *     the emitters stay, these VPLs stay valid (the shadow ray from the
+ *     emission point is still cast) and only recalcMin churns; when an
+ *     animated emitter moves, every one of them is invalid (gi__iir_validity).
  *
  * Units match gi_ir.c: a light's power is 4 pi I (point), I integral of
  * the cone factor over the cone (spot), E pi R^2 (directional), in RGB; a
@@ -98,6 +99,7 @@ typedef struct gi__slot {
     uint8_t kind, born; /* born: created this frame (moved) */
     uint16_t light;
     uint32_t id;
+    uint32_t prim; /* VPLs: the triangle it sits on (moved geometry invalidates it) */
     pf_vec3 pos, nrm, albedo;
     pf_vec3 intensity;
     double dp[3]; /* sampling point (misses keep theirs; VPLs recompute it each frame) */
@@ -288,14 +290,25 @@ static uint32_t gi__domain_count(const gi__iir_state *s, uint32_t l)
 
 /* Marks invalid samples EMPTY and gives every valid one its sampling point.
  * VPLs: the facing test, the domain test (spot cone, beam disc) and an
- * Embree shadow ray from the light; misses: their ray must still miss. */
+ * Embree shadow ray from the light; misses: their ray must still miss.
+ * Moved geometry (EXTENSION: the paper's scenes are static): a VPL whose
+ * triangle moved since the last frame is invalid, wherever it now is (its
+ * stored position is where the surface was), and so is every area-light VPL
+ * once an emitter moved (its emission point is stale); a VPL a moved object
+ * now hides from the light fails its shadow ray (Embree is up to date), and
+ * a miss the moved object now blocks fails its ray. All are re-sampled by
+ * Sec. 4.6 like any invalid VPL. */
 static void gi__iir_validity(gi__iir_state *s, const gi_vpl_inputs *in, uint32_t l, const gi__lframe *f)
 {
     uint32_t nr = 0, nm = 0;
     for (uint32_t i = 0; i < s->budget; i++) {
         gi__slot *q = &s->slot[i];
         if (q->kind != GI__VPL || q->light != l) continue;
-        if (f->area) { /* static emitters: the stored sampling point; facing and a shadow ray */
+        if (gi_motion_tri(in->motion, q->prim) || (f->area && in->motion && in->motion->emitters)) {
+            q->kind = GI__EMPTY;
+            continue;
+        }
+        if (f->area) { /* emitters as sampled: the stored sampling point; facing and a shadow ray */
             pf_vec3 d = pf_v3_sub(q->pos, q->em_p);
             if (!(pf_v3_dot(q->nrm, d) < 0.0f)) q->kind = GI__EMPTY;
             else s->rays[nr] = (pf_ray){q->em_p, 0.0f, d, 0.9999f}, s->ray_slot[nr++] = i;
@@ -425,6 +438,7 @@ static pf_result gi__iir_create_new(gi__iir_state *s, const gi_vpl_inputs *in, u
         if (pf_v3_dot(ng, dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f); /* two-sided: face the light */
         if (pf_v3_dot(n, ng) < 0.0f) n = pf_v3_scale(n, -1.0f);
         q->kind = GI__VPL;
+        q->prim = s->hits[k].prim;
         q->pos = pf_rt_offset_origin(sf.p, ng, ng);
         q->nrm = n;
         q->albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);

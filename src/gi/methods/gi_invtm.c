@@ -224,6 +224,7 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
         return pf_error_set(err, PF_ERR_ARGUMENT, "--method invtm needs the frame's G-buffer (camera points)");
     if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method invtm needs a job system");
     pf_result r = gi_vpl_set_reserve(out, in->budget ? in->budget : 1, err);
+    if (r == PF_OK) r = gi_rsm_set_geometry_moved(&s->rsm, in->motion, err); /* moved geometry: drawn again */
     if (r == PF_OK) r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
     float diag = pf_v3_length(pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min));
     if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->jobs, err);

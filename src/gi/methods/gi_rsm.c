@@ -429,6 +429,22 @@ static pf_result gi__rsm_render_punctual(gi_rsm_set *s, const pf_scene *scene, p
     return PF_OK;
 }
 
+pf_result gi_rsm_set_geometry_moved(gi_rsm_set *s, const gi_motion *motion, pf_error *err)
+{
+    if (!gi_motion_any(motion)) return PF_OK;
+    if (s->raster_ && motion->range_count) {
+        pf_result r = rs_context_update(s->raster_, motion->ranges, motion->range_count, err);
+        if (r != PF_OK) { /* made again at the next update */
+            rs_context_destroy(s->raster_);
+            s->raster_ = NULL;
+        }
+    }
+    if (s->lights_) /* no light matches: every punctual map is drawn again */
+        memset(s->lights_, 0xff, (s->punctual ? s->punctual : 1) * sizeof(pf_light));
+    s->area_rendered_ = 0;
+    return PF_OK;
+}
+
 pf_result gi_rsm_set_update(gi_rsm_set *s, const pf_scene *scene, const gi_area_lights *area, const pf_rt *rt,
                             pf_jobs *jobs, pf_error *err)
 {

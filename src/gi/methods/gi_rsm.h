@@ -71,6 +71,7 @@
 #include "gi_area.h"
 #include "pf_jobs.h"
 #include "pf_result.h"
+#include "gi_motion.h"
 #include "pf_rt.h"
 #include "pf_scene.h"
 #include "rs_raster.h"
@@ -151,6 +152,13 @@ void gi_rsm_set_init(gi_rsm_set *set, uint32_t size);
 pf_result gi_rsm_set_update(gi_rsm_set *set, const pf_scene *scene, const gi_area_lights *area, const pf_rt *rt,
                             pf_jobs *jobs, pf_error *err);
 void gi_rsm_set_free(gi_rsm_set *set);
+/* Geometry moved (gi_motion.h; motion may be NULL: nothing did): the set's
+ * rasterizer follows the pose (rs_context_update) and the next
+ * gi_rsm_set_update draws every map again (and traces the area map again),
+ * the lights being unchanged or not. An RSM is the light's view of the
+ * whole scene, so any moved triangle can change any texel; the maps are
+ * small (256^2 a face) next to what a partial redraw would save. */
+pf_result gi_rsm_set_geometry_moved(gi_rsm_set *set, const gi_motion *motion, pf_error *err);
 
 /* The map owning flat texel index t (binary search over the maps). */
 uint32_t gi_rsm_map_of(const gi_rsm_set *set, uint32_t t);

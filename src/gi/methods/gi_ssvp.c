@@ -362,6 +362,28 @@ static void gi__map_row(void *p, uint32_t item, uint32_t worker)
     pf_rt_intersect(J->rt, rays, m->hit + (size_t)j * R, R);
 }
 
+/* Moved geometry (issue 19; EXTENSION, the paper's scenes are static): a
+ * cluster's map (the closest hits of rays into the hemisphere in front of
+ * its centroid) is traced again unless the moved bounds, before and after,
+ * lie wholly behind the centroid's tangent plane, where no such ray can
+ * reach. The RSM is drawn again (gi_rsm_set_geometry_moved), so the
+ * first-bounce VPLs and hence the clusters (k-means from the last
+ * centroids, every frame) follow the moved surfaces. */
+static void gi_ssvp_motion(gi__ssvp_state *s, const gi_motion *mo)
+{
+    if (!gi_motion_any(mo)) return;
+    for (uint32_t c = 0; c < s->clusters; c++) {
+        gi__ssvp_map *m = &s->map[c];
+        if (!m->valid) continue;
+        int behind = !mo->emitters;
+        for (int k = 0; k < 8 && behind; k++) {
+            pf_vec3 p = pf_v3(k & 1 ? mo->hi.x : mo->lo.x, k & 2 ? mo->hi.y : mo->lo.y, k & 4 ? mo->hi.z : mo->lo.z);
+            behind = pf_v3_dot(pf_v3_sub(p, m->cpos), m->cnrm) < 0.0f;
+        }
+        if (!behind) m->valid = 0;
+    }
+}
+
 /* Renders the maps of the non-empty clusters whose centroid moved. Returns
  * 0 when out of memory. */
 static int gi_ssvp_cluster_maps(gi__ssvp_state *s, const gi_vpl_inputs *in)
@@ -576,7 +598,9 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     if (r != PF_OK) return r;
     s->maps_rendered = 0;
     if (!in->jobs) return pf_error_set(err, PF_ERR_ARGUMENT, "--method ssvp: needs the job system (inputs.jobs)");
+    if ((r = gi_rsm_set_geometry_moved(&s->rsm, in->motion, err)) != PF_OK) return r;
     if ((r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err)) != PF_OK) return r;
+    gi_ssvp_motion(s, in->motion);
     if (s->rsm.count > 0 && n1) {
         uint32_t nf = gi_ssvp_first_bounce(s, n1, out);
         gi_ssvp_cluster(s, in->scene, nf);

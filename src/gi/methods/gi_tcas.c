@@ -259,7 +259,8 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
         s->cap = s->texel && s->w && s->g0 && s->fv ? N : 0;
         if (!s->cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for %u chains", N);
     }
-    r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
+    r = gi_rsm_set_geometry_moved(&s->rsm, in->motion, err); /* moved geometry: the RSMs are drawn again */
+    if (r == PF_OK) r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
     float diag = pf_v3_length(pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min));
     if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->jobs, err);
     if (r != PF_OK) return r;

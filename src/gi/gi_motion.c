@@ -1,0 +1,118 @@
+/* gi_motion: a frame brought up to date for moved geometry (issue 19 item
+ * 2; see gi_motion.h for what is redone and how). */
+#include "gi_frame.h"
+#include "gi_ism.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static pf_vec3 gi__vmin(pf_vec3 a, pf_vec3 b) { return pf_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
+static pf_vec3 gi__vmax(pf_vec3 a, pf_vec3 b) { return pf_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
+
+static void gi__box_add(gi_moved_box *b, pf_vec3 lo, pf_vec3 hi)
+{
+    if (!b->pending) b->lo = lo, b->hi = hi;
+    else b->lo = gi__vmin(b->lo, lo), b->hi = gi__vmax(b->hi, hi);
+    b->pending = 1;
+}
+
+static int gi__emissive(const pf_scene *s, uint32_t t)
+{
+    const float *e = s->materials[s->tri_material[t]].emission;
+    return e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
+}
+
+pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err)
+{
+    const pf_scene *s = f->scene;
+    /* check every range first, so a bad report changes nothing */
+    uint32_t n = 0;
+    pf_vec3 lo = pf_v3(INFINITY, INFINITY, INFINITY), hi = pf_v3(-INFINITY, -INFINITY, -INFINITY);
+    for (uint32_t k = 0; k < count; k++) {
+        const pf_anim_moved *m = &moved[k];
+        if (!m->moved) continue;
+        if (m->tri_first > s->tri_count || m->tri_count > s->tri_count - m->tri_first ||
+            m->vertex_first > s->vertex_count || m->vertex_count > s->vertex_count - m->vertex_first)
+            return pf_error_set(err, PF_ERR_ARGUMENT,
+                                "moved geometry: triangles %u..+%u, vertices %u..+%u outside the scene's %u, %u",
+                                m->tri_first, m->tri_count, m->vertex_first, m->vertex_count, s->tri_count,
+                                s->vertex_count);
+        lo = gi__vmin(lo, gi__vmin(m->before_min, m->after_min));
+        hi = gi__vmax(hi, gi__vmax(m->before_max, m->after_max));
+        n++;
+    }
+    if (!n) return PF_OK;
+    pf_result r = PF_OK;
+    /* the VPL method's record: which triangles, where, and whether an
+     * emitter is among them */
+    gi_motion *mo = &f->motion;
+    if (!mo->tri_moved) {
+        mo->tri_moved = calloc(s->tri_count ? s->tri_count : 1, 1);
+        if (!mo->tri_moved) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved triangles");
+        mo->tri_count = s->tri_count;
+    }
+    if (mo->range_count != count) {
+        pf_anim_moved *rg = realloc(mo->ranges, sizeof *rg * count);
+        if (!rg) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved geometry's ranges");
+        memset(rg, 0, sizeof *rg * count);
+        mo->ranges = rg;
+        mo->range_count = count;
+    }
+    for (uint32_t k = 0; k < count; k++) {
+        pf_anim_moved *g = &mo->ranges[k];
+        if (!moved[k].moved) {
+            if (!g->moved) *g = moved[k];
+            continue;
+        }
+        if (!g->moved) {
+            *g = moved[k];
+            g->moved = 1;
+            continue;
+        }
+        /* moved again: the range stays, the bounds grow (before: the first
+         * report's before, after: this one's after, both kept as a union) */
+        g->before_min = gi__vmin(g->before_min, moved[k].before_min);
+        g->before_max = gi__vmax(g->before_max, moved[k].before_max);
+        g->after_min = gi__vmin(g->after_min, moved[k].after_min);
+        g->after_max = gi__vmax(g->after_max, moved[k].after_max);
+    }
+    int emitters = 0;
+    for (uint32_t k = 0; k < count; k++) {
+        const pf_anim_moved *m = &moved[k];
+        if (!m->moved) continue;
+        for (uint32_t t = m->tri_first; t < m->tri_first + m->tri_count; t++) {
+            mo->moved += !mo->tri_moved[t];
+            mo->tri_moved[t] = 1;
+            if (f->area.count && gi__emissive(s, t)) emitters = 1;
+        }
+    }
+    if (!mo->moved && !mo->emitters) mo->lo = lo, mo->hi = hi;
+    else mo->lo = gi__vmin(mo->lo, lo), mo->hi = gi__vmax(mo->hi, hi);
+    mo->epoch++;
+    mo->emitters |= emitters;
+
+    /* the frame's own copies of the triangles */
+    if (f->area_maps.para && (r = rs_para_context_update(f->area_maps.para, s, moved, count, err)) != PF_OK)
+        goto failed;
+    if (f->indirect && f->ind.para && (r = rs_para_context_update(f->ind.para, s, moved, count, err)) != PF_OK)
+        goto failed;
+    if (f->indirect && f->ind.ism && (r = gi_ism_update(f->ind.ism, s, moved, count, err)) != PF_OK) goto failed;
+
+    /* area lights: a moved emitter is sampled again (new points, new maps,
+     * drawn whole at the next frame); otherwise the K maps catch up with
+     * the box */
+    if (emitters) {
+        gi_area_lights_free(&f->area);
+        if ((r = gi_area_lights_build(&f->area, s, err)) != PF_OK) goto failed;
+        if ((r = gi_frame_set_area_sampling(f, f->area_strata, f->area_points, err)) != PF_OK) goto failed;
+        f->moved_area.pending = 0;
+    } else if (f->area_maps.rendered) {
+        gi__box_add(&f->moved_area, lo, hi);
+    }
+    if (f->shadows_rendered) gi__box_add(&f->moved_shadows, lo, hi);
+    if (f->indirect && f->ind.para && f->ind.atlas_slots) gi__box_add(&f->moved_maps, lo, hi);
+    return PF_OK;
+failed: /* the frame's copies are part-updated: the caller makes the frame again */
+    return r;
+}

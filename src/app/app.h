@@ -172,6 +172,8 @@ int app_sequence(const pf_options *opts);
 
 /* `softgi bench frame`: per-stage medians of the whole frame (app_bench_frame.c). */
 int app_bench_frame(const pf_options *opts);
+/* `softgi bench frame --moving-object`: a moving object's cost (app_bench_moving.c). */
+int app_bench_frame_moving(const pf_options *opts);
 
 /* `softgi reference`: the path-traced reference (gi_reference). */
 int app_reference(const pf_options *opts);

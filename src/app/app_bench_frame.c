@@ -722,7 +722,9 @@ int app_bench_frame(const pf_options *o)
 {
     pf_error err;
     pf_isa isa;
-    if (bf__check_options(o, &err) != PF_OK || pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
+    if (bf__check_options(o, &err) != PF_OK) return app_fail(&err);
+    if (o->moving_object) return app_bench_frame_moving(o);
+    if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     const char *dir = o->scenes_dir ? o->scenes_dir : "../shared/scenes";
     const char *method = o->method ? o->method : "ir";
     const char *visibility = o->visibility_raytrace ? "raytrace" : o->visibility_ism ? "ism" : "paraboloid";

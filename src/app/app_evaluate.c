@@ -6,9 +6,10 @@
  *                   [--full] [--rerun-reference] [--param KEY=VALUE ...] [-q]
  *                   [--frames A:B]
  *
- * For each sequence file (default: the six in scenes/sequences: the McGuire
+ * For each sequence file (default: eight in scenes/sequences: the McGuire
  * Cornell box, Sibenik and the conference room, each with a moving camera and
- * a moving light):
+ * a moving light, and the anim-box room with a moving object (anim-move)
+ * and with a deforming one (anim-deform), issue 19 item 3):
  *   1. the reference: `softgi sequence FILE --reference --spp N --track-spp T`
  *      (the tracked pixels, where |E| and |E'| are measured, with T samples, so
  *      the reference's own noise stays out of |E'|) into
@@ -106,7 +107,7 @@ typedef struct ev__args {
     int ranged;                      /* --frames A:B */
     uint32_t frame_first, frame_end; /* frame_end PF_CLI_FRAMES_END: open */
     char lists[2][4096]; /* storage for split --methods / --sequences */
-    char default_sequences[6][4200];
+    char default_sequences[8][4200];
 } ev__args;
 
 static void ev__usage(FILE *f)
@@ -130,7 +131,7 @@ static void ev__usage(FILE *f)
           "                      smc, mir, invtm, tcas, ssvp)\n"
           "  --sequences LIST    comma-separated .seq.json files (default: scenes/sequences/\n"
           "                      cornell-{camera,light}, sibenik-{camera,light},\n"
-          "                      conference-{camera,light})\n"
+          "                      conference-{camera,light}, anim-move, anim-deform)\n"
           "  --out DIR           output folder (default out/evaluate)\n"
           "  --size WxH          image size for every sequence (default 320x240)\n"
           "  --spp N             reference samples per pixel (default 256)\n"
@@ -272,9 +273,10 @@ static int ev__parse(ev__args *a, int argc, char **argv, int *help)
         for (size_t k = 0; k < sizeof all / sizeof all[0]; k++) a->methods[a->method_count++] = all[k];
     }
     if (!a->sequence_count) {
-        static const char *const names[] = {"cornell-camera", "cornell-light",    "sibenik-camera",
-                                            "sibenik-light",  "conference-camera", "conference-light"};
-        for (size_t k = 0; k < 6; k++) {
+        static const char *const names[] = {"cornell-camera",   "cornell-light",    "sibenik-camera",
+                                            "sibenik-light",    "conference-camera", "conference-light",
+                                            "anim-move",        "anim-deform"};
+        for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
             snprintf(a->default_sequences[k], sizeof a->default_sequences[k], "%s/scenes/sequences/%s.seq.json",
                      SOFTGI_SOURCE_DIR, names[k]);
             a->sequences[a->sequence_count++] = a->default_sequences[k];

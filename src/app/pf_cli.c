@@ -28,7 +28,7 @@ typedef enum pf__opt_id {
     PF__OPT_NO_INTERLEAVE, PF__OPT_CLAMP, PF__OPT_FILTER, PF__OPT_VISIBILITY, PF__OPT_ISM_RES, PF__OPT_ISM_POINTS,
     PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
-    PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
+    PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_MOVING_OBJECT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
     PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
     PF__OPT_TIME, PF__OPT_ANIMATION,
     PF__OPT_COUNT
@@ -186,6 +186,9 @@ static const pf__opt k_options[] = {
     {PF__OPT_SCENES, "--scenes", NULL, "DIR", BR | BF, "folder with sibenik/ and conference/ (default ../shared/scenes)",
      NULL},
     {PF__OPT_MOVING_LIGHT, "--moving-light", NULL, NULL, BF, "the light moves on a small circle every frame", NULL},
+    {PF__OPT_MOVING_OBJECT, "--moving-object", NULL, NULL, BF,
+     "Sibenik with a 4096-triangle object moving every frame, against the same frame with it still (issue 19)",
+     NULL},
     {PF__OPT_PARA_LOD, "--para-lod", NULL, "F", BR,
      "paraboloid maps from levels of detail: per group of triangles\nthe coarsest whose error is at most F texel "
      "footprints\n(0..16; default 0: exact maps; docs/raster.md)",
@@ -697,6 +700,7 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
     }
     case PF__OPT_SCENES: o->scenes_dir = val; break;
     case PF__OPT_MOVING_LIGHT: o->moving_light = 1; break;
+    case PF__OPT_MOVING_OBJECT: o->moving_object = 1; break;
     case PF__OPT_PARA_LOD:
         r = pf__float_option(a, val, 0.0f, RS_PARA_MAX_LOD, "a number in 0..16", &o->para_lod, err);
         break;

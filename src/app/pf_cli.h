@@ -92,6 +92,7 @@ typedef struct pf_options {
     uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */
     uint32_t taa;            /* --taa N: temporal anti-aliasing over up to N frames (0: off) */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */
+    int moving_object;       /* bench frame: --moving-object (an object moves in Sibenik: app_bench_moving.c) */
     float para_lod;          /* bench raster: --para-lod F, paraboloid maps from levels of detail (0: exact) */
     uint32_t spp;            /* reference: samples per pixel (0: 64) */
     uint32_t track_spp;      /* sequence --reference --track-spp N: tracked pixels with N samples (0: --spp) */

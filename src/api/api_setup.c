@@ -55,12 +55,12 @@ pf_result api_anim_clip(const pf_anim *anim, const char *scene_name, const char 
 }
 
 pf_result api_scene_pose(pf_scene *scene, pf_anim *anim, const char *scene_name, double seconds,
-                         const char *animation, uint32_t *moved, pf_error *err)
+                         const char *animation, uint32_t *moved, pf_anim_moved *report, pf_error *err)
 {
     int32_t clip;
     pf_result r = api_anim_clip(anim, scene_name, animation, &clip, err);
     if (r != PF_OK) return r; /* named already */
-    if ((r = pf_anim_pose(scene, NULL, moved, anim, clip, seconds, err)) != PF_OK) {
+    if ((r = pf_anim_pose(scene, report, moved, anim, clip, seconds, err)) != PF_OK) {
         char m[sizeof err->message];
         snprintf(m, sizeof m, "%s", err->message);
         pf_error_set(err, r, "%s: %s", scene_name, m);

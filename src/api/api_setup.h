@@ -41,6 +41,7 @@
 struct gi_frame;
 struct gi_indirect_options;
 struct pf_anim;
+struct pf_anim_moved;
 struct pf_jobs;
 struct pf_rt;
 struct rs_context;
@@ -69,11 +70,12 @@ pf_result api_anim_clip(const struct pf_anim *anim, const char *scene_name, cons
 
 /* --time / softgi_set_time: `scene` posed at `seconds` of `animation`
  * (api_anim_clip) with pf_anim_pose; *moved (may be NULL) gets how many
- * instanced primitives moved. Errors name the scene. The automatic camera
- * and light are not touched: they are chosen on the static pose, so an
- * animation is framed alike at every time. */
+ * instanced primitives moved, report (NULL, or anim->prim_count entries)
+ * pose's report of what moved (for pf_rt_update). Errors name the scene.
+ * The automatic camera and light are not touched: they are chosen on the
+ * static pose, so an animation is framed alike at every time. */
 pf_result api_scene_pose(pf_scene *scene, struct pf_anim *anim, const char *scene_name, double seconds,
-                         const char *animation, uint32_t *moved, pf_error *err);
+                         const char *animation, uint32_t *moved, struct pf_anim_moved *report, pf_error *err);
 
 /* The automatic camera of a validated scene without one: pf_defaults_camera
  * (its reasons into *dc when not NULL), rounded through the --camera value

@@ -7,12 +7,14 @@
  *   softgi_load_scene   api_scene_read with the memory budget -> the file's
  *                       camera, or api_default_camera -> pf_scene_validate ->
  *                       api_default_light when nothing lights the scene ->
- *                       api_budget_check -> pf_rt_create -> rs_context_create
+ *                       api_budget_check -> pf_rt_create_dynamic (what an
+ *                       animation can move apart: pf_rt.h) -> rs_context_create
  *   softgi_set_camera   pf_camera_look_at, as --camera
  *   softgi_set_lights   the scene's lights replaced, as --light
  *   softgi_set_time     the scene posed at a time (api_scene_pose), as --time;
- *                       Embree and the rasterizer rebuilt, the frame at the
- *                       next render, when geometry moved
+ *                       when geometry moved, Embree updated (pf_rt_update,
+ *                       REBUILD: a fresh build's bytes), the rasterizer
+ *                       rebuilt, the frame at the next render
  *   softgi_render       api_frame_create at the first frame, then
  *                       gi_frame_render_raster (or _raytraced)
  *   softgi_dump_stages  gi_dump_stages, as --dump-stages
@@ -87,6 +89,7 @@ struct softgi_context {
     int loaded;
     pf_scene scene;
     pf_anim anim;          /* what posing the scene needs (softgi_set_time) */
+    pf_anim_moved *moved;  /* anim.prim_count: the last pose's report (pf_rt_update) */
     char scene_name[256];  /* the path as given, for messages */
     pf_camera camera;
     softgi_internal_notes notes; /* auto_camera, auto_light and their text */
@@ -168,6 +171,8 @@ static void api__scene_free(softgi_context *c)
     if (c->loaded) pf_scene_free(&c->scene);
     memset(&c->scene, 0, sizeof c->scene);
     pf_anim_free(&c->anim);
+    free(c->moved);
+    c->moved = NULL;
     c->loaded = 0;
     memset(&c->notes, 0, sizeof c->notes);
     c->frames = 0;
@@ -411,7 +416,8 @@ softgi_result softgi_load_scene(softgi_context *c, const char *path, softgi_erro
     pf_stage_add(&c->load_times, "load scene", (pf_time_now() - t0) * 1e3);
     if (r == PF_OK) {
         t0 = pf_time_now();
-        r = pf_rt_create(&c->rt, &c->scene, c->isa, c->desc.threads, &e);
+        /* what an animation can move in instances of its own (pf_rt.h) */
+        r = pf_rt_create_dynamic(&c->rt, &c->scene, &c->anim, c->isa, c->desc.threads, &e);
         pf_stage_add(&c->load_times, "embree build", (pf_time_now() - t0) * 1e3);
     }
     if (r == PF_OK && !(c->desc.flags & SOFTGI_RAYTRACE)) {
@@ -589,17 +595,16 @@ softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light
     return SOFTGI_OK;
 }
 
-/* Embree's scene and the rasterizer again for the posed geometry, and the
- * frame at the next render (issue 19 item 2 will update them in place). */
+/* Embree's scene updated for the posed geometry (pf_rt_update: a fresh
+ * build's bytes), the rasterizer again, and the frame at the next render
+ * (issue 19 item 2 will update those in place too). */
 static pf_result api__rebuild(softgi_context *c, pf_error *e)
 {
     if (c->frame_ready) gi_frame_free(&c->frame);
     c->frame_ready = 0;
     rs_context_destroy(c->raster);
     c->raster = NULL;
-    pf_rt_destroy(c->rt);
-    c->rt = NULL;
-    pf_result r = pf_rt_create(&c->rt, &c->scene, c->isa, c->desc.threads, e);
+    pf_result r = pf_rt_update(c->rt, c->moved, c->anim.prim_count, PF_RT_REBUILD, e);
     if (r == PF_OK && !(c->desc.flags & SOFTGI_RAYTRACE))
         r = rs_context_create(&c->raster, &c->scene, c->jobs, rs_simd_for_isa(c->isa), e);
     return r;
@@ -615,7 +620,10 @@ softgi_result softgi_set_time(softgi_context *c, double seconds, const char *ani
     pf_fpenv_state env = api__fpenv_enter();
     pf_error e;
     uint32_t moved = 0;
-    pf_result r = api_scene_pose(&c->scene, &c->anim, c->scene_name, seconds, animation, &moved, &e);
+    pf_result r = PF_OK;
+    if (!c->moved && c->anim.prim_count && !(c->moved = calloc(c->anim.prim_count, sizeof *c->moved)))
+        r = pf_error_set(&e, PF_ERR_OUT_OF_MEMORY, "out of memory for the pose's report");
+    if (r == PF_OK) r = api_scene_pose(&c->scene, &c->anim, c->scene_name, seconds, animation, &moved, c->moved, &e);
     int rebuilt = 0;
     if (r == PF_OK && moved) {
         rebuilt = 1;

@@ -128,7 +128,8 @@ pf_result app_scene_load_sequence(const pf_options *o, const pf_sequence *seq, p
     pf_anim *a = anim ? anim : &own;
     pf_result r = app__scene_read(o, seq, scene, a, camera, stem, stem_size, err);
     if (r == PF_OK && o->time_set) {
-        r = api_scene_pose(scene, a, o->scene_path ? o->scene_path : "the scene", o->time, o->animation, NULL, err);
+        r = api_scene_pose(scene, a, o->scene_path ? o->scene_path : "the scene", o->time, o->animation, NULL, NULL,
+                           err);
         if (r != PF_OK) pf_scene_free(scene);
     }
     if (!anim || r != PF_OK) pf_anim_free(a);
@@ -249,10 +250,18 @@ pf_result app_setup_begin(const pf_options *o, app_setup *s, pf_stage_times *t, 
     pf_result r = pf_isa_resolve(o->isa, &s->isa, err);
     if (r != PF_OK) return r;
     double t0 = pf_time_now();
-    if ((r = app_scene_load(o, &s->scene, &s->camera, s->stem, sizeof s->stem, err)) != PF_OK) return r;
+    /* the animations are kept until Embree is built: what they can move is
+     * split off as softgi render (the API) and sequence split it, so a
+     * posed scene gives the same hits in every command (pf_rt.h) */
+    pf_anim anim;
+    memset(&anim, 0, sizeof anim);
+    if ((r = app_scene_load_sequence(o, NULL, &s->scene, &anim, &s->camera, s->stem, sizeof s->stem, err)) != PF_OK)
+        return r;
     pf_stage_add(t, "load scene", (pf_time_now() - t0) * 1e3);
     t0 = pf_time_now();
-    if ((r = pf_rt_create(&s->rt, &s->scene, s->isa, s->threads, err)) != PF_OK) {
+    r = pf_rt_create_dynamic(&s->rt, &s->scene, &anim, s->isa, s->threads, err);
+    pf_anim_free(&anim);
+    if (r != PF_OK) {
         pf_scene_free(&s->scene);
         return r;
     }

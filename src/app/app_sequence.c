@@ -42,16 +42,19 @@
  * moves (the expected baseline); a moving camera alone moves none.
  *
  * "animation" (pf_sequence.h): the scene's glTF animations are posed at
- * each frame's time (pf_anim_pose) before it renders. The renderer cannot
- * yet update its acceleration structures and maps for moved geometry
- * (issue 19 item 2), so a frame whose pose moves anything rebuilds the
- * Embree scene, the rasterizer and the frame (app__seq_rebuild): the VPL
- * method, the shadow and emitter maps and the --temporal / --taa / pipeline
- * histories start afresh at that frame, as at a first frame; frames whose
- * pose moves nothing (before the first key, after the last) carry the state
- * as usual. The first frame rendered is posed before anything is built.
- * Rebuilding is deterministic, so --frames A:B still gives a full run's
- * bytes. The pose's time is in the mean table as "pose (+ rebuild when
+ * each frame's time (pf_anim_pose) before it renders. Embree's scene keeps
+ * what an animation can move in instances of its own (pf_rt_create_dynamic,
+ * for every scene with animations, as softgi render builds it), and a
+ * frame whose pose moves anything updates it (pf_rt_update, REBUILD: the
+ * moved primitives' BVHs rebuilt, a fresh build's bytes). The rasterizer
+ * and its maps cannot be updated for moved geometry yet (issue 19 item 2),
+ * so such a frame rebuilds the rasterizer and the frame (app__seq_rebuild):
+ * the VPL method, the shadow and emitter maps and the --temporal / --taa /
+ * pipeline histories start afresh at that frame, as at a first frame;
+ * frames whose pose moves nothing (before the first key, after the last)
+ * carry the state as usual. The first frame rendered is posed before
+ * anything is built. Updating and rebuilding are deterministic, so
+ * --frames A:B still gives a full run's bytes. The pose's time is in the mean table as "pose (+ rebuild when
  * moved)", and each frame's line says how many objects moved. A pose that
  * would put geometry beyond PF_SCENE_MAX_COORD stops the run at that frame
  * (exit 1, the manifest left "running").
@@ -213,7 +216,8 @@ typedef struct app__seq_run {
     uint32_t track_count;
     app__seq_progress progress;
     /* "animation": the scene's animations over the frames */
-    pf_anim anim;
+    pf_anim anim;            /* kept for every animated scene (Embree's split, pf_rt.h) */
+    pf_anim_moved *moved;    /* anim.prim_count: the last pose's report (pf_rt_update) */
     int32_t clip;            /* the animation played (PF_ANIM_ALL: every one) */
     double t_start, t_end;   /* its time at frame 0 and at the last frame */
 } app__seq_run;
@@ -229,6 +233,7 @@ static void app__cleanup(app__seq_run *s)
     free(s->lights);
     pf_sequence_free(&s->seq);
     pf_anim_free(&s->anim);
+    free(s->moved);
 }
 
 /* The file's "animation" against the loaded scene: the animation it plays
@@ -249,6 +254,8 @@ static pf_result app__seq_animation(app__seq_run *s, pf_error *err)
     }
     s->t_start = seq->anim_time_set ? seq->anim_start : 0.0;
     s->t_end = seq->anim_time_set ? seq->anim_end : pf_anim_end(&s->anim, s->clip);
+    if (!(s->moved = calloc(s->anim.prim_count ? s->anim.prim_count : 1, sizeof *s->moved)))
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the pose's report");
     return PF_OK;
 }
 
@@ -257,7 +264,7 @@ static pf_result app__seq_animation(app__seq_run *s, pf_error *err)
 static pf_result app__seq_pose(app__seq_run *s, uint32_t f, uint32_t *moved, pf_error *err)
 {
     const double t = pf_sequence_time_at(&s->seq, f, s->t_start, s->t_end);
-    pf_result r = pf_anim_pose(&s->scene, NULL, moved, &s->anim, s->clip, t, err);
+    pf_result r = pf_anim_pose(&s->scene, s->moved, moved, &s->anim, s->clip, t, err);
     if (r != PF_OK) {
         char m[sizeof err->message];
         snprintf(m, sizeof m, "%s", err->message);
@@ -266,21 +273,21 @@ static pf_result app__seq_pose(app__seq_run *s, uint32_t f, uint32_t *moved, pf_
     return r;
 }
 
-/* Embree's scene, the rasterizer and the frame made again for the posed
- * geometry: the simplest correct way until they can be updated for moved
- * geometry (issue 19 item 2). The frame starts afresh: the VPL method's
- * state, the reused shadow and emitter maps, the temporal and TAA
- * histories are rebuilt from this frame on, as at a first frame. */
-static pf_result app__seq_rebuild(app__seq_run *s, const pf_options *o, pf_isa isa, uint32_t threads,
-                                  const pf_camera *camera, uint32_t width, uint32_t height, pf_error *err)
+/* Embree's scene updated for the posed geometry (pf_rt_update, REBUILD:
+ * the bytes of a fresh build of this pose, so a frame equals `softgi
+ * render --time t`), the rasterizer and the frame made again: the simplest
+ * correct way until they can be updated for moved geometry (issue 19
+ * item 2). The frame starts afresh: the VPL method's state, the reused
+ * shadow and emitter maps, the temporal and TAA histories are rebuilt from
+ * this frame on, as at a first frame. */
+static pf_result app__seq_rebuild(app__seq_run *s, const pf_options *o, pf_isa isa, const pf_camera *camera,
+                                  uint32_t width, uint32_t height, pf_error *err)
 {
     if (s->frame_ready) gi_frame_free(&s->frame);
     s->frame_ready = 0;
     rs_context_destroy(s->raster);
     s->raster = NULL;
-    if (s->rt) pf_rt_destroy(s->rt);
-    s->rt = NULL;
-    pf_result r = pf_rt_create(&s->rt, &s->scene, isa, threads, err);
+    pf_result r = pf_rt_update(s->rt, s->moved, s->anim.prim_count, PF_RT_REBUILD, err);
     if (r == PF_OK && !o->raytrace) r = rs_context_create(&s->raster, &s->scene, s->jobs, rs_simd_for_isa(isa), err);
     softgi_desc d;
     if (r == PF_OK) r = app_desc(o, width, height, &d, err);
@@ -419,8 +426,7 @@ int app_sequence(const pf_options *o)
     pf_camera camera;
     char stem[256];
     if (r == PF_OK)
-        r = app_scene_load_sequence(&so, seq, &s.scene, seq->anim_set ? &s.anim : NULL, &camera, stem, sizeof stem,
-                                    &err);
+        r = app_scene_load_sequence(&so, seq, &s.scene, &s.anim, &camera, stem, sizeof stem, &err);
     if (r != PF_OK) return app__fail_run(&s, &err);
     s.scene_loaded = 1;
     if (seq->anim_set && (r = app__seq_animation(&s, &err)) != PF_OK) return app__fail_run(&s, &err);
@@ -492,10 +498,11 @@ int app_sequence(const pf_options *o)
     if (seq->anim_set && (r = app__seq_pose(&s, f_start, &moved_objects, &err)) != PF_OK)
         return app__fail_run(&s, &err);
 
-    /* Embree, jobs, rasterizer, frame: once for the whole sequence (again
-     * after a frame's pose moves geometry). */
+    /* Embree, jobs, rasterizer, frame: once for the whole sequence (Embree
+     * updated, the rest again, after a frame's pose moves geometry). */
     double t_build = pf_time_now();
-    if ((r = pf_rt_create(&s.rt, &s.scene, isa, threads, &err)) != PF_OK) return app__fail_run(&s, &err);
+    if ((r = pf_rt_create_dynamic(&s.rt, &s.scene, &s.anim, isa, threads, &err)) != PF_OK)
+        return app__fail_run(&s, &err);
     s.jobs = pf_jobs_create(threads);
     if (!s.jobs) r = pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "cannot start %u threads", threads);
     if (r == PF_OK && !o->raytrace) r = rs_context_create(&s.raster, &s.scene, s.jobs, rs_simd_for_isa(isa), &err);
@@ -545,7 +552,7 @@ int app_sequence(const pf_options *o)
         double t_pose = pf_time_now();
         if (seq->anim_set && f != f_start) {
             r = app__seq_pose(&s, f, &moved_objects, &err);
-            if (r == PF_OK && moved_objects) r = app__seq_rebuild(&s, o, isa, threads, &camera, width, height, &err);
+            if (r == PF_OK && moved_objects) r = app__seq_rebuild(&s, o, isa, &camera, width, height, &err);
             if (r != PF_OK) break;
         }
         t_pose = (pf_time_now() - t_pose) * 1e3;

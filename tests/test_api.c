@@ -649,9 +649,12 @@ static uint64_t api_posed_hash(softgi_context *c, double t, const char *animatio
     return softgi_image_hash(rgb, info.width, info.height, 0);
 }
 
-/* softgi_set_time = `softgi render --time T --animation A`, bit for bit;
- * a second pose rebuilds what it must (the same image as a fresh context
- * posed there); a time that moves nothing keeps the frame going. */
+/* softgi_set_time = `softgi render --time T --animation A`, bit for bit,
+ * on a first frame; a second pose updates the renderer in place: the
+ * direct light then equals a fresh context's posed there (Embree, the
+ * rasterizer and the shadow maps are a fresh build's) and the whole image
+ * is the same for every context that went through the same poses; a time
+ * that moves nothing keeps the frame going. */
 static void test_set_time(void **state)
 {
     (void)state;
@@ -661,10 +664,10 @@ static void test_set_time(void **state)
     const uint64_t cli_bend = cli_render(ANIM_SKIN " --size 96x72 --threads 2 --time 0.5 --animation bend -q", &cli,
                                          &w, &h);
     free(cli);
-    const uint64_t cli_wave = cli_render(ANIM_HIER " --size 96x72 --threads 2 --time 1 --animation 0 -q", &cli, &w,
-                                         &h);
+    const uint64_t cli_wave = cli_render(ANIM_HIER " --size 96x72 --threads 2 --time 1 --animation 0 --direct-only -q",
+                                         &cli, &w, &h);
     free(cli);
-    const uint64_t cli_static = cli_render(ANIM_HIER " --size 96x72 --threads 2 -q", &cli, &w, &h);
+    const uint64_t cli_static = cli_render(ANIM_HIER " --size 96x72 --threads 2 --direct-only -q", &cli, &w, &h);
     free(cli);
 
     softgi_error err;
@@ -676,11 +679,26 @@ static void test_set_time(void **state)
     assert_true(api_posed_hash(c, 0.5, "bend", rgb) == cli_bend);
     softgi_destroy(c);
 
-    c = create_or_fail(&d);
+    softgi_desc dd = d;
+    dd.flags = SOFTGI_DIRECT_ONLY;
+    c = create_or_fail(&dd);
     ok_or_fail(softgi_load_scene(c, ANIM_HIER, &err), &err);
     assert_true(api_posed_hash(c, 0.3, NULL, rgb) != cli_wave);
-    assert_true(api_posed_hash(c, 1.0, NULL, rgb) == cli_wave); /* rebuilt: as a fresh context at t = 1 */
+    assert_true(api_posed_hash(c, 1.0, NULL, rgb) == cli_wave);     /* updated: as a fresh context at t = 1 */
     assert_true(api_posed_hash(c, 0.0, "wave", rgb) == cli_static); /* t = 0 is the static pose here */
+    softgi_destroy(c);
+    /* with VPLs: two contexts through the same poses, the same images */
+    uint64_t hs[2][3];
+    for (int k = 0; k < 2; k++) {
+        c = create_or_fail(&d);
+        ok_or_fail(softgi_load_scene(c, ANIM_HIER, &err), &err);
+        hs[k][0] = api_posed_hash(c, 0.3, NULL, rgb);
+        hs[k][1] = api_posed_hash(c, 1.0, NULL, rgb);
+        hs[k][2] = api_posed_hash(c, 0.0, "wave", rgb);
+        if (k == 0) softgi_destroy(c);
+    }
+    assert_memory_equal(hs[0], hs[1], sizeof hs[0]);
+    assert_true(hs[0][0] != hs[0][1]);
     ok_or_fail(softgi_get_info(c, &info, &err), &err);
     const uint32_t frames = info.frames;
     ok_or_fail(softgi_set_time(c, 0.0, "0", &err), &err); /* moves nothing: the frame goes on */

@@ -211,9 +211,13 @@ softgi_result softgi_set_lights(softgi_context *ctx, const softgi_light *lights,
  * animation of that name, or of that index when it is all digits ("0").
  * Before an animation's first key its first value holds, after its last key
  * its last value. The vertex and triangle counts and order stay, so
- * triangle ids are stable. Geometry that moved rebuilds the Embree scene
- * and the rasterizer now and the frame at the next softgi_render (the VPL
- * method starts afresh there); a time that moves nothing keeps them. The
+ * triangle ids are stable. Geometry that moved updates the Embree scene,
+ * the rasterizer and the frame in place (only what the moved geometry can
+ * change is redrawn; docs/architecture.md "Moving geometry"): the frame
+ * goes on, the VPL method keeps its state and is told what moved, as after
+ * softgi_set_lights. The direct light and every map equal a fresh
+ * context's posed there; the indirect image may differ from one by what
+ * the method carries (as it does under a moving light). The
  * camera and the automatic light stay as loaded (chosen on the scene's
  * static pose), so set the camera first to have an automatic light placed
  * as the program places it. SOFTGI_ERR_ARGUMENT without a scene, for a

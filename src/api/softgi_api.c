@@ -12,9 +12,9 @@
  *   softgi_set_camera   pf_camera_look_at, as --camera
  *   softgi_set_lights   the scene's lights replaced, as --light
  *   softgi_set_time     the scene posed at a time (api_scene_pose), as --time;
- *                       when geometry moved, Embree updated (pf_rt_update,
- *                       REBUILD: a fresh build's bytes), the rasterizer
- *                       rebuilt, the frame at the next render
+ *                       when geometry moved, Embree (pf_rt_update, REBUILD:
+ *                       a fresh build's bytes), the rasterizer and the frame
+ *                       updated in place (gi_frame_geometry_moved)
  *   softgi_render       api_frame_create at the first frame, then
  *                       gi_frame_render_raster (or _raytraced)
  *   softgi_dump_stages  gi_dump_stages, as --dump-stages
@@ -595,18 +595,16 @@ softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light
     return SOFTGI_OK;
 }
 
-/* Embree's scene updated for the posed geometry (pf_rt_update: a fresh
- * build's bytes), the rasterizer again, and the frame at the next render
- * (issue 19 item 2 will update those in place too). */
-static pf_result api__rebuild(softgi_context *c, pf_error *e)
+/* Embree's scene (pf_rt_update, REBUILD: a fresh build's bytes), the
+ * rasterizer (rs_context_update) and the frame (gi_frame_geometry_moved)
+ * updated in place for the posed geometry (issue 19 item 2, gi_motion.h):
+ * the frame's state carries on, as after softgi_set_lights. */
+static pf_result api__geometry_moved(softgi_context *c, pf_error *e)
 {
-    if (c->frame_ready) gi_frame_free(&c->frame);
-    c->frame_ready = 0;
-    rs_context_destroy(c->raster);
-    c->raster = NULL;
-    pf_result r = pf_rt_update(c->rt, c->moved, c->anim.prim_count, PF_RT_REBUILD, e);
-    if (r == PF_OK && !(c->desc.flags & SOFTGI_RAYTRACE))
-        r = rs_context_create(&c->raster, &c->scene, c->jobs, rs_simd_for_isa(c->isa), e);
+    const uint32_t n = c->anim.prim_count;
+    pf_result r = pf_rt_update(c->rt, c->moved, n, PF_RT_REBUILD, e);
+    if (r == PF_OK && c->raster) r = rs_context_update(c->raster, c->moved, n, e);
+    if (r == PF_OK && c->frame_ready) r = gi_frame_geometry_moved(&c->frame, c->moved, n, e);
     return r;
 }
 
@@ -624,14 +622,14 @@ softgi_result softgi_set_time(softgi_context *c, double seconds, const char *ani
     if (!c->moved && c->anim.prim_count && !(c->moved = calloc(c->anim.prim_count, sizeof *c->moved)))
         r = pf_error_set(&e, PF_ERR_OUT_OF_MEMORY, "out of memory for the pose's report");
     if (r == PF_OK) r = api_scene_pose(&c->scene, &c->anim, c->scene_name, seconds, animation, &moved, c->moved, &e);
-    int rebuilt = 0;
+    int updated = 0;
     if (r == PF_OK && moved) {
-        rebuilt = 1;
-        r = api__rebuild(c, &e);
+        updated = 1;
+        r = api__geometry_moved(c, &e);
     }
     api__fpenv_leave(env);
     if (r != PF_OK) {
-        if (rebuilt) api__scene_free(c); /* Embree or the rasterizer failed: no scene is left */
+        if (updated) api__scene_free(c); /* an update failed part-way: no scene is left */
         return api__fail(err, &e);
     }
     api__ok(err);

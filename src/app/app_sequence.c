@@ -46,15 +46,16 @@
  * what an animation can move in instances of its own (pf_rt_create_dynamic,
  * for every scene with animations, as softgi render builds it), and a
  * frame whose pose moves anything updates it (pf_rt_update, REBUILD: the
- * moved primitives' BVHs rebuilt, a fresh build's bytes). The rasterizer
- * and its maps cannot be updated for moved geometry yet (issue 19 item 2),
- * so such a frame rebuilds the rasterizer and the frame (app__seq_rebuild):
- * the VPL method, the shadow and emitter maps and the --temporal / --taa /
- * pipeline histories start afresh at that frame, as at a first frame;
- * frames whose pose moves nothing (before the first key, after the last)
- * carry the state as usual. The first frame rendered is posed before
- * anything is built. Updating and rebuilding are deterministic, so
- * --frames A:B still gives a full run's bytes. The pose's time is in the mean table as "pose (+ rebuild when
+ * moved primitives' BVHs rebuilt, a fresh build's bytes), and the
+ * rasterizer and the frame in place (rs_context_update,
+ * gi_frame_geometry_moved: shadow, VPL and emitter maps redrawn only where
+ * the moved bounds can change them; gi_motion.h): the VPL method keeps its
+ * state and is told what moved, and the --temporal / --taa / pipeline
+ * histories go on, as under a moving light (app__seq_update). The first
+ * frame rendered is posed before anything is built. Updating is
+ * deterministic, so --frames A:B still gives a full run's bytes (the frames
+ * before A are rendered to carry the state). The pose's time is in the mean
+ * table as "pose (+ update when
  * moved)", and each frame's line says how many objects moved. A pose that
  * would put geometry beyond PF_SCENE_MAX_COORD stops the run at that frame
  * (exit 1, the manifest left "running").
@@ -273,27 +274,20 @@ static pf_result app__seq_pose(app__seq_run *s, uint32_t f, uint32_t *moved, pf_
     return r;
 }
 
-/* Embree's scene updated for the posed geometry (pf_rt_update, REBUILD:
- * the bytes of a fresh build of this pose, so a frame equals `softgi
- * render --time t`), the rasterizer and the frame made again: the simplest
- * correct way until they can be updated for moved geometry (issue 19
- * item 2). The frame starts afresh: the VPL method's state, the reused
- * shadow and emitter maps, the temporal and TAA histories are rebuilt from
- * this frame on, as at a first frame. */
-static pf_result app__seq_rebuild(app__seq_run *s, const pf_options *o, pf_isa isa, const pf_camera *camera,
-                                  uint32_t width, uint32_t height, pf_error *err)
+/* The renderer brought up to date for the posed geometry in place (issue
+ * 19 item 2; gi_motion.h): Embree (pf_rt_update, REBUILD: the moved
+ * primitives' BVHs built afresh, a fresh build's bytes, so the run does not
+ * depend on where it started), the rasterizer (rs_context_update) and the
+ * frame (gi_frame_geometry_moved: the maps redrawn only where the moved
+ * bounds reach them, the VPL method told what moved). The frame's state
+ * carries on, as under a moving light. A failure (out of memory) stops
+ * the run. */
+static pf_result app__seq_update(app__seq_run *s, pf_error *err)
 {
-    if (s->frame_ready) gi_frame_free(&s->frame);
-    s->frame_ready = 0;
-    rs_context_destroy(s->raster);
-    s->raster = NULL;
-    pf_result r = pf_rt_update(s->rt, s->moved, s->anim.prim_count, PF_RT_REBUILD, err);
-    if (r == PF_OK && !o->raytrace) r = rs_context_create(&s->raster, &s->scene, s->jobs, rs_simd_for_isa(isa), err);
-    softgi_desc d;
-    if (r == PF_OK) r = app_desc(o, width, height, &d, err);
-    if (r == PF_OK)
-        r = api_frame_create(&s->frame, &d, &s->scene, s->rt, s->raster, s->jobs, camera, !o->reference, 0, err);
-    s->frame_ready = r == PF_OK;
+    const uint32_t n = s->anim.prim_count;
+    pf_result r = pf_rt_update(s->rt, s->moved, n, PF_RT_REBUILD, err);
+    if (r == PF_OK && s->raster) r = rs_context_update(s->raster, s->moved, n, err);
+    if (r == PF_OK && s->frame_ready) r = gi_frame_geometry_moved(&s->frame, s->moved, n, err);
     return r;
 }
 
@@ -546,13 +540,13 @@ int app_sequence(const pf_options *o)
         prog->frame = f;
         prog->stages = 0;
         app__seq_progress_show(prog, 0.0, NULL);
-        /* the animation at frame f: what moved rebuilds Embree, the
-         * rasterizer and the frame (app__seq_rebuild) */
+        /* the animation at frame f: what moved updates Embree, the
+         * rasterizer and the frame (app__seq_update) */
         moved_objects = 0;
         double t_pose = pf_time_now();
         if (seq->anim_set && f != f_start) {
             r = app__seq_pose(&s, f, &moved_objects, &err);
-            if (r == PF_OK && moved_objects) r = app__seq_rebuild(&s, o, isa, &camera, width, height, &err);
+            if (r == PF_OK && moved_objects) r = app__seq_update(&s, &err);
             if (r != PF_OK) break;
         }
         t_pose = (pf_time_now() - t_pose) * 1e3;
@@ -597,7 +591,7 @@ int app_sequence(const pf_options *o)
             continue;
         }
         moved_sum += moved;
-        if (seq->anim_set) pf_stage_add(&total, "pose (+ rebuild when moved)", t_pose);
+        if (seq->anim_set) pf_stage_add(&total, "pose (+ update when moved)", t_pose);
         for (uint32_t i = 0; i < fr->times.count; i++) pf_stage_add(&total, fr->times.name[i], fr->times.ms[i]);
         /* write */
         t0 = pf_time_now();
@@ -626,7 +620,7 @@ int app_sequence(const pf_options *o)
                 printf("  VPLs %u, moved %u, maps %u", fr->ind.vpls.count, moved, fr->ind.maps_rendered);
             if (lights_changed) printf("  (%u light%s moved)", lights_changed, lights_changed > 1 ? "s" : "");
             if (moved_objects)
-                printf("  (%u object%s moved: scene rebuilt)", moved_objects, moved_objects > 1 ? "s" : "");
+                printf("  (%u object%s moved: renderer updated)", moved_objects, moved_objects > 1 ? "s" : "");
             printf("\n");
         }
     }

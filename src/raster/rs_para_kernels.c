@@ -19,16 +19,19 @@ _Static_assert(RS__LANES % SIMD_W == 0, "cluster sizes are multiples of RS__LANE
 
 /* (u, v) intervals -> inclusive texel ranges, as rs__uv_to_texels
  * (rs_paraboloid.c): centre u_i = (2i+1-R)/R >= lo <=> i >= (lo + 1) R/2 -
- * 1/2. max(fa, 0) = fa > 0 ? fa : 0 and min(fb, top) = fb < top ? fb : top
- * are the scalar expressions; NaN lanes fail fa <= fb either way. Returns
- * the mask of non-empty ranges. */
-static inline simd_mask rs__uv_to_texels_w(simd_f lo, simd_f hi, uint32_t res, simd_i *a, simd_i *b)
+ * 1/2, clamped to [first, last]: the map's (0, R - 1), or the texels a
+ * partial render draws (rs_para_render_box: triangles outside them are
+ * dropped here, before any setup). max(fa, first) = fa > first ? fa : first
+ * and min(fb, last) = fb < last ? fb : last are the scalar expressions; NaN
+ * lanes fail fa <= fb either way. Returns the mask of non-empty ranges. */
+static inline simd_mask rs__uv_to_texels_w(simd_f lo, simd_f hi, uint32_t res, int32_t first, int32_t last,
+                                           simd_i *a, simd_i *b)
 {
-    const simd_f h = simd_set1_f(0.5f * (float)res), top = simd_set1_f((float)res - 1.0f);
+    const simd_f h = simd_set1_f(0.5f * (float)res), top = simd_set1_f((float)last);
     const simd_f one = simd_set1_f(1.0f), half = simd_set1_f(0.5f);
     simd_f fa = simd_ceil_f(simd_sub_f(simd_mul_f(simd_add_f(lo, one), h), half));
     simd_f fb = simd_floor_f(simd_sub_f(simd_mul_f(simd_add_f(hi, one), h), half));
-    fa = simd_max_f(fa, simd_zero_f());
+    fa = simd_max_f(fa, simd_set1_f((float)first));
     fb = simd_min_f(fb, top);
     simd_mask ok = simd_le_f(fa, fb);
     *a = simd_f2i_trunc(fa);
@@ -97,8 +100,8 @@ static void rs__front(const rs_para_context *ctx, rs__scratch *sc, const rs_para
         simd_f vmin = simd_sub_f(simd_min_f(simd_min_f(pv[0], pv[1]), pv[2]), mg);
         simd_f vmax = simd_add_f(simd_max_f(simd_max_f(pv[0], pv[1]), pv[2]), mg);
         simd_i i0, i1, j0, j1;
-        simd_mask okx = rs__uv_to_texels_w(umin, umax, ctx->res, &i0, &i1);
-        simd_mask oky = rs__uv_to_texels_w(vmin, vmax, ctx->res, &j0, &j1);
+        simd_mask okx = rs__uv_to_texels_w(umin, umax, ctx->res, sc->limit.i0, sc->limit.i1, &i0, &i1);
+        simd_mask oky = rs__uv_to_texels_w(vmin, vmax, ctx->res, sc->limit.j0, sc->limit.j1, &j0, &j1);
         simd_mask drawn = simd_mask_and(all, simd_mask_and(okx, oky));
         simd_mask crossing = simd_mask_andnot(any, all);
         sc->stats.triangles_between_texels += (uint64_t)simd_mask_count(simd_mask_andnot(all, drawn));

@@ -20,6 +20,7 @@
 #define RS__UV_EPS 4e-6f      /* uv margin of every bound (float error of projections is ~5e-7) */
 #define RS__TILE 8            /* tile side (texels) of the occlusion-culling depth maxima */
 #define RS__LANES 16          /* triangles per front-end batch; cluster sizes are multiples of it */
+#define RS__SUPER 16          /* clusters per super-cluster (partial renders' first cull) */
 #define RS__FILTER 0x1p-17f   /* float filter: |g| > RS__FILTER |A||B| fixes the sign */
 
 /* ------------------------------------------------------------------ types */
@@ -83,6 +84,8 @@ typedef struct rs__scratch {
     void *batch_block;
     rs__batch batch;
     rs_para_stats stats;
+    rs__rect limit;      /* the texels the map being drawn renders (all, or rs_para_render_box's) */
+    int partial;         /* limit is not the whole map */
 } rs__scratch;
 
 struct rs_para_context {
@@ -92,6 +95,17 @@ struct rs_para_context {
     float *soa[13]; /* x0 y0 z0 x1 y1 z1 x2 y2 z2 nx ny nz emax, tri_padded each (zero padding) */
     float *soa_block;
     rs__cluster *clusters;
+    /* every RS__LANES-triangle batch of the clusters (lane k: triangles
+     * [k RS__LANES, ...), count 0 for padding) with its own sphere: partial
+     * renders (rs_para_render_box) cull batches by it, since a cluster that
+     * meets a small texel rectangle mostly holds triangles that do not */
+    rs__cluster *lanes;
+    uint32_t lane_count;
+    /* every RS__SUPER consecutive clusters as one sphere (exact maps only,
+     * NULL with levels of detail): a partial render skips the clusters of
+     * a super-cluster whose image misses its texels without testing each */
+    rs__cluster *supers;
+    uint32_t super_count;
     /* levels of detail (rs_para_lod.h; lod 0: none, every cluster is drawn) */
     float lod;
     uint32_t lod_count;

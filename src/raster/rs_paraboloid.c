@@ -432,6 +432,30 @@ static void rs__cluster_sphere(const rs_para_context *ctx, rs__cluster *cl)
     cl->r = nextafterf((float)(sqrt(r2) * (1.0 + 1e-6)), INFINITY);
 }
 
+/* The batches of cluster c (RS__LANES triangles each, cluster sizes being
+ * multiples of it) with their spheres. */
+static void rs__lane_spheres(rs_para_context *ctx, uint32_t c)
+{
+    const rs__cluster *cl = &ctx->clusters[c];
+    for (uint32_t base = cl->first; base < cl->first + cl->count; base += RS__LANES) {
+        rs__cluster *ln = &ctx->lanes[base / RS__LANES];
+        ln->first = base;
+        ln->count = cl->first + cl->count - base < RS__LANES ? cl->first + cl->count - base : RS__LANES;
+        rs__cluster_sphere(ctx, ln);
+    }
+}
+
+/* Super-cluster g: the triangles of clusters [g RS__SUPER, ...) (exact maps:
+ * contiguous), one sphere. */
+static void rs__super_sphere(rs_para_context *ctx, uint32_t g)
+{
+    uint32_t c0 = g * RS__SUPER, c1 = c0 + RS__SUPER < ctx->cluster_count ? c0 + RS__SUPER : ctx->cluster_count;
+    rs__cluster *sp = &ctx->supers[g];
+    sp->first = ctx->clusters[c0].first;
+    sp->count = ctx->clusters[c1 - 1].first + ctx->clusters[c1 - 1].count - sp->first;
+    rs__cluster_sphere(ctx, sp);
+}
+
 pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, const rs_para_options *opts,
                                  pf_error *err)
 {
@@ -483,13 +507,15 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     }
     ctx->soa_block = aligned_alloc(64, (size_t)13 * ctx->tri_padded * sizeof(float));
     ctx->clusters = calloc(ctx->cluster_count, sizeof(rs__cluster));
+    ctx->lane_count = ctx->tri_padded / RS__LANES;
+    ctx->lanes = calloc(ctx->lane_count ? ctx->lane_count : 1, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
     ctx->d2 = malloc(R * sizeof(float));
     ctx->dz = malloc((size_t)R * R * sizeof(float));
     ctx->w = malloc((size_t)R * R * sizeof(float));
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
-    if (!ctx->soa_block || !ctx->clusters || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
+    if (!ctx->soa_block || !ctx->clusters || !ctx->lanes || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
         !ctx->row_hi || (o.lod > 0.0f && !ctx->lod_groups)) {
         rs__lod_free(&lod);
         rs_para_context_destroy(ctx);
@@ -541,6 +567,16 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
         }
     }
     for (uint32_t c = 0; c < ctx->cluster_count; c++) rs__cluster_sphere(ctx, &ctx->clusters[c]);
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) rs__lane_spheres(ctx, c);
+    if (!ctx->lod_groups) {
+        ctx->super_count = (ctx->cluster_count + RS__SUPER - 1) / RS__SUPER;
+        ctx->supers = calloc(ctx->super_count ? ctx->super_count : 1, sizeof(rs__cluster));
+        if (!ctx->supers) {
+            rs_para_context_destroy(ctx);
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "paraboloid maps: out of memory");
+        }
+        for (uint32_t g = 0; g < ctx->super_count; g++) rs__super_sphere(ctx, g);
+    }
 
     /* Texel tables. */
     for (uint32_t i = 0; i < R; i++) {
@@ -588,8 +624,12 @@ pf_result rs_para_context_update(rs_para_context *ctx, const pf_scene *scene, co
             rs__fill_tri(ctx, t, scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]]);
         }
         for (uint32_t c = r->tri_first / ctx->cluster_size; c <= (r->tri_first + r->tri_count - 1) / ctx->cluster_size;
-             c++)
+             c++) {
             rs__cluster_sphere(ctx, &ctx->clusters[c]);
+            rs__lane_spheres(ctx, c);
+        }
+        uint32_t c0 = r->tri_first / ctx->cluster_size, c1 = (r->tri_first + r->tri_count - 1) / ctx->cluster_size;
+        for (uint32_t g = c0 / RS__SUPER; g <= c1 / RS__SUPER; g++) rs__super_sphere(ctx, g);
     }
     return PF_OK;
 }
@@ -604,6 +644,8 @@ void rs_para_context_destroy(rs_para_context *ctx)
     free(ctx->scratch);
     free(ctx->soa_block);
     free(ctx->clusters);
+    free(ctx->lanes);
+    free(ctx->supers);
     free(ctx->lod_groups);
     free(ctx->u);
     free(ctx->d2);
@@ -909,15 +951,22 @@ static int rs__cluster_bound(const rs_para_context *ctx, const rs_para_frame *f,
     return !rs__rect_empty(*rect);
 }
 
-/* Maximum depth over tile (ti, tj)'s inside texels (-INFINITY: none). */
+/* Maximum depth over tile (ti, tj)'s inside texels that the map renders
+ * (sc->limit; -INFINITY: none). Every rectangle tested against it is met
+ * with the limit first, so texels outside it, never drawn, do not keep
+ * their tile from culling. */
 static float rs__tile_max(const rs_para_context *ctx, const rs__scratch *sc, int32_t ti, int32_t tj)
 {
     const uint32_t R = ctx->res;
+    const rs__rect L = sc->limit;
     float m = -INFINITY;
+    int32_t j0 = tj * RS__TILE > L.j0 ? tj * RS__TILE : L.j0;
     int32_t jend = (tj + 1) * RS__TILE < (int32_t)R ? (tj + 1) * RS__TILE : (int32_t)R;
-    for (int32_t j = tj * RS__TILE; j < jend; j++) {
+    jend = jend < L.j1 + 1 ? jend : L.j1 + 1;
+    for (int32_t j = j0; j < jend; j++) {
         int32_t lo = ti * RS__TILE > ctx->row_lo[j] ? ti * RS__TILE : ctx->row_lo[j];
         int32_t hi = (ti + 1) * RS__TILE - 1 < ctx->row_hi[j] ? (ti + 1) * RS__TILE - 1 : ctx->row_hi[j];
+        lo = lo > L.i0 ? lo : L.i0, hi = hi < L.i1 ? hi : L.i1;
         const float *d = sc->depth + (size_t)j * R;
         for (int32_t i = lo; i <= hi; i++) m = d[i] > m ? d[i] : m;
     }
@@ -975,7 +1024,26 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
     rs__batch *b = &sc->batch;
     b->n = 0;
     const rs_para_kernels *kern = rs_para_kernels_for(ctx->simd);
-    kern->front(ctx, sc, f, cl);
+    if (!sc->partial) {
+        kern->front(ctx, sc, f, cl);
+    } else {
+        /* a partial render: only the batches whose sphere's image meets the
+         * texels it draws, and is not hidden there already, reach the front
+         * end (in order; the depth kept per texel, the nearest, does not
+         * depend on what is skipped) */
+        for (uint32_t base = cl->first; base < cl->first + cl->count; base += RS__LANES) {
+            const rs__cluster *ln = &ctx->lanes[base / RS__LANES];
+            rs__rect r;
+            float near;
+            if (!rs__cluster_bound(ctx, f, ln, &r, &near)) continue;
+            r = rs__rect_meet(r, limit);
+            if (rs__rect_empty(r) || rs__occluded(ctx, sc, r, near)) {
+                sc->stats.triangles_occluded += ln->count;
+                continue;
+            }
+            kern->front(ctx, sc, f, ln);
+        }
+    }
     for (uint32_t k = 0; k < b->n; k++) {
         rs__setup s;
         rs__rect rect;
@@ -992,7 +1060,8 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
              * where t itself is that uncertain (several codes). */
             float lmin = rs__minf(rs__minf(b->len[0][k], b->len[1][k]), b->len[2][k]);
             float near = (lmin - ctx->soa[12][b->tri[k]]) - 1e-4f * lmin;
-            rs__rect r = {b->rect[0][k], b->rect[1][k], b->rect[2][k], b->rect[3][k]};
+            rs__rect r = rs__rect_meet((rs__rect){b->rect[0][k], b->rect[1][k], b->rect[2][k], b->rect[3][k]}, limit);
+            if (rs__rect_empty(r)) continue; /* outside the texels the map renders */
             if (near > 0.0f && rs__occluded(ctx, sc, r, near)) {
                 sc->stats.triangles_occluded++;
                 continue;
@@ -1019,11 +1088,14 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
     const uint32_t R = ctx->res;
     if (rs__rect_empty(limit)) return;
     rs_para_frame f = rs_para_frame_make(pos, nrm);
-    for (size_t k = 0; k < (size_t)R * R; k++) sc->depth[k] = INFINITY;
+    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++) /* only these texels are read */
+        for (uint32_t i = (uint32_t)limit.i0; i <= (uint32_t)limit.i1; i++) sc->depth[(size_t)j * R + i] = INFINITY;
     for (uint32_t k = 0; k < ctx->tiles * ctx->tiles; k++) {
         sc->tile_max[k] = INFINITY;
         sc->tile_dirty[k] = 0;
     }
+    sc->limit = limit;
+    sc->partial = limit.i0 > 0 || limit.j0 > 0 || limit.i1 < (int32_t)R - 1 || limit.j1 < (int32_t)R - 1;
     sc->stats.maps++;
 
     /* 1. cull clusters, bound the rest (with levels of detail: the clusters
@@ -1048,6 +1120,18 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             sc->stats.lod_levels += L;
         }
         for (uint32_t c = c0; c < c1; c++) {
+            if (sc->partial && ctx->supers && c % RS__SUPER == 0) { /* a whole super-cluster outside the texels? */
+                rs__rect sr;
+                float snear;
+                const rs__cluster *sp = &ctx->supers[c / RS__SUPER];
+                if (!rs__cluster_bound(ctx, &f, sp, &sr, &snear) || rs__rect_empty(rs__rect_meet(sr, limit))) {
+                    uint32_t skip = c + RS__SUPER < c1 ? RS__SUPER : c1 - c;
+                    sc->stats.clusters_in += skip;
+                    sc->stats.clusters_behind += skip;
+                    c += skip - 1;
+                    continue;
+                }
+            }
             sc->stats.clusters_in++;
             if (!rs__cluster_bound(ctx, &f, &ctx->clusters[c], &sc->crect[c], &sc->cnear[c])) {
                 sc->stats.clusters_behind++;

@@ -150,6 +150,8 @@ typedef struct gi__smc_vpl {
     float cell;         /* this iteration's estimate of its cell's area */
     uint32_t area_n;    /* estimates in the mean (capped at area_window) */
     uint32_t id, alive, valid, born;
+    uint32_t paths;       /* GI__SMC_PATHS_E / _RANK: the estimate's paths are in the cache */
+    uint32_t paths_epoch; /* the cache's epoch they were traced in */
 } gi__smc_vpl;
 
 /* A point of X. */
@@ -235,6 +237,18 @@ typedef struct gi__smc_state {
     uint32_t light_count, light_cap, lights_tracked;
     const gi_vpl_inputs *in;  /* this update's inputs (for the jobs) */
     gi_radiosity_ctx rad;
+    /* Line 18 under moving lights: each VPL's two estimates keep their
+     * light-independent paths (gi_radiosity_trace), so a light change
+     * re-gathers them with shadow rays only (gi__smc_estimate_radiosities_vpls) */
+    gi_radiosity_vertex *paths; /* 2 estimates per slot, path_nv records each (NULL: no cache) */
+    size_t paths_cap;           /* records allocated */
+    uint32_t path_nv;           /* records per estimate (gi_radiosity_vertex_count) */
+    uint32_t paths_epoch;       /* bumps when what the paths depend on changes */
+    gi_radiosity_ctx paths_rad; /* the ctx they were traced with */
+    gi_radiosity_vertex *rad_scratch; /* per worker: GI__SMC_RAD_GROUP estimates' records */
+    size_t rad_scratch_cap;
+    uint32_t *est;            /* line 18's estimates: slot * 2 + (0: E, 1: E_rank) */
+    uint32_t est_count;
     pf_stage_times parts;     /* the last update's time by Hedman 2017 Table 2's columns */
     double t_mark;            /* gi__smc_part: when the running part began */
 } gi__smc_state;
@@ -301,6 +315,9 @@ static void gi__smc_free_buffers(gi__smc_state *s)
     free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->nearest), free(s->lights);
     free(s->phot);
     s->phot = NULL;
+    free(s->paths), free(s->rad_scratch), free(s->est);
+    s->paths = NULL, s->rad_scratch = NULL, s->est = NULL;
+    s->paths_cap = s->rad_scratch_cap = 0;
     gi_knn_free(&s->raw_tree);
     free(s->sortkeys);
     s->sortkeys = NULL;
@@ -342,7 +359,8 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->nearest = calloc(s->raw_cap ? s->raw_cap : 1, sizeof(uint32_t));
     s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0;
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
-    if (!s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
+    s->est = calloc(2 * (size_t)I, sizeof(uint32_t));
+    if (!s->est || !s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
         !s->knn_pts || !s->knn_slot || !s->nearest) {
         gi__smc_free_buffers(s);
         s->I = 0;
@@ -646,48 +664,144 @@ static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inpu
 
 /* ---------------------------------------------------------------- lines 7 and 18 */
 
-static void gi__smc_rad_cand_job(void *ctx, uint32_t i, uint32_t worker)
+/* Estimates per job item: their shadow and bounce rays share packets. */
+#define GI__SMC_RAD_GROUP 4
+/* The path cache's size limit (records of all VPLs' two estimates, 64 bytes
+ * each): beyond it line 18 traces every estimate again, which gives the
+ * same bits, only slower. 2048 VPLs at spp 16 and 3 bounces take 12 MiB. */
+#define GI__SMC_PATHS_MAX ((size_t)256 << 20)
+#define GI__SMC_PATHS_E 1u
+#define GI__SMC_PATHS_RANK 2u
+#define GI__SMC_RANK_SEED 0x52414e4bull
+
+/* The light-independent part of every estimate depends on the scene, the
+ * area lights, spp and bounces: a change of any of them empties the cache.
+ * Sizes the cache and the per-worker scratch (once, or when they grow). */
+static pf_result gi__smc_paths_prepare(gi__smc_state *s, const gi_vpl_inputs *in, pf_error *err)
 {
-    (void)worker;
-    gi__smc_state *s = ctx;
-    gi__smc_cand *C = &s->raw[s->cand[i]];
-    C->E = gi_radiosity_irradiance(&s->rad, C->surf, C->ng, C->ns, C->seed);
+    const gi_radiosity_ctx *r = &s->rad;
+    uint32_t nv = gi_radiosity_vertex_count(r);
+    if (r->scene != s->paths_rad.scene || r->rt != s->paths_rad.rt || r->area != s->paths_rad.area ||
+        r->spp != s->paths_rad.spp || r->bounces != s->paths_rad.bounces || nv != s->path_nv) {
+        s->paths_epoch++;
+        s->paths_rad = *r;
+        s->path_nv = nv;
+    }
+    uint32_t workers = in->jobs ? pf_jobs_thread_count(in->jobs) : 1;
+    size_t scratch = (size_t)workers * GI__SMC_RAD_GROUP * nv;
+    if (scratch > s->rad_scratch_cap) {
+        gi_radiosity_vertex *p = realloc(s->rad_scratch, scratch * sizeof *p);
+        if (!p) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for the radiosity paths");
+        s->rad_scratch = p, s->rad_scratch_cap = scratch;
+    }
+    size_t cache = (size_t)s->I * 2 * nv;
+    if (cache * sizeof(gi_radiosity_vertex) > GI__SMC_PATHS_MAX) cache = 0; /* too large: no cache */
+    if (cache > s->paths_cap) {
+        free(s->paths);
+        s->paths = malloc(cache * sizeof *s->paths);
+        s->paths_cap = s->paths ? cache : 0;
+        s->paths_epoch++; /* what was cached is gone (a failed allocation only slows line 18) */
+    } else if (!cache && s->paths_cap) {
+        free(s->paths);
+        s->paths = NULL, s->paths_cap = 0;
+        s->paths_epoch++;
+    }
+    return PF_OK;
 }
 
-static void gi__smc_rad_vpl_job(void *ctx, uint32_t i, uint32_t worker)
+/* Line 7 for candidates [GROUP i, GROUP i + GROUP): traced and gathered at
+ * once in the worker's scratch (a candidate is estimated only once). */
+static void gi__smc_rad_cand_job(void *ctx, uint32_t item, uint32_t worker)
 {
-    (void)worker;
     gi__smc_state *s = ctx;
-    gi__smc_vpl *v = &s->y[s->list[i]];
-    /* v->pos is the pushed-off point; the estimator pushes again by the
-     * same rule, a few ulps further: immaterial */
-    if (v->light_epoch != s->light_epoch) {
-        v->E = gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed);
-        v->light_epoch = s->light_epoch;
+    gi_radiosity_site y[GI__SMC_RAD_GROUP] = {0};
+    uint64_t seed[GI__SMC_RAD_GROUP] = {0};
+    gi_radiosity_vertex *v[GI__SMC_RAD_GROUP] = {0};
+    pf_vec3 E[GI__SMC_RAD_GROUP];
+    uint32_t n = 0;
+    for (uint32_t i = item * GI__SMC_RAD_GROUP; i < s->cand_count && n < GI__SMC_RAD_GROUP; i++, n++) {
+        const gi__smc_cand *C = &s->raw[s->cand[i]];
+        y[n] = (gi_radiosity_site){C->surf, C->ng, C->ns};
+        seed[n] = C->seed;
+        v[n] = s->rad_scratch + ((size_t)worker * GI__SMC_RAD_GROUP + n) * s->path_nv;
     }
-    if (v->rank_epoch != s->light_epoch) {
-        v->E_rank = s->prm.independent ? gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed ^ 0x52414e4bull)
-                                       : v->E;
-        v->rank_epoch = s->light_epoch;
+    gi_radiosity_trace(&s->rad, y, seed, n, v);
+    gi_radiosity_gather(&s->rad, y, (const gi_radiosity_vertex *const *)v, n, E);
+    for (uint32_t k = 0; k < n; k++) s->raw[s->cand[item * GI__SMC_RAD_GROUP + k]].E = E[k];
+}
+
+/* Line 18 for the estimates est[GROUP i, GROUP i + GROUP): the paths come
+ * from the cache when they were traced for this VPL and estimate in the
+ * cache's epoch, else they are traced (into the cache when there is one);
+ * then all are gathered with the lights of now. */
+static void gi__smc_rad_vpl_job(void *ctx, uint32_t item, uint32_t worker)
+{
+    gi__smc_state *s = ctx;
+    const uint32_t *est = s->est + (size_t)item * GI__SMC_RAD_GROUP;
+    const uint32_t left = s->est_count - item * GI__SMC_RAD_GROUP;
+    const uint32_t n = left < GI__SMC_RAD_GROUP ? left : GI__SMC_RAD_GROUP;
+    gi_radiosity_site y[GI__SMC_RAD_GROUP] = {0}, ty[GI__SMC_RAD_GROUP] = {0};
+    uint64_t tseed[GI__SMC_RAD_GROUP] = {0};
+    gi_radiosity_vertex *v[GI__SMC_RAD_GROUP] = {0}, *tv[GI__SMC_RAD_GROUP] = {0};
+    pf_vec3 E[GI__SMC_RAD_GROUP];
+    uint32_t t = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        gi__smc_vpl *V = &s->y[est[k] >> 1];
+        uint32_t which = est[k] & 1u, bit = which ? GI__SMC_PATHS_RANK : GI__SMC_PATHS_E;
+        /* v->pos is the pushed-off point; the estimator pushes again by the
+         * same rule, a few ulps further: immaterial */
+        y[k] = (gi_radiosity_site){V->pos, V->ng, V->ns};
+        v[k] = s->paths ? s->paths + (size_t)est[k] * s->path_nv
+                        : s->rad_scratch + ((size_t)worker * GI__SMC_RAD_GROUP + k) * s->path_nv;
+        if (s->paths && V->paths_epoch == s->paths_epoch && (V->paths & bit)) continue;
+        ty[t] = y[k];
+        tseed[t] = which ? V->seed ^ GI__SMC_RANK_SEED : V->seed;
+        tv[t++] = v[k];
+    }
+    if (t) gi_radiosity_trace(&s->rad, ty, tseed, t, tv);
+    gi_radiosity_gather(&s->rad, y, (const gi_radiosity_vertex *const *)v, n, E);
+    for (uint32_t k = 0; k < n; k++) {
+        gi__smc_vpl *V = &s->y[est[k] >> 1];
+        if (est[k] & 1u) V->E_rank = E[k];
+        else V->E = E[k];
     }
 }
 
 /* ESTIMATERADIOSITIES for the candidates (line 7): every candidate. */
 static void gi__smc_estimate_radiosities_candidates(gi__smc_state *s, const gi_vpl_inputs *in)
 {
-    pf_jobs_parallel_for(in->jobs, gi__smc_rad_cand_job, s, s->cand_count, 4);
+    pf_jobs_parallel_for(in->jobs, gi__smc_rad_cand_job, s, (s->cand_count + GI__SMC_RAD_GROUP - 1) / GI__SMC_RAD_GROUP,
+                         1);
 }
 
 /* ESTIMATERADIOSITIES for Y (line 18): a VPL's estimate is a pure function
  * of its seed and the lights, so only VPLs whose estimate predates a light
- * change are recomputed (new VPLs carry their candidate's value). */
+ * change are recomputed (new VPLs carry their candidate's value for
+ * ranking). With independent=0 the ranking estimate is the rendering one. */
 static void gi__smc_estimate_radiosities_vpls(gi__smc_state *s, const gi_vpl_inputs *in)
 {
     uint32_t n = 0;
-    for (uint32_t i = 0; i < s->I; i++)
-        if (s->y[i].alive && (s->y[i].light_epoch != s->light_epoch || s->y[i].rank_epoch != s->light_epoch))
-            s->list[n++] = i;
-    pf_jobs_parallel_for(in->jobs, gi__smc_rad_vpl_job, s, n, 4);
+    for (uint32_t i = 0; i < s->I; i++) {
+        const gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        if (v->light_epoch != s->light_epoch) s->est[n++] = 2 * i;
+        if (v->rank_epoch != s->light_epoch && s->prm.independent) s->est[n++] = 2 * i + 1;
+    }
+    s->est_count = n;
+    pf_jobs_parallel_for(in->jobs, gi__smc_rad_vpl_job, s, (n + GI__SMC_RAD_GROUP - 1) / GI__SMC_RAD_GROUP, 1);
+    for (uint32_t k = 0; k < n; k++) { /* the cache now holds these estimates' paths */
+        gi__smc_vpl *v = &s->y[s->est[k] >> 1];
+        if (!s->paths) continue;
+        if (v->paths_epoch != s->paths_epoch) v->paths = 0, v->paths_epoch = s->paths_epoch;
+        v->paths |= (s->est[k] & 1u) ? GI__SMC_PATHS_RANK : GI__SMC_PATHS_E;
+    }
+    for (uint32_t i = 0; i < s->I; i++) {
+        gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        v->light_epoch = s->light_epoch;
+        if (v->rank_epoch != s->light_epoch) v->E_rank = s->prm.independent ? v->E_rank : v->E;
+        v->rank_epoch = s->light_epoch;
+    }
 }
 
 /* ---------------------------------------------------------------- lines 8 and 19 */
@@ -1131,6 +1245,8 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     s->rad.spp = s->prm.spp;
     s->rad.bounces = s->prm.bounces ? s->prm.bounces : (in->bounces ? in->bounces : 3);
     if (s->rad.bounces > GI_RADIOSITY_MAX_BOUNCES) s->rad.bounces = GI_RADIOSITY_MAX_BOUNCES;
+    r = gi__smc_paths_prepare(s, in, err);
+    if (r != PF_OK) return r;
     uint32_t iters = 1;
     s->parts.count = 0;
     s->t_mark = pf_time_now();

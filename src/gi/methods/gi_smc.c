@@ -201,7 +201,8 @@ typedef struct gi__smc_photon {
     pf_vec3 pos, nrm;
     pf_vec3 intensity; /* Phi albedo / pi / photons, W/sr (gi_lightpath_hit) */
     uint32_t valid;    /* a hit (paths end early) */
-    uint32_t in_s;     /* lands where the intersection points reach (see gi__smc_photons) */
+    uint32_t bin;      /* the slot of the VPL it is binned to; GI__SMC_NONE when it lands where no
+                          intersection point reaches (see gi__smc_photons) */
 } gi__smc_photon;
 
 typedef struct gi__smc_params {
@@ -951,7 +952,7 @@ static void gi__smc_estimate_areas_vpls(gi__smc_state *s, const gi_vpl_inputs *i
  * visible point sees light the image only through other surfaces, whose
  * VPLs carry that light already. The VPLs' radiosity estimates still rank
  * them (lines 9-17); only what is rendered changes. */
-#define GI__SMC_PHOTON_CHUNK 16
+#define GI__SMC_PHOTON_CHUNK 64
 #define GI__SMC_REACH 8.0f
 
 static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
@@ -960,19 +961,21 @@ static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
     const gi_lightpath_lights *lights = ((void **)ctx)[1];
     gi__smc_state *s = ((void **)ctx)[0];
     uint32_t B = s->rad.bounces, paths = s->phot_paths;
-    gi_vpl hits[GI_RADIOSITY_MAX_BOUNCES];
-    for (uint32_t i = chunk * GI__SMC_PHOTON_CHUNK; i < paths && i < (chunk + 1) * GI__SMC_PHOTON_CHUNK; i++) {
-        uint32_t got = gi_lightpath_trace_halton(lights, s->in->rt, i + 1, B, B, hits);
+    uint32_t i0 = chunk * GI__SMC_PHOTON_CHUNK, m = paths - i0 < GI__SMC_PHOTON_CHUNK ? paths - i0 : GI__SMC_PHOTON_CHUNK;
+    gi_vpl hits[GI__SMC_PHOTON_CHUNK * GI_RADIOSITY_MAX_BOUNCES];
+    uint32_t got[GI__SMC_PHOTON_CHUNK];
+    gi_lightpath_trace_halton_batch(lights, s->in->rt, i0 + 1, m, B, hits, got); /* path i is Halton index i + 1 */
+    for (uint32_t i = 0; i < m; i++)
         for (uint32_t k = 0; k < B; k++) {
-            gi__smc_photon *P = &s->phot[(size_t)i * B + k];
+            gi__smc_photon *P = &s->phot[(size_t)(i0 + i) * B + k];
+            const gi_vpl *h = &hits[(size_t)i * B + k];
             memset(P, 0, sizeof *P);
-            if (k >= got) continue;
-            P->pos = hits[k].pos;
-            P->nrm = hits[k].nrm;
-            P->intensity = pf_v3_scale(hits[k].intensity, 1.0f / (float)paths);
+            if (k >= got[i]) continue;
+            P->pos = h->pos;
+            P->nrm = h->nrm;
+            P->intensity = pf_v3_scale(h->intensity, 1.0f / (float)paths);
             P->valid = 1;
         }
-    }
 }
 
 /* Traces the photons when the lights changed since they were traced. */
@@ -1030,7 +1033,9 @@ static int gi__smc_compat_raw(const void *ctx, uint32_t i)
     return pf_v3_dot(c->s->raw[i].ns, c->nrm) >= GI__SMC_COMPAT;
 }
 
-static void gi__smc_reach_job(void *ctx, uint32_t chunk, uint32_t worker)
+/* Photons [256 chunk, 256 chunk + 256): whether they land where the
+ * intersection points reach, then the VPL each is binned to. */
+static void gi__smc_bin_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
     (void)worker;
     gi__smc_state *s = ctx;
@@ -1040,7 +1045,11 @@ static void gi__smc_reach_job(void *ctx, uint32_t chunk, uint32_t worker)
         gi__smc_compat_ctx c = {s, P->nrm};
         uint32_t r = P->valid ? gi_knn_nearest_where(&s->raw_tree, P->pos, gi__smc_compat_raw, &c, &d2) : GI_KNN_NONE;
         float rk2 = r != GI_KNN_NONE ? s->raw[r].area * (float)s->raw_k * (float)PF_INV_PI : 0.0f;
-        P->in_s = r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2;
+        P->bin = GI__SMC_NONE;
+        if (!(r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2)) continue;
+        uint32_t t = gi_knn_nearest_where(&s->tree, P->pos, gi__smc_compat_vpl, &c, NULL);
+        if (t == GI_KNN_NONE) t = gi_knn_nearest(&s->tree, P->pos, NULL);
+        if (t != GI_KNN_NONE) P->bin = s->knn_slot[t];
     }
 }
 
@@ -1054,14 +1063,10 @@ static pf_result gi__smc_photons(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts[i] = s->raw[i].pos;
     r = gi_knn_build(&s->raw_tree, s->knn_pts, s->raw_count, err);
     if (r != PF_OK) return r;
-    pf_jobs_parallel_for(in->jobs, gi__smc_reach_job, s, (s->phot_count + 255) / 256, 1);
+    pf_jobs_parallel_for(in->jobs, gi__smc_bin_job, s, (s->phot_count + 255) / 256, 1);
     for (uint32_t i = 0; i < s->phot_count; i++) { /* in photon order: the same sums for any thread count */
-        if (!s->phot[i].in_s) continue;
-        gi__smc_compat_ctx c = {s, s->phot[i].nrm};
-        uint32_t t = gi_knn_nearest_where(&s->tree, s->phot[i].pos, gi__smc_compat_vpl, &c, NULL);
-        if (t == GI_KNN_NONE) t = gi_knn_nearest(&s->tree, s->phot[i].pos, NULL);
-        if (t == GI_KNN_NONE) continue;
-        gi__smc_vpl *v = &s->y[s->knn_slot[t]];
+        if (s->phot[i].bin == GI__SMC_NONE) continue;
+        gi__smc_vpl *v = &s->y[s->phot[i].bin];
         v->phot = pf_v3_add(v->phot, s->phot[i].intensity);
     }
     return PF_OK;

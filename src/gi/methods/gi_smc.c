@@ -120,6 +120,7 @@
  *                  "photons" below) or its radiosity estimate times its
  *                  cell's area (point)
  *   photons=16     light paths per VPL for flux=photons */
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -174,19 +175,62 @@ typedef struct gi__smc_cand {
     float intensity;
 } gi__smc_cand;
 
-/* A sort record: a key, a class (sorted first), the item index (ties). */
+/* A sort record: a key, a class (sorted first), the item index (ties).
+ * Records sort ascending by (cls, key, i), a total order (gi__smc_sort). */
 typedef struct gi__smc_sortkey {
     float key;
     uint32_t cls, i;
 } gi__smc_sortkey;
 
-/* Ascending by (cls, key, i): a total order, so qsort's result is unique. */
-static int gi__smc_cmp_sortkey(const void *a, const void *b)
+/* Sorts o[0, n), given in ascending i, ascending by (cls, key, i): the
+ * order qsort with that comparison gave (-0 equal to +0; a -0 key comes
+ * back +0), by a stable radix sort on (cls, key): the input's i order
+ * breaks the ties. tmp: scratch of n records. */
+static void gi__smc_sort(gi__smc_sortkey *o, gi__smc_sortkey *tmp, uint32_t n)
 {
-    const gi__smc_sortkey *x = a, *y = b;
-    if (x->cls != y->cls) return x->cls < y->cls ? -1 : 1;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->i < y->i ? -1 : (x->i > y->i);
+    uint32_t cnt[2048];
+    uint32_t cls_any = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        assert(i == 0 || o[i - 1].i < o[i].i);
+        cls_any |= o[i].cls;
+    }
+    /* the key's bits in an unsigned order: x + 0 makes -0 into +0 */
+    for (uint32_t i = 0; i < n; i++) {
+        float f = o[i].key + 0.0f;
+        uint32_t u;
+        memcpy(&u, &f, sizeof u);
+        u = (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+        memcpy(&o[i].key, &u, sizeof u); /* restored below */
+    }
+    gi__smc_sortkey *a = o, *b = tmp;
+    for (uint32_t pass = 0; pass < 4; pass++) { /* 11, 11, 10 bits of the key, then the class */
+        if (pass == 3 && !cls_any) break;
+        uint32_t shift = pass * 11, bins = pass == 2 ? 1024u : (pass == 3 ? 2u : 2048u);
+        memset(cnt, 0, sizeof(uint32_t) * bins);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t u;
+            memcpy(&u, &a[i].key, sizeof u);
+            cnt[pass == 3 ? a[i].cls : (u >> shift) & (bins - 1)]++;
+        }
+        for (uint32_t k = 0, sum = 0; k < bins; k++) {
+            uint32_t c = cnt[k];
+            cnt[k] = sum, sum += c;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t u;
+            memcpy(&u, &a[i].key, sizeof u);
+            b[cnt[pass == 3 ? a[i].cls : (u >> shift) & (bins - 1)]++] = a[i];
+        }
+        gi__smc_sortkey *t = a;
+        a = b, b = t;
+    }
+    if (a != o) memcpy(o, a, sizeof *o * n);
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, &o[i].key, sizeof u);
+        u = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+        memcpy(&o[i].key, &u, sizeof u);
+    }
 }
 
 /* Rendering areas: the paper's 1 / (I p(y)) from Eq. 7, or (the default)
@@ -226,13 +270,15 @@ typedef struct gi__smc_state {
     uint8_t *vis_hit;         /* points * V validation results */
     uint32_t *list, *list2;   /* scratch index lists (I) */
     pf_vec3 *knn_pts;         /* scratch for tree builds (max(raw, I)) */
+    pf_vec3 *knn_pts2, *knn_nrm; /* the same, for a second tree built at once (raw) */
     uint32_t *knn_slot;
     uint32_t *nearest;        /* per intersection point: tree index of its nearest VPL */
     gi__smc_photon *phot;     /* flux=photons: the hits of photons * I light paths, bounces slots each */
     size_t phot_cap;
     uint32_t phot_count, phot_paths, phot_traced, phot_epoch, phot_bounces, raw_k;
     gi_knn raw_tree;          /* the last iteration's intersection points (the photons' region test) */
-    gi__smc_sortkey *sortkeys; /* scratch (max(raw, I)) */
+    int raw_tree_wanted;      /* this iteration builds raw_tree (the update's last, flux=photons) */
+    gi__smc_sortkey *sortkeys, *sortkeys2; /* scratch (max(raw, I)) */
     gi_knn tree;
     pf_light *lights;         /* the lights E was estimated with */
     uint32_t light_count, light_cap, lights_tracked;
@@ -320,8 +366,9 @@ static void gi__smc_free_buffers(gi__smc_state *s)
     s->paths = NULL, s->rad_scratch = NULL, s->est = NULL;
     s->paths_cap = s->rad_scratch_cap = 0;
     gi_knn_free(&s->raw_tree);
-    free(s->sortkeys);
-    s->sortkeys = NULL;
+    free(s->sortkeys), free(s->sortkeys2), free(s->knn_pts2), free(s->knn_nrm);
+    s->sortkeys = s->sortkeys2 = NULL;
+    s->knn_pts2 = s->knn_nrm = NULL;
     s->light_count = s->light_cap = s->lights_tracked = 0;
     gi_knn_free(&s->tree);
     s->y = NULL, s->prev_id = NULL, s->x = NULL, s->raw = NULL, s->cand = NULL, s->vis_hit = NULL;
@@ -356,12 +403,15 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->list = calloc(I, sizeof(uint32_t));
     s->list2 = calloc(I, sizeof(uint32_t));
     s->knn_pts = calloc(big, sizeof(pf_vec3));
+    s->knn_pts2 = calloc(big, sizeof(pf_vec3));
+    s->knn_nrm = calloc(big, sizeof(pf_vec3));
+    s->sortkeys2 = calloc(big, sizeof *s->sortkeys2);
     s->knn_slot = calloc(big, sizeof(uint32_t));
     s->nearest = calloc(s->raw_cap ? s->raw_cap : 1, sizeof(uint32_t));
     s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0;
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
     s->est = calloc(2 * (size_t)I, sizeof(uint32_t));
-    if (!s->est || !s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
+    if (!s->est || !s->sortkeys || !s->sortkeys2 || !s->knn_pts2 || !s->knn_nrm || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
         !s->knn_pts || !s->knn_slot || !s->nearest) {
         gi__smc_free_buffers(s);
         s->I = 0;
@@ -369,7 +419,10 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     }
     for (uint32_t i = 0; i < I; i++) s->prev_id[i] = GI__SMC_NONE - 1u; /* nothing output yet */
     s->warmed = 0;
-    return gi_knn_build(&s->tree, s->knn_pts, big, err); /* size the tree once */
+    pf_result r = gi_knn_build_facing(&s->tree, s->knn_pts, s->knn_nrm, big, err); /* size the trees once */
+    if (r == PF_OK && s->prm.flux == GI__SMC_FLUX_PHOTONS)
+        r = gi_knn_build_facing(&s->raw_tree, s->knn_pts2, s->knn_nrm, s->raw_cap ? s->raw_cap : 1, err);
+    return r;
 }
 
 /* ---------------------------------------------------------------- lights */
@@ -643,13 +696,37 @@ static void gi__smc_key_job(void *ctx, uint32_t chunk, uint32_t worker)
 /* Y^ <- RESAMPLECANDIDATES(Y^): draws min(I, hits) of the intersection
  * points without replacement with probability ~ 1 / (their density), so the
  * candidates are about uniform in area (Sec. 3.2.1, rate ratio:1). */
+typedef struct gi__smc_build_ctx {
+    gi__smc_state *s;
+    pf_result r[2];
+    pf_error err[2];
+} gi__smc_build_ctx;
+
+/* Item 0: the intersection points' tree of line 6 (their surface points);
+ * item 1: the photons' region tree (the pushed-off points and normals). */
+static void gi__smc_build_job(void *ctx, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    gi__smc_build_ctx *c = ctx;
+    gi__smc_state *s = c->s;
+    c->r[item] = item == 0 ? gi_knn_build(&s->tree, s->knn_pts, s->raw_count, &c->err[item])
+                           : gi_knn_build_facing(&s->raw_tree, s->knn_pts2, s->knn_nrm, s->raw_count, &c->err[item]);
+}
+
 static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inputs *in, uint64_t key, pf_error *err)
 {
     s->cand_count = 0;
     if (!s->raw_count) return PF_OK;
     for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts[i] = s->raw[i].surf;
-    pf_result r = gi_knn_build(&s->tree, s->knn_pts, s->raw_count, err);
-    if (r != PF_OK) return r;
+    if (s->raw_tree_wanted)
+        for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts2[i] = s->raw[i].pos, s->knn_nrm[i] = s->raw[i].ns;
+    gi__smc_build_ctx b = {s, {PF_OK, PF_OK}, {{0}}};
+    pf_jobs_parallel_for(in->jobs, gi__smc_build_job, &b, s->raw_tree_wanted ? 2 : 1, 1);
+    for (int i = 0; i < 2; i++)
+        if (b.r[i] != PF_OK) {
+            *err = b.err[i];
+            return b.r[i];
+        }
     uint32_t k = (uint32_t)floor(sqrt((double)s->raw_count) / 32.0);
     gi__smc_key_ctx c = {s, key, k < 1 ? 1 : (k > GI_KNN_MAX_K ? GI_KNN_MAX_K : k)};
     s->raw_k = c.k;
@@ -657,7 +734,7 @@ static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inpu
     /* the top keys: sorted descending (ascending on -key), ties by index */
     gi__smc_sortkey *o = s->sortkeys;
     for (uint32_t i = 0; i < s->raw_count; i++) o[i] = (gi__smc_sortkey){-s->raw[i].key, 0, i};
-    qsort(o, s->raw_count, sizeof *o, gi__smc_cmp_sortkey);
+    gi__smc_sort(o, s->sortkeys2, s->raw_count);
     s->cand_count = s->raw_count < s->I ? s->raw_count : s->I;
     for (uint32_t i = 0; i < s->cand_count; i++) s->cand[i] = o[i].i;
     return PF_OK;
@@ -816,11 +893,12 @@ static pf_result gi__smc_build_vpl_tree(gi__smc_state *s, uint32_t *count, pf_er
         s->list2[i] = GI_KNN_NONE;
         if (!s->y[i].alive) continue;
         s->knn_pts[n] = s->y[i].pos;
+        s->knn_nrm[n] = s->y[i].ns;
         s->knn_slot[n] = i;
         s->list2[i] = n++;
     }
     *count = n;
-    return gi_knn_build(&s->tree, s->knn_pts, n, err);
+    return gi_knn_build_facing(&s->tree, s->knn_pts, s->knn_nrm, n, err);
 }
 
 static void gi__smc_density_cand_job(void *ctx, uint32_t i, uint32_t worker)
@@ -1016,22 +1094,6 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
  * this); with none, the nearest. */
 #define GI__SMC_COMPAT 0.5f
 
-typedef struct gi__smc_compat_ctx {
-    const gi__smc_state *s;
-    pf_vec3 nrm;
-} gi__smc_compat_ctx;
-
-static int gi__smc_compat_vpl(const void *ctx, uint32_t t)
-{
-    const gi__smc_compat_ctx *c = ctx;
-    return pf_v3_dot(c->s->y[c->s->knn_slot[t]].ns, c->nrm) >= GI__SMC_COMPAT;
-}
-
-static int gi__smc_compat_raw(const void *ctx, uint32_t i)
-{
-    const gi__smc_compat_ctx *c = ctx;
-    return pf_v3_dot(c->s->raw[i].ns, c->nrm) >= GI__SMC_COMPAT;
-}
 
 /* Photons [256 chunk, 256 chunk + 256): whether they land where the
  * intersection points reach, then the VPL each is binned to. */
@@ -1042,12 +1104,12 @@ static void gi__smc_bin_job(void *ctx, uint32_t chunk, uint32_t worker)
     for (uint32_t i = chunk * 256; i < s->phot_count && i < (chunk + 1) * 256; i++) {
         gi__smc_photon *P = &s->phot[i];
         float d2;
-        gi__smc_compat_ctx c = {s, P->nrm};
-        uint32_t r = P->valid ? gi_knn_nearest_where(&s->raw_tree, P->pos, gi__smc_compat_raw, &c, &d2) : GI_KNN_NONE;
+        /* the trees carry the points' normals (raw[i].ns, the VPLs' ns) */
+        uint32_t r = P->valid ? gi_knn_nearest_facing(&s->raw_tree, P->pos, P->nrm, GI__SMC_COMPAT, &d2) : GI_KNN_NONE;
         float rk2 = r != GI_KNN_NONE ? s->raw[r].area * (float)s->raw_k * (float)PF_INV_PI : 0.0f;
         P->bin = GI__SMC_NONE;
         if (!(r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2)) continue;
-        uint32_t t = gi_knn_nearest_where(&s->tree, P->pos, gi__smc_compat_vpl, &c, NULL);
+        uint32_t t = gi_knn_nearest_facing(&s->tree, P->pos, P->nrm, GI__SMC_COMPAT, NULL);
         if (t == GI_KNN_NONE) t = gi_knn_nearest(&s->tree, P->pos, NULL);
         if (t != GI_KNN_NONE) P->bin = s->knn_slot[t];
     }
@@ -1059,10 +1121,7 @@ static pf_result gi__smc_photons(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
 {
     for (uint32_t i = 0; i < s->I; i++) s->y[i].phot = pf_v3(0, 0, 0);
     pf_result r = gi__smc_trace_photons(s, in, err);
-    if (r != PF_OK || !s->raw_count || !s->phot_count) return r;
-    for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts[i] = s->raw[i].pos;
-    r = gi_knn_build(&s->raw_tree, s->knn_pts, s->raw_count, err);
-    if (r != PF_OK) return r;
+    if (r != PF_OK || !s->raw_count || !s->phot_count) return r; /* raw_tree: built with line 6 */
     pf_jobs_parallel_for(in->jobs, gi__smc_bin_job, s, (s->phot_count + 255) / 256, 1);
     for (uint32_t i = 0; i < s->phot_count; i++) { /* in photon order: the same sums for any thread count */
         if (s->phot[i].bin == GI__SMC_NONE) continue;
@@ -1083,7 +1142,7 @@ static uint32_t gi__smc_count_undersampled(gi__smc_state *s)
     for (uint32_t i = 0; i < s->I; i++)
         if (s->y[i].alive) v[n++] = (gi__smc_sortkey){s->y[i].intensity, 0, i};
     if (!n) return 0;
-    qsort(v, n, sizeof *v, gi__smc_cmp_sortkey);
+    gi__smc_sort(v, s->sortkeys2, n);
     uint32_t at = (uint32_t)ceil(0.95 * n); /* the candidate must beat v[0 .. at-1] */
     float t = v[(at ? at : 1) - 1].key;
     uint32_t strong = 0;
@@ -1107,7 +1166,7 @@ static uint32_t gi__smc_invalidate_and_clamp(gi__smc_state *s, uint32_t m_min)
             o[n++] = (gi__smc_sortkey){s->y[i].intensity, s->y[i].valid ? 1u : 0u, i};
             invalid += !s->y[i].valid;
         }
-    qsort(o, n, sizeof *o, gi__smc_cmp_sortkey); /* invalid first, then weaker first, then slot */
+    gi__smc_sort(o, s->sortkeys2, n); /* invalid first, then weaker first, then slot */
     uint32_t inv = invalid > m_min ? invalid : (m_min < n ? m_min : n);
     uint32_t removed = inv < s->prm.m_max ? inv : s->prm.m_max;
     for (uint32_t k = 0; k < removed; k++) s->y[o[k].i].alive = 0;
@@ -1120,7 +1179,7 @@ static void gi__smc_take_strongest(gi__smc_state *s)
 {
     gi__smc_sortkey *o = s->sortkeys; /* strongest first: ascending on -intensity, ties by candidate order */
     for (uint32_t i = 0; i < s->cand_count; i++) o[i] = (gi__smc_sortkey){-s->raw[s->cand[i]].intensity, 0, i};
-    qsort(o, s->cand_count, sizeof *o, gi__smc_cmp_sortkey);
+    gi__smc_sort(o, s->sortkeys2, s->cand_count);
     uint32_t next = 0;
     for (uint32_t slot = 0; slot < s->I && next < s->cand_count; slot++) {
         if (s->y[slot].alive) continue;
@@ -1256,12 +1315,16 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     s->parts.count = 0;
     s->t_mark = pf_time_now();
     if (!s->warmed) {
+        s->raw_tree_wanted = 0;
         r = gi__smc_initialize_vpls(s, in, err); /* line 1 */
         gi__smc_part(s, GI__SMC_T_CAND);
         iters = s->prm.warmup;                   /* Sec. 3.2: 100 iterations before the first frame */
         s->warmed = 1;
     }
-    for (uint32_t k = 0; k < iters && r == PF_OK; k++) r = gi__smc_iterate(s, in, err);
+    for (uint32_t k = 0; k < iters && r == PF_OK; k++) {
+        s->raw_tree_wanted = k + 1 == iters && s->prm.flux == GI__SMC_FLUX_PHOTONS;
+        r = gi__smc_iterate(s, in, err);
+    }
     s->in = NULL;
     if (r == PF_OK && s->prm.flux == GI__SMC_FLUX_PHOTONS) {
         r = gi__smc_photons(s, in, err);

@@ -245,6 +245,7 @@ typedef struct gi__smc_photon {
     pf_vec3 pos, nrm;
     pf_vec3 intensity; /* Phi albedo / pi / photons, W/sr (gi_lightpath_hit) */
     uint32_t valid;    /* a hit (paths end early) */
+    uint32_t morton;   /* of its position (gi__smc_order_photons) */
     uint32_t bin;      /* the slot of the VPL it is binned to; GI__SMC_NONE when it lands where no
                           intersection point reaches (see gi__smc_photons) */
 } gi__smc_photon;
@@ -274,6 +275,10 @@ typedef struct gi__smc_state {
     uint32_t *knn_slot;
     uint32_t *nearest;        /* per intersection point: tree index of its nearest VPL */
     gi__smc_photon *phot;     /* flux=photons: the hits of photons * I light paths, bounces slots each */
+    uint32_t *phot_order;     /* the valid photons (phot_valid of them) in Morton order of their positions */
+    uint32_t *phot_sort;      /* scratch of the sort: 3 x phot_cap */
+    uint32_t phot_valid;
+    pf_vec3 morton_lo, morton_scale; /* the scene's bounds -> [0, 1024)^3 */
     size_t phot_cap;
     uint32_t phot_count, phot_paths, phot_traced, phot_epoch, phot_bounces, raw_k;
     gi_knn raw_tree;          /* the last iteration's intersection points (the photons' region test) */
@@ -360,8 +365,8 @@ static void gi__smc_free_buffers(gi__smc_state *s)
 {
     free(s->y), free(s->prev_id), free(s->x), free(s->raw), free(s->cand), free(s->vis_hit);
     free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->nearest), free(s->lights);
-    free(s->phot);
-    s->phot = NULL;
+    free(s->phot), free(s->phot_order), free(s->phot_sort);
+    s->phot = NULL, s->phot_order = NULL, s->phot_sort = NULL;
     free(s->paths), free(s->rad_scratch), free(s->est);
     s->paths = NULL, s->rad_scratch = NULL, s->est = NULL;
     s->paths_cap = s->rad_scratch_cap = 0;
@@ -408,7 +413,7 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->sortkeys2 = calloc(big, sizeof *s->sortkeys2);
     s->knn_slot = calloc(big, sizeof(uint32_t));
     s->nearest = calloc(s->raw_cap ? s->raw_cap : 1, sizeof(uint32_t));
-    s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0;
+    s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0, s->phot_valid = 0;
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
     s->est = calloc(2 * (size_t)I, sizeof(uint32_t));
     if (!s->est || !s->sortkeys || !s->sortkeys2 || !s->knn_pts2 || !s->knn_nrm || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
@@ -681,7 +686,10 @@ static void gi__smc_key_job(void *ctx, uint32_t chunk, uint32_t worker)
     (void)worker;
     gi__smc_key_ctx *c = ctx;
     gi__smc_state *s = c->s;
-    for (uint32_t i = chunk * 256; i < s->raw_count && i < chunk * 256 + 256; i++) {
+    /* in the tree's order (s->tree.idx: a permutation of the points), so
+     * that consecutive queries are neighbours and walk the same branches */
+    for (uint32_t j = chunk * 256; j < s->raw_count && j < chunk * 256 + 256; j++) {
+        const uint32_t i = s->tree.idx[j];
         /* weight w = 1 / p(point) ~ r_k^2 (the constant k / (N pi) cancels) */
         float r2 = gi_knn_kth_dist2(&s->tree, s->raw[i].surf, c->k, i);
         float u = 1.0f - gi__rand(c->key, 20, i, 0); /* (0, 1] */
@@ -1033,6 +1041,18 @@ static void gi__smc_estimate_areas_vpls(gi__smc_state *s, const gi_vpl_inputs *i
 #define GI__SMC_PHOTON_CHUNK 64
 #define GI__SMC_REACH 8.0f
 
+/* 10 bits of each coordinate, interleaved (x highest): nearby points get
+ * nearby codes. */
+static uint32_t gi__smc_morton(pf_vec3 p, pf_vec3 lo, pf_vec3 scale)
+{
+    float f[3] = {(p.x - lo.x) * scale.x, (p.y - lo.y) * scale.y, (p.z - lo.z) * scale.z};
+    uint32_t c[3], m = 0;
+    for (int a = 0; a < 3; a++) c[a] = f[a] > 0.0f ? (f[a] < 1023.0f ? (uint32_t)f[a] : 1023u) : 0u;
+    for (int b = 9; b >= 0; b--)
+        for (int a = 0; a < 3; a++) m = (m << 1) | ((c[a] >> b) & 1u);
+    return m;
+}
+
 static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
     (void)worker;
@@ -1053,7 +1073,43 @@ static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
             P->nrm = h->nrm;
             P->intensity = pf_v3_scale(h->intensity, 1.0f / (float)paths);
             P->valid = 1;
+            P->morton = gi__smc_morton(P->pos, s->morton_lo, s->morton_scale);
         }
+}
+
+/* phot_order: the valid photons sorted by the Morton code of their
+ * positions (ties in photon order), so the binning's queries come in
+ * spatial order, neighbours after neighbours: the trees' branches and
+ * leaves they walk are the previous query's (about twice as fast as photon
+ * order at 2048 VPLs). Only the order of the queries changes, not their
+ * answers. */
+static void gi__smc_order_photons(gi__smc_state *s)
+{
+    uint32_t *key = s->phot_sort, *key2 = key + s->phot_cap, *ord2 = key2 + s->phot_cap, *ord = s->phot_order;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->phot_count; i++) {
+        s->phot[i].bin = GI__SMC_NONE;
+        if (!s->phot[i].valid) continue;
+        key[n] = s->phot[i].morton;
+        ord[n++] = i;
+    }
+    for (uint32_t pass = 0; pass < 3; pass++) { /* stable LSD radix sort, 10 bits a pass */
+        uint32_t cnt[1024] = {0}, shift = 10 * pass;
+        for (uint32_t i = 0; i < n; i++) cnt[(key[i] >> shift) & 1023u]++;
+        for (uint32_t b = 0, sum = 0; b < 1024; b++) {
+            uint32_t c = cnt[b];
+            cnt[b] = sum, sum += c;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t at = cnt[(key[i] >> shift) & 1023u]++;
+            key2[at] = key[i], ord2[at] = ord[i];
+        }
+        uint32_t *t = key;
+        key = key2, key2 = t;
+        t = ord, ord = ord2, ord2 = t;
+    }
+    if (ord != s->phot_order) memcpy(s->phot_order, ord, sizeof(uint32_t) * n);
+    s->phot_valid = n;
 }
 
 /* Traces the photons when the lights changed since they were traced. */
@@ -1063,14 +1119,21 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
     if (s->phot_traced && s->phot_epoch == s->light_epoch && s->phot_bounces == B) return PF_OK;
     size_t need = (size_t)paths * B;
     if (need > s->phot_cap) {
-        gi__smc_photon *p = realloc(s->phot, need * sizeof *p);
-        if (!p) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u photon paths", paths);
-        s->phot = p, s->phot_cap = need;
+        free(s->phot), free(s->phot_order), free(s->phot_sort);
+        s->phot = malloc(need * sizeof *s->phot);
+        s->phot_order = malloc(need * sizeof(uint32_t));
+        s->phot_sort = malloc(3 * need * sizeof(uint32_t));
+        s->phot_cap = s->phot && s->phot_order && s->phot_sort ? need : 0;
+        if (!s->phot_cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u photon paths", paths);
     }
     s->phot_paths = paths;
     s->phot_count = 0;
     gi_lightpath_lights lights;
     gi_lightpath_lights_init(&lights, in->scene, in->area);
+    pf_vec3 ext = pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min);
+    s->morton_lo = in->scene->bounds_min;
+    s->morton_scale = pf_v3(ext.x > 0.0f ? 1024.0f / ext.x : 0.0f, ext.y > 0.0f ? 1024.0f / ext.y : 0.0f,
+                            ext.z > 0.0f ? 1024.0f / ext.z : 0.0f);
     if (lights.nl && lights.total > 0.0) {
         void *ctx[2] = {s, &lights};
         s->in = in;
@@ -1079,6 +1142,7 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
         s->in = NULL;
         s->phot_count = (uint32_t)need;
     }
+    gi__smc_order_photons(s);
     s->phot_traced = 1, s->phot_epoch = s->light_epoch, s->phot_bounces = B;
     return PF_OK;
 }
@@ -1101,11 +1165,11 @@ static void gi__smc_bin_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
     (void)worker;
     gi__smc_state *s = ctx;
-    for (uint32_t i = chunk * 256; i < s->phot_count && i < (chunk + 1) * 256; i++) {
-        gi__smc_photon *P = &s->phot[i];
+    for (uint32_t o = chunk * 256; o < s->phot_valid && o < (chunk + 1) * 256; o++) {
+        gi__smc_photon *P = &s->phot[s->phot_order[o]]; /* in Morton order; the others stay unbinned */
         float d2;
         /* the trees carry the points' normals (raw[i].ns, the VPLs' ns) */
-        uint32_t r = P->valid ? gi_knn_nearest_facing(&s->raw_tree, P->pos, P->nrm, GI__SMC_COMPAT, &d2) : GI_KNN_NONE;
+        uint32_t r = gi_knn_nearest_facing(&s->raw_tree, P->pos, P->nrm, GI__SMC_COMPAT, &d2);
         float rk2 = r != GI_KNN_NONE ? s->raw[r].area * (float)s->raw_k * (float)PF_INV_PI : 0.0f;
         P->bin = GI__SMC_NONE;
         if (!(r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2)) continue;
@@ -1122,7 +1186,7 @@ static pf_result gi__smc_photons(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     for (uint32_t i = 0; i < s->I; i++) s->y[i].phot = pf_v3(0, 0, 0);
     pf_result r = gi__smc_trace_photons(s, in, err);
     if (r != PF_OK || !s->raw_count || !s->phot_count) return r; /* raw_tree: built with line 6 */
-    pf_jobs_parallel_for(in->jobs, gi__smc_bin_job, s, (s->phot_count + 255) / 256, 1);
+    pf_jobs_parallel_for(in->jobs, gi__smc_bin_job, s, (s->phot_valid + 255) / 256, 1);
     for (uint32_t i = 0; i < s->phot_count; i++) { /* in photon order: the same sums for any thread count */
         if (s->phot[i].bin == GI__SMC_NONE) continue;
         gi__smc_vpl *v = &s->y[s->phot[i].bin];

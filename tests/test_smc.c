@@ -19,6 +19,15 @@
  *   visibility can reach;
  * - every VPL set of 30 frames (camera and light moving) is identical with
  *   1 and 2 threads; slots are stable and `moved` marks exactly the new ones;
+ *   and identical between 1 thread on the scalar paths (rasterizer scalar,
+ *   Embree SSE2) and 2 threads on this machine's best SIMD paths;
+ * - the radiosity estimate's two halves (gi_radiosity_trace, then
+ *   gi_radiosity_gather, as SMC's line 18 keeps the first across frames)
+ *   give gi_radiosity_irradiance's bits, batched or not, with area and
+ *   several punctual lights, after a light moved too; the batched light
+ *   paths (gi_lightpath_trace_halton_batch) give the single ones' bits;
+ *   the tree's nearest facing point and its k-th distance on degenerate sets
+ *   (duplicates, a plane) equal a brute-force scan;
  * - bad parameters and a missing G-buffer give clear errors. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -30,6 +39,7 @@
 
 #include "gi_frame.h"
 #include "gi_knn.h"
+#include "gi_lightpath.h"
 #include "gi_radiosity.h"
 #include "gi_reference.h"
 #include "pf_gltf.h"
@@ -136,6 +146,72 @@ static void test_knn_brute_force(void **state)
     assert_int_equal(gi_knn_build(&t, p, 0, &err), PF_OK);
     assert_true(isinf(gi_knn_kth_dist2(&t, p[0], 1, GI_KNN_NONE)));
     assert_int_equal(gi_knn_nearest(&t, p[0], NULL), GI_KNN_NONE);
+    gi_knn_free(&t);
+}
+
+/* The nearest point whose normal faces a direction (gi_knn_nearest_facing,
+ * the photons' query) against a brute-force scan, and the tree on
+ * degenerate sets: every point the same, all points on one plane (the
+ * build's exact-median fallback), k larger than a leaf. */
+static void test_knn_facing_degenerate(void **state)
+{
+    (void)state;
+    enum { N = 2500 };
+    static pf_vec3 p[N], n[N];
+    for (int i = 0; i < N; i++) {
+        p[i] = pf_v3(rnd() * 4.0f - 2.0f, rnd() * 0.5f, rnd() * 3.0f);
+        n[i] = pf_v3_normalize(pf_v3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f));
+    }
+    for (int i = 0; i < 30; i++) p[200 + i] = p[9], n[200 + i] = n[9]; /* ties on the index */
+    gi_knn t;
+    memset(&t, 0, sizeof t);
+    pf_error err;
+    assert_int_equal(gi_knn_build_facing(&t, p, n, N, &err), PF_OK);
+    for (int q = 0; q < 300; q++) {
+        pf_vec3 c = q < 60 ? p[q * 7 + 200 * (q == 3)] : pf_v3(rnd() * 5.0f - 2.5f, rnd(), rnd() * 3.0f);
+        pf_vec3 m = pf_v3_normalize(pf_v3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f));
+        const float cos_min = q % 3 == 0 ? 0.5f : (q % 3 == 1 ? 0.9f : -0.2f);
+        uint32_t best = GI_KNN_NONE;
+        float bd = INFINITY;
+        for (int i = 0; i < N; i++) {
+            pf_vec3 v = pf_v3_sub(p[i], c);
+            float d = pf_v3_dot(v, v);
+            if (pf_v3_dot(n[i], m) >= cos_min && (d < bd || (d == bd && (uint32_t)i < best))) bd = d, best = (uint32_t)i;
+        }
+        float got_d;
+        uint32_t got = gi_knn_nearest_facing(&t, c, m, cos_min, &got_d);
+        if (got != best || !(got_d == bd || (isinf(got_d) && isinf(bd))))
+            fail_msg("facing query %d: tree %u (%.9g), brute force %u (%.9g)", q, got, got_d, best, bd);
+    }
+    /* no normal qualifies: none */
+    assert_int_equal(gi_knn_nearest_facing(&t, p[0], pf_v3(0, 1, 0), 2.0f, NULL), GI_KNN_NONE);
+    /* a plain tree has no normals: none */
+    assert_int_equal(gi_knn_build(&t, p, N, &err), PF_OK);
+    assert_int_equal(gi_knn_nearest_facing(&t, p[0], pf_v3(0, 1, 0), -1.0f, NULL), GI_KNN_NONE);
+    /* every point the same: distances 0, the lowest index */
+    for (int i = 0; i < N; i++) p[i] = pf_v3(0.25f, -1.0f, 3.0f);
+    assert_int_equal(gi_knn_build(&t, p, N, &err), PF_OK);
+    assert_true(gi_knn_kth_dist2(&t, p[0], 40, 5) == 0.0f);
+    assert_int_equal(gi_knn_nearest(&t, pf_v3(0, 0, 0), NULL), 0);
+    /* a plane (z constant), k above a leaf's size */
+    static float d[N];
+    for (int i = 0; i < N; i++) p[i] = pf_v3(rnd() * 2.0f, rnd() * 2.0f, 1.0f);
+    assert_int_equal(gi_knn_build(&t, p, N, &err), PF_OK);
+    for (int q = 0; q < 40; q++) {
+        pf_vec3 c = pf_v3(rnd() * 2.0f, rnd() * 2.0f, 1.0f + 0.01f * (float)(q % 3));
+        for (int i = 0; i < N; i++) {
+            pf_vec3 v = pf_v3_sub(p[i], c);
+            d[i] = pf_v3_dot(v, v);
+        }
+        for (int a = 0; a < 40; a++)
+            for (int b = a + 1; b < N; b++)
+                if (d[b] < d[a]) {
+                    float x = d[a];
+                    d[a] = d[b];
+                    d[b] = x;
+                }
+        assert_true(gi_knn_kth_dist2(&t, c, 40, GI_KNN_NONE) == d[39]);
+    }
     gi_knn_free(&t);
 }
 
@@ -274,6 +350,100 @@ static void test_radiosity_furnace(void **state)
     pf_scene_free(&s);
 }
 
+/* gi_radiosity_trace + gi_radiosity_gather = gi_radiosity_irradiance, bit
+ * for bit: the closed emissive sphere (area lights) with its point light
+ * and a second one, spp 1, 5, 16 and 37 (groups of 16 paths and a
+ * remainder), 1 to 4 bounces, 7 estimates in one batch and one at a time;
+ * then a light moves and the kept paths, gathered again, still give what a
+ * fresh estimate gives (SMC's line 18). */
+static void test_radiosity_halves(void **state)
+{
+    (void)state;
+    pf_scene s;
+    if (!tu_load_or_skip(&s, SPHERE)) return;
+    pf_error err;
+    assert_true(s.light_count >= 1);
+    pf_light L = s.lights[0];
+    L.position = pf_v3(0.2f, -0.1f, 0.15f);
+    L.color = pf_v3(0.3f, 1.0f, 0.6f);
+    assert_int_equal(pf_scene_add_light(&s, &L, &err), PF_OK);
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    pf_rt *rt;
+    assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+    gi_area_lights area;
+    assert_int_equal(gi_area_lights_build(&area, &s, &err), PF_OK);
+    assert_true(area.count > 0);
+    enum { E = 7 };
+    static gi_radiosity_vertex buf[E][37 * 4];
+    static const uint32_t spps[] = {1, 5, 16, 37};
+    for (uint32_t a = 0; a < 4; a++)
+        for (uint32_t B = 1; B <= 4; B++) {
+            gi_radiosity_ctx c = {&s, rt, &area, spps[a], B};
+            assert_true(gi_radiosity_vertex_count(&c) <= 37 * 4);
+            gi_radiosity_site y[E];
+            uint64_t seed[E];
+            gi_radiosity_vertex *v[E];
+            pf_vec3 want[E], got[E], one;
+            for (int e = 0; e < E; e++) {
+                pf_vec3 n = pf_v3_normalize(pf_v3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f));
+                y[e] = (gi_radiosity_site){pf_v3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f), n, n};
+                seed[e] = 1000u * a + 10u * B + (uint64_t)e;
+                v[e] = buf[e];
+                want[e] = gi_radiosity_irradiance(&c, y[e].p, y[e].ng, y[e].ns, seed[e]);
+            }
+            gi_radiosity_trace(&c, y, seed, E, v);
+            gi_radiosity_gather(&c, y, (const gi_radiosity_vertex *const *)v, E, got);
+            assert_memory_equal(want, got, sizeof want);
+            gi_radiosity_gather(&c, &y[3], (const gi_radiosity_vertex *const *)&v[3], 1, &one);
+            assert_memory_equal(&want[3], &one, sizeof one);
+            /* a light moves: the same paths, gathered with the new light */
+            s.lights[1].position = pf_v3_add(s.lights[1].position, pf_v3(0.01f, 0.02f, -0.01f));
+            gi_radiosity_gather(&c, y, (const gi_radiosity_vertex *const *)v, E, got);
+            for (int e = 0; e < E; e++) {
+                pf_vec3 fresh = gi_radiosity_irradiance(&c, y[e].p, y[e].ng, y[e].ns, seed[e]);
+                assert_memory_equal(&fresh, &got[e], sizeof fresh);
+            }
+        }
+    gi_area_lights_free(&area);
+    pf_rt_destroy(rt);
+    pf_scene_free(&s);
+}
+
+/* The light paths of SMC's photons, 64 at a time
+ * (gi_lightpath_trace_halton_batch), against one at a time: the same hits,
+ * bit for bit (the Cornell box's point light; the sphere's area light). */
+static void test_lightpath_batch(void **state)
+{
+    (void)state;
+    const char *scenes[] = {CORNELL, SPHERE};
+    for (int k = 0; k < 2; k++) {
+        pf_scene s;
+        if (!tu_load_or_skip(&s, scenes[k])) continue;
+        pf_error err;
+        assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+        pf_rt *rt;
+        assert_int_equal(pf_rt_create(&rt, &s, PF_ISA_SSE2, 1, &err), PF_OK);
+        gi_area_lights area;
+        assert_int_equal(gi_area_lights_build(&area, &s, &err), PF_OK);
+        gi_lightpath_lights lights;
+        gi_lightpath_lights_init(&lights, &s, &area);
+        enum { P = 150, B = 4 };
+        static gi_vpl one[P * B], many[P * B];
+        uint32_t got1[P], got[P];
+        memset(one, 0, sizeof one), memset(many, 0, sizeof many);
+        for (uint32_t i = 0; i < P; i++) got1[i] = gi_lightpath_trace_halton(&lights, rt, 7 + i, B, B, &one[i * B]);
+        gi_lightpath_trace_halton_batch(&lights, rt, 7, P, B, many, got);
+        assert_memory_equal(got1, got, sizeof got);
+        assert_memory_equal(one, many, sizeof one);
+        uint32_t hits = 0;
+        for (uint32_t i = 0; i < P; i++) hits += got[i];
+        assert_true(hits > P); /* paths bounce */
+        gi_area_lights_free(&area);
+        pf_rt_destroy(rt);
+        pf_scene_free(&s);
+    }
+}
+
 /* ---------------------------------------------------------------- the method */
 
 /* A static camera and light: after the warm-up the set settles; count the
@@ -334,13 +504,22 @@ static void test_corridor_hidden_room(void **state)
 /* 30 frames with the camera and the light moving, on 1 and 2 threads:
  * every frame's VPL set is identical. Also: slots are stable (a VPL whose
  * id was in slot i stays in slot i), `moved` is set exactly for new ids. */
-static void run_frames(uint32_t threads, gi_vpl *out, uint32_t *counts)
+static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *out, uint32_t *counts)
 {
     fx x;
     fx_load(&x, CORNELL);
     static const char *const params[] = {"warmup=10", "spp=8", NULL};
     pf_camera cam = x.scene.cameras[0];
-    fx_begin(&x, threads, 48, 48, &cam, 128, params);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.method = gi_vpl_method_find("smc");
+    io.vpls = 128;
+    io.visibility_raytrace = 1;
+    pf_error err;
+    for (const char *const *p = params; *p; p++) assert_int_equal(gi_params_add(&io.params, *p, &err), PF_OK);
+    tu_fx_desc d = {0};
+    d.threads = threads, d.simd = simd, d.isa = isa, d.w = 48, d.h = 48, d.cam = &cam, d.io = &io, d.indirect_only = 1;
+    tu_fx_begin_with(&x, &d);
     static uint32_t prev_id[128];
     for (int fr = 0; fr < 30; fr++) {
         pf_error err;
@@ -361,6 +540,11 @@ static void run_frames(uint32_t threads, gi_vpl *out, uint32_t *counts)
     fx_end(&x);
 }
 
+static void run_frames(uint32_t threads, gi_vpl *out, uint32_t *counts)
+{
+    run_frames_with(threads, RS_SIMD_SCALAR, PF_ISA_SSE2, out, counts);
+}
+
 static void test_deterministic_threads(void **state)
 {
     (void)state;
@@ -378,6 +562,27 @@ static void test_deterministic_threads(void **state)
     }
     /* the light moves: the set adapts, but at most M_max per frame */
     assert_true(changed > 0 && changed <= 29u * 16u);
+}
+
+/* The same 30 frames on the scalar paths with 1 thread (the rasterizer's
+ * scalar G-buffer, Embree pinned to SSE2) and on this machine's best paths
+ * with 2 threads (the rasterizer's widest SIMD path, Embree's best ISA):
+ * every VPL's position, normal, intensity, id and moved flag, bit for bit. */
+static void test_deterministic_isa(void **state)
+{
+    (void)state;
+    static gi_vpl a[30 * 128], b[30 * 128];
+    uint32_t ca[30], cb[30];
+    memset(a, 0, sizeof a), memset(b, 0, sizeof b);
+    const pf_isa best = pf_isa_detect();
+    run_frames_with(1, RS_SIMD_SCALAR, PF_ISA_SSE2, a, ca);
+    run_frames_with(2, rs_simd_for_isa(best), best, b, cb);
+    print_message("scalar / SSE2, 1 thread against %s, 2 threads\n", pf_isa_name(best));
+    for (int fr = 0; fr < 30; fr++) {
+        assert_int_equal(ca[fr], cb[fr]);
+        if (memcmp(a + fr * 128, b + fr * 128, sizeof(gi_vpl) * ca[fr]))
+            fail_msg("frame %d: the VPL sets differ between the scalar and the %s paths", fr, pf_isa_name(best));
+    }
 }
 
 /* The mean indirect irradiance (gi_indirect's combined buffer) of one
@@ -544,7 +749,9 @@ static void test_bad_input(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_knn_brute_force),       cmocka_unit_test(test_knn_density_grid),
+        cmocka_unit_test(test_knn_brute_force),       cmocka_unit_test(test_knn_facing_degenerate),
+        cmocka_unit_test(test_knn_density_grid),      cmocka_unit_test(test_radiosity_halves),
+        cmocka_unit_test(test_lightpath_batch),       cmocka_unit_test(test_deterministic_isa),
         cmocka_unit_test(test_radiosity_point_light), cmocka_unit_test(test_radiosity_furnace),
         cmocka_unit_test(test_static_converges),      cmocka_unit_test(test_corridor_hidden_room),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_units_furnace),

@@ -6,89 +6,175 @@
 #include <stdlib.h>
 #include <string.h>
 
-static inline float gi__coord(const pf_vec3 *p, uint32_t a) { return a == 0 ? p->x : (a == 1 ? p->y : p->z); }
+/* A point during the build: its coordinates and its index, moved as one. */
+struct gi_knn_rec {
+    float c[3];
+    uint32_t i;
+};
 
-/* The total order the split uses: coordinate on axis a, then index. */
-static inline int gi__less(const gi_knn *t, uint32_t a, uint32_t i, uint32_t j)
+/* An inner node: [lo, mid) at or below `split` on `axis`, [mid, hi) at or
+ * above; the left child is the next node, the right one is `right`. */
+struct gi_knn_node {
+    float split;
+    uint32_t mid, right, axis;
+};
+
+/* Inner nodes of a tree over n points: every split leaves at least
+ * n / 8 >= 2 points on each side, so leaves hold two points or more and
+ * there are fewer than n / 2 inner nodes. */
+static uint32_t gi__node_cap(uint32_t n) { return n / 2 + 1; }
+
+/* Selection (Wirth's variant of Hoare's): permutes r[0, n) so that r[k]
+ * has rank k on axis a, with r[0, k) at or below it and r(k, n) at or
+ * above it. Equal coordinates split evenly (many duplicates stay O(n));
+ * the pivot's own value stops both scans, so they stay inside the range. */
+static void gi__select(gi_knn_rec *r, uint32_t n, uint32_t k, uint32_t a)
 {
-    float ci = gi__coord(&t->pts[i], a), cj = gi__coord(&t->pts[j], a);
-    return ci < cj || (ci == cj && i < j);
+    int64_t l = 0, m = (int64_t)n - 1;
+    while (l < m) {
+        const float x = r[k].c[a];
+        int64_t i = l, j = m;
+        do {
+            while (r[i].c[a] < x) i++;
+            while (x < r[j].c[a]) j--;
+            if (i <= j) {
+                gi_knn_rec t = r[i];
+                r[i] = r[j];
+                r[j] = t;
+                i++, j--;
+            }
+        } while (i <= j);
+        if (j < (int64_t)k) l = i;
+        if ((int64_t)k < i) m = j;
+    }
 }
 
-/* Quickselect: permutes idx[lo, hi) so that idx[m] is the element of rank
- * m - lo in the order above, smaller ones before it, larger after. Pivot:
- * median of three, so sorted input stays O(n). */
-static void gi__select(gi_knn *t, uint32_t a, uint32_t lo, uint32_t hi, uint32_t m)
+/* Branch-free partition: r[0, m) < v <= r[m, n) on axis a; returns m. */
+static uint32_t gi__partition(gi_knn_rec *r, uint32_t n, uint32_t a, float v)
 {
-    uint32_t *x = t->idx;
-    while (hi - lo > 1) {
-        uint32_t mid = lo + (hi - lo) / 2, last = hi - 1;
-        /* order x[lo], x[mid], x[last]; the median goes to x[last] as pivot */
-        if (gi__less(t, a, x[mid], x[lo])) { uint32_t s = x[mid]; x[mid] = x[lo]; x[lo] = s; }
-        if (gi__less(t, a, x[last], x[lo])) { uint32_t s = x[last]; x[last] = x[lo]; x[lo] = s; }
-        if (gi__less(t, a, x[mid], x[last])) { uint32_t s = x[mid]; x[mid] = x[last]; x[last] = s; }
-        uint32_t pivot = x[last], store = lo;
-        for (uint32_t i = lo; i < last; i++)
-            if (gi__less(t, a, x[i], pivot)) { uint32_t s = x[i]; x[i] = x[store]; x[store] = s; store++; }
-        x[last] = x[store];
-        x[store] = pivot;
-        if (store == m) return;
-        if (m < store) hi = store;
-        else lo = store + 1;
+    uint32_t j = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        gi_knn_rec t = r[i];
+        r[i] = r[j];
+        r[j] = t;
+        j += t.c[a] < v;
     }
+    return j;
+}
+
+/* The median of up to 15 evenly spaced coordinates of r[0, n) on axis a. */
+static float gi__sample_median(const gi_knn_rec *r, uint32_t n, uint32_t a)
+{
+    float s[15];
+    uint32_t m = n < 15 ? n : 15;
+    for (uint32_t i = 0; i < m; i++) {
+        float c = r[(uint32_t)(((uint64_t)(2 * i + 1) * n) / (2 * m))].c[a];
+        uint32_t j = i;
+        for (; j > 0 && s[j - 1] > c; j--) s[j] = s[j - 1];
+        s[j] = c;
+    }
+    return s[m / 2];
 }
 
 static void gi__build(gi_knn *t, uint32_t lo, uint32_t hi)
 {
-    while (hi - lo > 1) {
-        pf_vec3 mn = t->pts[t->idx[lo]], mx = mn;
-        for (uint32_t i = lo + 1; i < hi; i++) {
-            pf_vec3 p = t->pts[t->idx[i]];
-            mn = pf_v3(fminf(mn.x, p.x), fminf(mn.y, p.y), fminf(mn.z, p.z));
-            mx = pf_v3(fmaxf(mx.x, p.x), fmaxf(mx.y, p.y), fmaxf(mx.z, p.z));
+    while (hi - lo > GI_KNN_LEAF) {
+        gi_knn_rec *r = t->rec + lo;
+        const uint32_t n = hi - lo;
+        float mn[3] = {r[0].c[0], r[0].c[1], r[0].c[2]}, mx[3] = {mn[0], mn[1], mn[2]};
+        for (uint32_t i = 1; i < n; i++) /* compares, not fminf: libm calls here cost more than the split */
+            for (int a = 0; a < 3; a++) {
+                float c = r[i].c[a];
+                mn[a] = c < mn[a] ? c : mn[a];
+                mx[a] = c > mx[a] ? c : mx[a];
+            }
+        float ex = mx[0] - mn[0], ey = mx[1] - mn[1], ez = mx[2] - mn[2];
+        uint32_t a = ex >= ey && ex >= ez ? 0u : (ey >= ez ? 1u : 2u);
+        float v = gi__sample_median(r, n, a);
+        uint32_t m = gi__partition(r, n, a, v);
+        if (m < n / 8 || n - m < n / 8) { /* a poor sample (or many equal coordinates): the exact median */
+            m = n / 2;
+            gi__select(r, n, m, a);
+            v = r[m].c[a];
         }
-        pf_vec3 e = pf_v3_sub(mx, mn);
-        uint32_t a = e.x >= e.y && e.x >= e.z ? 0u : (e.y >= e.z ? 1u : 2u);
-        uint32_t mid = lo + (hi - lo) / 2;
-        gi__select(t, a, lo, hi, mid);
-        t->axis[mid] = (uint8_t)a;
-        gi__build(t, lo, mid);
-        lo = mid + 1; /* the right half iteratively */
+        gi_knn_node *N = &t->node[t->node_count++];
+        N->axis = a, N->split = v, N->mid = lo + m;
+        gi__build(t, lo, lo + m);
+        N->right = t->node_count;
+        lo += m; /* the right half iteratively */
     }
-    if (hi - lo == 1) t->axis[lo] = 0;
+}
+
+static pf_result gi__reserve(gi_knn *t, uint32_t count, int facing, pf_error *err)
+{
+    uint32_t nodes = gi__node_cap(count);
+    if (count > t->cap || !t->rec || (facing && !t->nx)) {
+        uint32_t cap = count > t->cap ? count : t->cap;
+        cap = cap ? cap : 1;
+        free(t->x), free(t->y), free(t->z), free(t->idx), free(t->rec), free(t->nx), free(t->ny), free(t->nz);
+        t->x = malloc(sizeof(float) * cap), t->y = malloc(sizeof(float) * cap), t->z = malloc(sizeof(float) * cap);
+        t->nx = malloc(sizeof(float) * cap), t->ny = malloc(sizeof(float) * cap), t->nz = malloc(sizeof(float) * cap);
+        t->idx = malloc(sizeof(uint32_t) * cap);
+        t->rec = malloc(sizeof(gi_knn_rec) * cap);
+        t->cap = t->x && t->y && t->z && t->nx && t->ny && t->nz && t->idx && t->rec ? cap : 0;
+        if (!t->cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
+    }
+    if (nodes > t->node_cap) {
+        free(t->node);
+        t->node = malloc(sizeof(gi_knn_node) * nodes);
+        t->node_cap = t->node ? nodes : 0;
+        if (!t->node_cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
+    }
+    return PF_OK;
+}
+
+static pf_result gi__build_tree(gi_knn *t, const pf_vec3 *pts, const pf_vec3 *nrms, uint32_t count, pf_error *err)
+{
+    pf_result r = gi__reserve(t, count, nrms != NULL, err);
+    if (r != PF_OK) return r;
+    t->count = count;
+    t->node_count = 0;
+    t->facing = nrms != NULL;
+    for (uint32_t i = 0; i < count; i++) t->rec[i] = (gi_knn_rec){{pts[i].x, pts[i].y, pts[i].z}, i};
+    gi__build(t, 0, count);
+    for (uint32_t i = 0; i < count; i++) {
+        t->x[i] = t->rec[i].c[0], t->y[i] = t->rec[i].c[1], t->z[i] = t->rec[i].c[2];
+        t->idx[i] = t->rec[i].i;
+    }
+    if (nrms)
+        for (uint32_t i = 0; i < count; i++) {
+            const pf_vec3 *n = &nrms[t->idx[i]];
+            t->nx[i] = n->x, t->ny[i] = n->y, t->nz[i] = n->z;
+        }
+    return PF_OK;
 }
 
 pf_result gi_knn_build(gi_knn *t, const pf_vec3 *pts, uint32_t count, pf_error *err)
 {
-    if (count > t->cap) {
-        uint32_t cap = count;
-        pf_vec3 *p = realloc(t->pts, sizeof(pf_vec3) * cap);
-        if (p) t->pts = p;
-        uint32_t *ix = realloc(t->idx, sizeof(uint32_t) * cap);
-        if (ix) t->idx = ix;
-        uint8_t *ax = realloc(t->axis, cap);
-        if (ax) t->axis = ax;
-        pf_vec3 *tp = realloc(t->tpts, sizeof(pf_vec3) * cap);
-        if (tp) t->tpts = tp;
-        if (!p || !ix || !ax || !tp)
-            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %u-point k-d tree", count);
-        t->cap = cap;
-    }
-    t->count = count;
-    if (count) memcpy(t->pts, pts, sizeof(pf_vec3) * count);
-    for (uint32_t i = 0; i < count; i++) t->idx[i] = i;
-    gi__build(t, 0, count);
-    for (uint32_t i = 0; i < count; i++) t->tpts[i] = t->pts[t->idx[i]];
-    return PF_OK;
+    return gi__build_tree(t, pts, NULL, count, err);
+}
+
+pf_result gi_knn_build_facing(gi_knn *t, const pf_vec3 *pts, const pf_vec3 *nrms, uint32_t count, pf_error *err)
+{
+    return gi__build_tree(t, pts, nrms, count, err);
 }
 
 void gi_knn_free(gi_knn *t)
 {
-    free(t->pts);
-    free(t->idx);
-    free(t->axis);
-    free(t->tpts);
+    free(t->x), free(t->y), free(t->z), free(t->nx), free(t->ny), free(t->nz), free(t->idx), free(t->rec);
+    free(t->node);
     memset(t, 0, sizeof *t);
+}
+
+/* Squared distances from q to the points [lo, lo + n) of a leaf, each
+ * dot(p - q, p - q) as the brute force computes it. */
+static void gi__leaf_dist2(const gi_knn *t, uint32_t lo, uint32_t n, const float q[3], float *d)
+{
+    const float *x = t->x + lo, *y = t->y + lo, *z = t->z + lo;
+    for (uint32_t i = 0; i < n; i++) {
+        float dx = x[i] - q[0], dy = y[i] - q[1], dz = z[i] - q[2];
+        d[i] = dx * dx + dy * dy + dz * dz;
+    }
 }
 
 /* The k best squared distances so far, ascending (insertion: k <= 64). */
@@ -110,31 +196,38 @@ static void gi__push(gi__heap *h, float d2)
     h->d[i] = d2;
 }
 
-static void gi__query(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, uint32_t exclude, gi__heap *h)
+/* The squared distance from q to a cell that lies off[a] away from it on
+ * each axis, a lower bound on every point's of the cell: each point's
+ * |p_a - q_a| rounds to at least off[a] = |split - q_a| (the split lies
+ * between them), and squares and sums round monotonically, so
+ * (dx dx + dy dy) + dz dz >= (off_x off_x + off_y off_y) + off_z off_z
+ * (Arya and Mount's incremental distance, computed afresh, never updated
+ * by differences that could round below the bound). */
+static inline float gi__cell_dist2(const float off[3]) { return off[0] * off[0] + off[1] * off[1] + off[2] * off[2]; }
+
+/* Near side first, the far side only if its cell is no farther than the
+ * current k-th distance. */
+static void gi__query(const gi_knn *t, uint32_t node, uint32_t lo, uint32_t hi, const float q[3], float o0, float o1,
+                      float o2, uint32_t exclude, gi__heap *hp)
 {
-    while (hi > lo) {
-        if (hi - lo <= 8) { /* small node: scan */
-            for (uint32_t i = lo; i < hi; i++) {
-                if (t->idx[i] == exclude) continue;
-                pf_vec3 d = pf_v3_sub(t->tpts[i], q);
-                gi__push(h, pf_v3_dot(d, d));
-            }
-            return;
+    float off[3] = {o0, o1, o2};
+    while (hi - lo > GI_KNN_LEAF) {
+        const gi_knn_node *N = &t->node[node];
+        float delta = q[N->axis] - N->split;
+        if (delta < 0.0f) {
+            gi__query(t, node + 1, lo, N->mid, q, off[0], off[1], off[2], exclude, hp);
+            node = N->right, lo = N->mid;
+        } else {
+            gi__query(t, N->right, N->mid, hi, q, off[0], off[1], off[2], exclude, hp);
+            node = node + 1, hi = N->mid;
         }
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (t->idx[mid] != exclude) {
-            pf_vec3 d = pf_v3_sub(t->tpts[mid], q);
-            gi__push(h, pf_v3_dot(d, d));
-        }
-        float delta = gi__coord(&q, t->axis[mid]) - gi__coord(&t->tpts[mid], t->axis[mid]);
-        /* near side first, the far side only if the splitting plane is
-         * closer than the current k-th distance */
-        uint32_t nlo = delta < 0.0f ? lo : mid + 1, nhi = delta < 0.0f ? mid : hi;
-        uint32_t flo = delta < 0.0f ? mid + 1 : lo, fhi = delta < 0.0f ? hi : mid;
-        gi__query(t, nlo, nhi, q, exclude, h);
-        if (!(delta * delta <= gi__worst(h))) return;
-        lo = flo, hi = fhi;
+        off[N->axis] = fabsf(delta);
+        if (!(gi__cell_dist2(off) <= gi__worst(hp))) return;
     }
+    float d[GI_KNN_LEAF];
+    gi__leaf_dist2(t, lo, hi - lo, q, d);
+    for (uint32_t i = 0; i < hi - lo; i++)
+        if (t->idx[lo + i] != exclude) gi__push(hp, d[i]);
 }
 
 float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude)
@@ -142,62 +235,89 @@ float gi_knn_kth_dist2(const gi_knn *t, pf_vec3 q, uint32_t k, uint32_t exclude)
     gi__heap h;
     h.k = k < 1 ? 1 : (k > GI_KNN_MAX_K ? GI_KNN_MAX_K : k);
     h.n = 0;
-    gi__query(t, 0, t->count, q, exclude, &h);
+    const float qq[3] = {q.x, q.y, q.z};
+    if (t->count) gi__query(t, 0, 0, t->count, qq, 0.0f, 0.0f, 0.0f, exclude, &h);
     return gi__worst(&h);
 }
 
 /* The best (d2, index) so far in the total order (distance, index), among
- * the points ok accepts (all when ok is NULL). */
+ * the points ok accepts (all when ok is NULL), or (facing) among those
+ * whose normal m has pf_v3_dot(m, n) >= cos_min. */
 typedef struct gi__best {
     float d2;
     uint32_t i;
     int (*ok)(const void *ctx, uint32_t index);
     const void *ctx;
+    int facing;
+    float n[3], cos_min;
 } gi__best;
 
-static void gi__offer(gi__best *b, float d2, uint32_t i)
+/* <=: a point of the far cell at the same distance may have a lower index */
+static void gi__nearest(const gi_knn *t, uint32_t node, uint32_t lo, uint32_t hi, const float q[3], float o0, float o1,
+                        float o2, gi__best *b)
 {
-    if ((d2 < b->d2 || (d2 == b->d2 && i < b->i)) && (!b->ok || b->ok(b->ctx, i))) b->d2 = d2, b->i = i;
+    float off[3] = {o0, o1, o2};
+    while (hi - lo > GI_KNN_LEAF) {
+        const gi_knn_node *N = &t->node[node];
+        float delta = q[N->axis] - N->split;
+        if (delta < 0.0f) {
+            gi__nearest(t, node + 1, lo, N->mid, q, off[0], off[1], off[2], b);
+            node = N->right, lo = N->mid;
+        } else {
+            gi__nearest(t, N->right, N->mid, hi, q, off[0], off[1], off[2], b);
+            node = node + 1, hi = N->mid;
+        }
+        off[N->axis] = fabsf(delta);
+        if (!(gi__cell_dist2(off) <= b->d2)) return;
+    }
+    const uint32_t n = hi - lo;
+    float d[GI_KNN_LEAF];
+    gi__leaf_dist2(t, lo, n, q, d);
+    if (b->facing) {
+        const float *nx = t->nx + lo, *ny = t->ny + lo, *nz = t->nz + lo;
+        float f[GI_KNN_LEAF];
+        for (uint32_t i = 0; i < n; i++) f[i] = nx[i] * b->n[0] + ny[i] * b->n[1] + nz[i] * b->n[2];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t ix = t->idx[lo + i];
+            if (f[i] >= b->cos_min && (d[i] < b->d2 || (d[i] == b->d2 && ix < b->i))) b->d2 = d[i], b->i = ix;
+        }
+        return;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t ix = t->idx[lo + i];
+        if ((d[i] < b->d2 || (d[i] == b->d2 && ix < b->i)) && (!b->ok || b->ok(b->ctx, ix))) b->d2 = d[i], b->i = ix;
+    }
 }
 
-static void gi__nearest(const gi_knn *t, uint32_t lo, uint32_t hi, pf_vec3 q, gi__best *b)
+static uint32_t gi__nearest_root(const gi_knn *t, pf_vec3 q, gi__best *b, float *dist2)
 {
-    while (hi > lo) {
-        if (hi - lo <= 8) {
-            for (uint32_t i = lo; i < hi; i++) {
-                pf_vec3 d = pf_v3_sub(t->tpts[i], q);
-                gi__offer(b, pf_v3_dot(d, d), t->idx[i]);
-            }
-            return;
-        }
-        uint32_t mid = lo + (hi - lo) / 2;
-        pf_vec3 d = pf_v3_sub(t->tpts[mid], q);
-        gi__offer(b, pf_v3_dot(d, d), t->idx[mid]);
-        float delta = gi__coord(&q, t->axis[mid]) - gi__coord(&t->tpts[mid], t->axis[mid]);
-        uint32_t nlo = delta < 0.0f ? lo : mid + 1, nhi = delta < 0.0f ? mid : hi;
-        uint32_t flo = delta < 0.0f ? mid + 1 : lo, fhi = delta < 0.0f ? hi : mid;
-        gi__nearest(t, nlo, nhi, q, b);
-        /* <=: a point on the far side at the same distance may have a lower index */
-        if (!(delta * delta <= b->d2)) return;
-        lo = flo, hi = fhi;
-    }
+    const float qq[3] = {q.x, q.y, q.z};
+    if (t->count) gi__nearest(t, 0, 0, t->count, qq, 0.0f, 0.0f, 0.0f, b);
+    if (dist2) *dist2 = b->d2;
+    return b->i;
 }
 
 uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2)
 {
-    gi__best b = {INFINITY, GI_KNN_NONE, NULL, NULL};
-    gi__nearest(t, 0, t->count, q, &b);
-    if (dist2) *dist2 = b.d2;
-    return b.i;
+    gi__best b = {INFINITY, GI_KNN_NONE, NULL, NULL, 0, {0, 0, 0}, 0.0f};
+    return gi__nearest_root(t, q, &b, dist2);
 }
 
 uint32_t gi_knn_nearest_where(const gi_knn *t, pf_vec3 q, int (*ok)(const void *ctx, uint32_t index),
                               const void *ctx, float *dist2)
 {
-    gi__best b = {INFINITY, GI_KNN_NONE, ok, ctx};
-    gi__nearest(t, 0, t->count, q, &b);
-    if (dist2) *dist2 = b.d2;
-    return b.i;
+    gi__best b = {INFINITY, GI_KNN_NONE, ok, ctx, 0, {0, 0, 0}, 0.0f};
+    return gi__nearest_root(t, q, &b, dist2);
+}
+
+uint32_t gi_knn_nearest_facing(const gi_knn *t, pf_vec3 q, pf_vec3 n, float cos_min, float *dist2)
+{
+    gi__best b = {INFINITY, GI_KNN_NONE, NULL, NULL, t->facing, {n.x, n.y, n.z}, cos_min};
+    if (!t->facing) { /* no normals: nothing qualifies */
+        if (dist2) *dist2 = INFINITY;
+        return GI_KNN_NONE;
+    }
+    return gi__nearest_root(t, q, &b, dist2);
 }
 
 float gi_knn_density(uint32_t k, uint32_t n, float r2)

@@ -3,17 +3,25 @@
  * Radiosity (Hedman 2017 Sec. 3.2.4, Eq. 7; the paper builds a BVH on the
  * GPU, Sec. 4: any exact kNN structure gives the same answers).
  *
- * Tree: the point indices are permuted in place into an implicit balanced
- * tree. Node [lo, hi) splits at mid = (lo + hi) / 2 on the axis where its
- * points spread most; idx[mid] is the node's point, [lo, mid) lie at or
- * below it on that axis and (mid, hi) at or above it. The split is a
- * quickselect on the total order (coordinate, index), so the tree depends
- * only on the points, never on timing. Build O(n log n), query about
- * O(log n + k) for well-spread points.
+ * Tree: the points are permuted into a tree of buckets. A node holds the
+ * points [lo, hi); with more than GI_KNN_LEAF points it splits on the axis
+ * where its points spread most, at the median of a sample of their
+ * coordinates (one branch-free partition pass; an exact median when the
+ * sample's splits the node worse than 1:7): the points of [lo, mid) lie at
+ * or below the split, those of [mid, hi) at or above it. Nodes are stored
+ * in preorder (the left child follows its parent). A leaf's points are
+ * scanned together from structure-of-arrays coordinates (the loop
+ * vectorises). Build O(n log n), query about O(log n + k) for well-spread
+ * points.
  *
- * Queries are exact: the k-th smallest distance is a property of the point
- * set, so any traversal order returns the same value, bit for bit. Queries
- * only read the tree and may run on many threads at once.
+ * Queries are exact: the k-th smallest distance and the nearest point
+ * (lowest index among equally near ones) are properties of the point set,
+ * each distance computed as dot(p - q, p - q) = (dx dx + dy dy) + dz dz, and
+ * a subtree is skipped only when its splitting plane is farther than the
+ * current answer: rounding is monotonic, so no point behind the plane can
+ * come out nearer than the plane. Any tree over the same points, and any
+ * traversal order, gives the same answers, bit for bit. Queries only read
+ * the tree and may run on many threads at once.
  *
  * Density (Eq. 7, the photon-mapping assumption that the k neighbours lie
  * on one plane through the query point):
@@ -31,12 +39,19 @@
 #define GI_KNN_MAX_K 64
 #define GI_KNN_NONE 0xffffffffu
 
+#define GI_KNN_LEAF 16 /* points per leaf at most */
+
+typedef struct gi_knn_rec gi_knn_rec;   /* the build's scratch (gi_knn.c) */
+typedef struct gi_knn_node gi_knn_node; /* gi_knn.c */
+
 typedef struct gi_knn {
-    uint32_t count, cap;
-    pf_vec3 *pts;   /* copies of the points, by original index */
-    uint32_t *idx;  /* the implicit tree: a permutation of 0..count-1 */
-    pf_vec3 *tpts;  /* pts[idx[i]]: the points in tree order, so queries read memory in order */
-    uint8_t *axis;  /* split axis of the node whose point is idx[i] */
+    uint32_t count, cap, node_count, node_cap;
+    float *x, *y, *z;    /* the points in tree order */
+    float *nx, *ny, *nz; /* their normals (gi_knn_build_facing), in tree order */
+    uint32_t *idx;       /* their indices in the array given to gi_knn_build */
+    gi_knn_node *node;   /* preorder */
+    gi_knn_rec *rec;     /* build scratch */
+    int facing;          /* built with normals */
 } gi_knn;
 
 /* Builds the tree over pts[0..count) (copied; count may be 0). Reuses the
@@ -58,6 +73,12 @@ uint32_t gi_knn_nearest(const gi_knn *t, pf_vec3 q, float *dist2);
  * when none is). */
 uint32_t gi_knn_nearest_where(const gi_knn *t, pf_vec3 q, int (*ok)(const void *ctx, uint32_t index),
                               const void *ctx, float *dist2);
+
+/* The tree with a unit normal per point, for gi_knn_nearest_facing. */
+pf_result gi_knn_build_facing(gi_knn *t, const pf_vec3 *pts, const pf_vec3 *nrms, uint32_t count, pf_error *err);
+/* gi_knn_nearest among the points whose normal m faces n's way:
+ * pf_v3_dot(m, n) >= cos_min (a tree built by gi_knn_build_facing). */
+uint32_t gi_knn_nearest_facing(const gi_knn *t, pf_vec3 q, pf_vec3 n, float cos_min, float *dist2);
 
 /* Eq. 7: density w.r.t. area of N points, given the squared k-NN radius
  * (0 for r2 = INFINITY; INFINITY for r2 = 0). */

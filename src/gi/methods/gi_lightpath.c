@@ -150,19 +150,75 @@ uint32_t gi_lightpath_trace_halton(const gi_lightpath_lights *c, const pf_rt *rt
     return n;
 }
 
-int gi_lightpath_hit(const pf_rt *rt, pf_ray ray, pf_vec3 phi, gi_vpl *v, pf_vec3 *albedo)
+/* gi_lightpath_hit after the intersection: the hit h of `ray` (not a miss). */
+static void gi__hit_surface(const pf_rt *rt, const pf_ray *ray, const pf_hit *h, pf_vec3 phi, gi_vpl *v,
+                            pf_vec3 *albedo)
 {
-    pf_hit h = pf_rt_intersect1(rt, ray);
-    if (h.prim == PF_RT_MISS) return 0;
     pf_surface sf;
-    pf_rt_surface(rt, &h, GI_VPL_ALBEDO_LOD, &sf); /* the VPL's albedo: gi_vpl.h's rule */
+    pf_rt_surface(rt, h, GI_VPL_ALBEDO_LOD, &sf); /* the VPL's albedo: gi_vpl.h's rule */
     pf_vec3 n = sf.ns, ng = sf.ng;
-    if (pf_v3_dot(ng, ray.dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f); /* two-sided: face the photon */
+    if (pf_v3_dot(ng, ray->dir) > 0.0f) ng = pf_v3_scale(ng, -1.0f); /* two-sided: face the photon */
     if (pf_v3_dot(n, ng) < 0.0f) n = pf_v3_scale(n, -1.0f);
     *albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
     v->pos = pf_rt_offset_origin(sf.p, ng, ng);
     v->nrm = n;
     v->intensity = pf_v3_scale(pf_v3_mul(phi, *albedo), PF_INV_PI);
+}
+
+#define GI__BATCH 64 /* paths per Embree call of gi_lightpath_trace_halton_batch */
+
+void gi_lightpath_trace_halton_batch(const gi_lightpath_lights *c, const pf_rt *rt, uint32_t hi0, uint32_t count,
+                                     uint32_t bounces, gi_vpl *out, uint32_t *got)
+{
+    for (uint32_t b0 = 0; b0 < count; b0 += GI__BATCH) {
+        const uint32_t m = count - b0 < GI__BATCH ? count - b0 : GI__BATCH;
+        pf_ray ray[GI__BATCH], rays[GI__BATCH];
+        pf_vec3 phi[GI__BATCH];
+        pf_hit hits[GI__BATCH];
+        uint32_t dim0[GI__BATCH], who[GI__BATCH];
+        uint8_t alive[GI__BATCH];
+        for (uint32_t i = 0; i < m; i++) {
+            gi_lightpath_numbers u;
+            dim0[i] = gi__numbers_halton(c, hi0 + b0 + i, &u);
+            gi_lightpath_emit(c, &u, &ray[i], &phi[i]);
+            got[b0 + i] = 0;
+            alive[i] = bounces > 0;
+        }
+        for (uint32_t k = 0; k < bounces; k++) {
+            uint32_t q = 0;
+            for (uint32_t i = 0; i < m; i++)
+                if (alive[i]) rays[q] = ray[i], who[q++] = i;
+            if (!q) break;
+            pf_rt_intersect(rt, rays, hits, q);
+            for (uint32_t j = 0; j < q; j++) {
+                const uint32_t i = who[j], hi = hi0 + b0 + i;
+                if (hits[j].prim == PF_RT_MISS) {
+                    alive[i] = 0;
+                    continue;
+                }
+                gi_vpl *v = &out[(size_t)(b0 + i) * bounces + got[b0 + i]];
+                pf_vec3 albedo;
+                gi__hit_surface(rt, &rays[j], &hits[j], phi[i], v, &albedo);
+                got[b0 + i]++;
+                /* Russian roulette by albedo, then a cosine-weighted bounce */
+                uint32_t d = dim0[i] + 3 * k;
+                if (k + 1 == bounces || d + 2 >= GI__DIMS) {
+                    alive[i] = 0;
+                    continue;
+                }
+                float rr = (float)gi_halton(hi, gi__primes[d + 2]);
+                float a1 = (float)gi_halton(hi, gi__primes[d]), a2 = (float)gi_halton(hi, gi__primes[d + 1]);
+                alive[i] = (uint8_t)gi_lightpath_bounce(v, albedo, rr, a1, a2, &phi[i], &ray[i]);
+            }
+        }
+    }
+}
+
+int gi_lightpath_hit(const pf_rt *rt, pf_ray ray, pf_vec3 phi, gi_vpl *v, pf_vec3 *albedo)
+{
+    pf_hit h = pf_rt_intersect1(rt, ray);
+    if (h.prim == PF_RT_MISS) return 0;
+    gi__hit_surface(rt, &ray, &h, phi, v, albedo);
     return 1;
 }
 

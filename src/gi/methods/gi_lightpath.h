@@ -67,6 +67,13 @@ uint32_t gi_lightpath_choose(const gi_lightpath_lights *c, double choice, double
  * and at most `max`, and returns how many. */
 uint32_t gi_lightpath_trace_halton(const gi_lightpath_lights *c, const pf_rt *rt, uint32_t hi, uint32_t bounces,
                                    uint32_t max, gi_vpl *out);
+/* gi_lightpath_trace_halton for the `count` paths hi0 .. hi0 + count - 1 at
+ * once, segment by segment, so each segment's rays share Embree packets:
+ * path i writes its hits to out[i * bounces ..] and their number to
+ * got[i], the same bits as count calls of gi_lightpath_trace_halton with
+ * max = bounces (a ray's result does not depend on its packet, pf_rt.h). */
+void gi_lightpath_trace_halton_batch(const gi_lightpath_lights *c, const pf_rt *rt, uint32_t hi0, uint32_t count,
+                                     uint32_t bounces, gi_vpl *out, uint32_t *got);
 /* Traces `ray`; on a hit writes the VPL (position pushed off the surface,
  * normal facing the photon, intensity Phi * albedo / pi, id and moved = 1
  * left to the caller) and the surface albedo, and returns 1; 0 on a miss. */

@@ -54,4 +54,53 @@ uint64_t gi_radiosity_hash(uint64_t a, uint64_t b);
  * estimate is for. RGB, W/m^2. Pure function of its arguments. */
 pf_vec3 gi_radiosity_irradiance(const gi_radiosity_ctx *ctx, pf_vec3 p, pf_vec3 ng, pf_vec3 ns, uint64_t seed);
 
+/* ---------------------------------------------------------------- the two halves
+ *
+ * An estimate in two halves, for callers that estimate the same point again
+ * when only the punctual lights have moved (SMC's line 18 under a moving
+ * light). The paths' vertices, their throughputs and the area-light samples
+ * (area lights do not move) depend on the point, the seed, spp, bounces and
+ * the scene, never on the punctual lights:
+ *   gi_radiosity_trace   the light-independent half: every path's vertices
+ *                        and its area-light sample at each vertex;
+ *   gi_radiosity_gather  the light-dependent half: the punctual lights'
+ *                        shadow rays at y and at every vertex, and the sum.
+ * gather(trace(...)) returns the bits gi_radiosity_irradiance returns: the
+ * per-path sums are added in the same order (vertex by vertex, the lights in
+ * scene order, then that vertex's area sample) and the paths in sample
+ * order; how rays are grouped into Embree packets does not change a ray's
+ * result (pf_rt.h). Both take `count` estimates at once, so their rays fill
+ * the packets. */
+
+/* An estimate's point: on the surface, normals turned to the estimate's side. */
+typedef struct gi_radiosity_site {
+    pf_vec3 p, ng, ns;
+} gi_radiosity_site;
+
+/* Vertex j of one path (j = 0 is y itself), light-independent. */
+typedef struct gi_radiosity_vertex {
+    pf_vec3 p, ng, ns; /* normals turned to the side the light arrives on */
+    pf_vec3 T;         /* throughput: the albedos of the vertices after y */
+    pf_vec3 area;      /* the area-light sample's T Le cos_y cos_l / (r^2 pdf), when `flags` has LIT */
+    uint32_t flags;    /* GI_RADIOSITY_ALIVE: the path reached this vertex; GI_RADIOSITY_LIT: area adds */
+} gi_radiosity_vertex;
+
+#define GI_RADIOSITY_ALIVE 1u
+#define GI_RADIOSITY_LIT 2u
+
+/* Vertex records one estimate needs: spp x bounces (both clamped as the
+ * estimator clamps them), stored v[j * spp + s] for path s, vertex j. */
+uint32_t gi_radiosity_vertex_count(const gi_radiosity_ctx *ctx);
+
+/* The light-independent half of `count` estimates: estimate e at y[e] with
+ * seed seeds[e] writes its gi_radiosity_vertex_count records to v[e]. */
+void gi_radiosity_trace(const gi_radiosity_ctx *ctx, const gi_radiosity_site *y, const uint64_t *seeds, uint32_t count,
+                        gi_radiosity_vertex *const *v);
+
+/* The light-dependent half: out[e] = E(y[e]) with the scene's punctual
+ * lights now, from the records v[e] that gi_radiosity_trace wrote for it
+ * (with the same ctx: spp, bounces, scene, area lights). */
+void gi_radiosity_gather(const gi_radiosity_ctx *ctx, const gi_radiosity_site *y,
+                         const gi_radiosity_vertex *const *v, uint32_t count, pf_vec3 *out);
+
 #endif

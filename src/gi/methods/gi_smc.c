@@ -120,6 +120,7 @@
  *                  "photons" below) or its radiosity estimate times its
  *                  cell's area (point)
  *   photons=16     light paths per VPL for flux=photons */
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -150,6 +151,8 @@ typedef struct gi__smc_vpl {
     float cell;         /* this iteration's estimate of its cell's area */
     uint32_t area_n;    /* estimates in the mean (capped at area_window) */
     uint32_t id, alive, valid, born;
+    uint32_t paths;       /* GI__SMC_PATHS_E / _RANK: the estimate's paths are in the cache */
+    uint32_t paths_epoch; /* the cache's epoch they were traced in */
 } gi__smc_vpl;
 
 /* A point of X. */
@@ -172,19 +175,62 @@ typedef struct gi__smc_cand {
     float intensity;
 } gi__smc_cand;
 
-/* A sort record: a key, a class (sorted first), the item index (ties). */
+/* A sort record: a key, a class (sorted first), the item index (ties).
+ * Records sort ascending by (cls, key, i), a total order (gi__smc_sort). */
 typedef struct gi__smc_sortkey {
     float key;
     uint32_t cls, i;
 } gi__smc_sortkey;
 
-/* Ascending by (cls, key, i): a total order, so qsort's result is unique. */
-static int gi__smc_cmp_sortkey(const void *a, const void *b)
+/* Sorts o[0, n), given in ascending i, ascending by (cls, key, i): the
+ * order qsort with that comparison gave (-0 equal to +0; a -0 key comes
+ * back +0), by a stable radix sort on (cls, key): the input's i order
+ * breaks the ties. tmp: scratch of n records. */
+static void gi__smc_sort(gi__smc_sortkey *o, gi__smc_sortkey *tmp, uint32_t n)
 {
-    const gi__smc_sortkey *x = a, *y = b;
-    if (x->cls != y->cls) return x->cls < y->cls ? -1 : 1;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->i < y->i ? -1 : (x->i > y->i);
+    uint32_t cnt[2048];
+    uint32_t cls_any = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        assert(i == 0 || o[i - 1].i < o[i].i);
+        cls_any |= o[i].cls;
+    }
+    /* the key's bits in an unsigned order: x + 0 makes -0 into +0 */
+    for (uint32_t i = 0; i < n; i++) {
+        float f = o[i].key + 0.0f;
+        uint32_t u;
+        memcpy(&u, &f, sizeof u);
+        u = (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+        memcpy(&o[i].key, &u, sizeof u); /* restored below */
+    }
+    gi__smc_sortkey *a = o, *b = tmp;
+    for (uint32_t pass = 0; pass < 4; pass++) { /* 11, 11, 10 bits of the key, then the class */
+        if (pass == 3 && !cls_any) break;
+        uint32_t shift = pass * 11, bins = pass == 2 ? 1024u : (pass == 3 ? 2u : 2048u);
+        memset(cnt, 0, sizeof(uint32_t) * bins);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t u;
+            memcpy(&u, &a[i].key, sizeof u);
+            cnt[pass == 3 ? a[i].cls : (u >> shift) & (bins - 1)]++;
+        }
+        for (uint32_t k = 0, sum = 0; k < bins; k++) {
+            uint32_t c = cnt[k];
+            cnt[k] = sum, sum += c;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t u;
+            memcpy(&u, &a[i].key, sizeof u);
+            b[cnt[pass == 3 ? a[i].cls : (u >> shift) & (bins - 1)]++] = a[i];
+        }
+        gi__smc_sortkey *t = a;
+        a = b, b = t;
+    }
+    if (a != o) memcpy(o, a, sizeof *o * n);
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, &o[i].key, sizeof u);
+        u = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+        memcpy(&o[i].key, &u, sizeof u);
+    }
 }
 
 /* Rendering areas: the paper's 1 / (I p(y)) from Eq. 7, or (the default)
@@ -199,7 +245,9 @@ typedef struct gi__smc_photon {
     pf_vec3 pos, nrm;
     pf_vec3 intensity; /* Phi albedo / pi / photons, W/sr (gi_lightpath_hit) */
     uint32_t valid;    /* a hit (paths end early) */
-    uint32_t in_s;     /* lands where the intersection points reach (see gi__smc_photons) */
+    uint32_t morton;   /* of its position (gi__smc_order_photons) */
+    uint32_t bin;      /* the slot of the VPL it is binned to; GI__SMC_NONE when it lands where no
+                          intersection point reaches (see gi__smc_photons) */
 } gi__smc_photon;
 
 typedef struct gi__smc_params {
@@ -223,18 +271,36 @@ typedef struct gi__smc_state {
     uint8_t *vis_hit;         /* points * V validation results */
     uint32_t *list, *list2;   /* scratch index lists (I) */
     pf_vec3 *knn_pts;         /* scratch for tree builds (max(raw, I)) */
+    pf_vec3 *knn_pts2, *knn_nrm; /* the same, for a second tree built at once (raw) */
     uint32_t *knn_slot;
     uint32_t *nearest;        /* per intersection point: tree index of its nearest VPL */
     gi__smc_photon *phot;     /* flux=photons: the hits of photons * I light paths, bounces slots each */
+    uint32_t *phot_order;     /* the valid photons (phot_valid of them) in Morton order of their positions */
+    uint32_t *phot_sort;      /* scratch of the sort: 3 x phot_cap */
+    uint32_t phot_valid;
+    pf_vec3 morton_lo, morton_scale; /* the scene's bounds -> [0, 1024)^3 */
     size_t phot_cap;
     uint32_t phot_count, phot_paths, phot_traced, phot_epoch, phot_bounces, raw_k;
     gi_knn raw_tree;          /* the last iteration's intersection points (the photons' region test) */
-    gi__smc_sortkey *sortkeys; /* scratch (max(raw, I)) */
+    int raw_tree_wanted;      /* this iteration builds raw_tree (the update's last, flux=photons) */
+    gi__smc_sortkey *sortkeys, *sortkeys2; /* scratch (max(raw, I)) */
     gi_knn tree;
     pf_light *lights;         /* the lights E was estimated with */
     uint32_t light_count, light_cap, lights_tracked;
     const gi_vpl_inputs *in;  /* this update's inputs (for the jobs) */
     gi_radiosity_ctx rad;
+    /* Line 18 under moving lights: each VPL's two estimates keep their
+     * light-independent paths (gi_radiosity_trace), so a light change
+     * re-gathers them with shadow rays only (gi__smc_estimate_radiosities_vpls) */
+    gi_radiosity_vertex *paths; /* 2 estimates per slot, path_nv records each (NULL: no cache) */
+    size_t paths_cap;           /* records allocated */
+    uint32_t path_nv;           /* records per estimate (gi_radiosity_vertex_count) */
+    uint32_t paths_epoch;       /* bumps when what the paths depend on changes */
+    gi_radiosity_ctx paths_rad; /* the ctx they were traced with */
+    gi_radiosity_vertex *rad_scratch; /* per worker: GI__SMC_RAD_GROUP estimates' records */
+    size_t rad_scratch_cap;
+    uint32_t *est;            /* line 18's estimates: slot * 2 + (0: E, 1: E_rank) */
+    uint32_t est_count;
     pf_stage_times parts;     /* the last update's time by Hedman 2017 Table 2's columns */
     double t_mark;            /* gi__smc_part: when the running part began */
 } gi__smc_state;
@@ -299,11 +365,15 @@ static void gi__smc_free_buffers(gi__smc_state *s)
 {
     free(s->y), free(s->prev_id), free(s->x), free(s->raw), free(s->cand), free(s->vis_hit);
     free(s->list), free(s->list2), free(s->knn_pts), free(s->knn_slot), free(s->nearest), free(s->lights);
-    free(s->phot);
-    s->phot = NULL;
+    free(s->phot), free(s->phot_order), free(s->phot_sort);
+    s->phot = NULL, s->phot_order = NULL, s->phot_sort = NULL;
+    free(s->paths), free(s->rad_scratch), free(s->est);
+    s->paths = NULL, s->rad_scratch = NULL, s->est = NULL;
+    s->paths_cap = s->rad_scratch_cap = 0;
     gi_knn_free(&s->raw_tree);
-    free(s->sortkeys);
-    s->sortkeys = NULL;
+    free(s->sortkeys), free(s->sortkeys2), free(s->knn_pts2), free(s->knn_nrm);
+    s->sortkeys = s->sortkeys2 = NULL;
+    s->knn_pts2 = s->knn_nrm = NULL;
     s->light_count = s->light_cap = s->lights_tracked = 0;
     gi_knn_free(&s->tree);
     s->y = NULL, s->prev_id = NULL, s->x = NULL, s->raw = NULL, s->cand = NULL, s->vis_hit = NULL;
@@ -338,11 +408,15 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     s->list = calloc(I, sizeof(uint32_t));
     s->list2 = calloc(I, sizeof(uint32_t));
     s->knn_pts = calloc(big, sizeof(pf_vec3));
+    s->knn_pts2 = calloc(big, sizeof(pf_vec3));
+    s->knn_nrm = calloc(big, sizeof(pf_vec3));
+    s->sortkeys2 = calloc(big, sizeof *s->sortkeys2);
     s->knn_slot = calloc(big, sizeof(uint32_t));
     s->nearest = calloc(s->raw_cap ? s->raw_cap : 1, sizeof(uint32_t));
-    s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0;
+    s->phot_count = 0, s->phot_cap = 0, s->phot_traced = 0, s->phot_valid = 0;
     s->sortkeys = calloc(big, sizeof *s->sortkeys);
-    if (!s->sortkeys || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
+    s->est = calloc(2 * (size_t)I, sizeof(uint32_t));
+    if (!s->est || !s->sortkeys || !s->sortkeys2 || !s->knn_pts2 || !s->knn_nrm || !s->y || !s->prev_id || !s->x || !s->raw || !s->cand || !s->vis_hit || !s->list || !s->list2 ||
         !s->knn_pts || !s->knn_slot || !s->nearest) {
         gi__smc_free_buffers(s);
         s->I = 0;
@@ -350,7 +424,10 @@ static pf_result gi__smc_alloc(gi__smc_state *s, uint32_t I, pf_error *err)
     }
     for (uint32_t i = 0; i < I; i++) s->prev_id[i] = GI__SMC_NONE - 1u; /* nothing output yet */
     s->warmed = 0;
-    return gi_knn_build(&s->tree, s->knn_pts, big, err); /* size the tree once */
+    pf_result r = gi_knn_build_facing(&s->tree, s->knn_pts, s->knn_nrm, big, err); /* size the trees once */
+    if (r == PF_OK && s->prm.flux == GI__SMC_FLUX_PHOTONS)
+        r = gi_knn_build_facing(&s->raw_tree, s->knn_pts2, s->knn_nrm, s->raw_cap ? s->raw_cap : 1, err);
+    return r;
 }
 
 /* ---------------------------------------------------------------- lights */
@@ -609,7 +686,10 @@ static void gi__smc_key_job(void *ctx, uint32_t chunk, uint32_t worker)
     (void)worker;
     gi__smc_key_ctx *c = ctx;
     gi__smc_state *s = c->s;
-    for (uint32_t i = chunk * 256; i < s->raw_count && i < chunk * 256 + 256; i++) {
+    /* in the tree's order (s->tree.idx: a permutation of the points), so
+     * that consecutive queries are neighbours and walk the same branches */
+    for (uint32_t j = chunk * 256; j < s->raw_count && j < chunk * 256 + 256; j++) {
+        const uint32_t i = s->tree.idx[j];
         /* weight w = 1 / p(point) ~ r_k^2 (the constant k / (N pi) cancels) */
         float r2 = gi_knn_kth_dist2(&s->tree, s->raw[i].surf, c->k, i);
         float u = 1.0f - gi__rand(c->key, 20, i, 0); /* (0, 1] */
@@ -624,13 +704,37 @@ static void gi__smc_key_job(void *ctx, uint32_t chunk, uint32_t worker)
 /* Y^ <- RESAMPLECANDIDATES(Y^): draws min(I, hits) of the intersection
  * points without replacement with probability ~ 1 / (their density), so the
  * candidates are about uniform in area (Sec. 3.2.1, rate ratio:1). */
+typedef struct gi__smc_build_ctx {
+    gi__smc_state *s;
+    pf_result r[2];
+    pf_error err[2];
+} gi__smc_build_ctx;
+
+/* Item 0: the intersection points' tree of line 6 (their surface points);
+ * item 1: the photons' region tree (the pushed-off points and normals). */
+static void gi__smc_build_job(void *ctx, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    gi__smc_build_ctx *c = ctx;
+    gi__smc_state *s = c->s;
+    c->r[item] = item == 0 ? gi_knn_build(&s->tree, s->knn_pts, s->raw_count, &c->err[item])
+                           : gi_knn_build_facing(&s->raw_tree, s->knn_pts2, s->knn_nrm, s->raw_count, &c->err[item]);
+}
+
 static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inputs *in, uint64_t key, pf_error *err)
 {
     s->cand_count = 0;
     if (!s->raw_count) return PF_OK;
     for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts[i] = s->raw[i].surf;
-    pf_result r = gi_knn_build(&s->tree, s->knn_pts, s->raw_count, err);
-    if (r != PF_OK) return r;
+    if (s->raw_tree_wanted)
+        for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts2[i] = s->raw[i].pos, s->knn_nrm[i] = s->raw[i].ns;
+    gi__smc_build_ctx b = {s, {PF_OK, PF_OK}, {{0}}};
+    pf_jobs_parallel_for(in->jobs, gi__smc_build_job, &b, s->raw_tree_wanted ? 2 : 1, 1);
+    for (int i = 0; i < 2; i++)
+        if (b.r[i] != PF_OK) {
+            *err = b.err[i];
+            return b.r[i];
+        }
     uint32_t k = (uint32_t)floor(sqrt((double)s->raw_count) / 32.0);
     gi__smc_key_ctx c = {s, key, k < 1 ? 1 : (k > GI_KNN_MAX_K ? GI_KNN_MAX_K : k)};
     s->raw_k = c.k;
@@ -638,7 +742,7 @@ static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inpu
     /* the top keys: sorted descending (ascending on -key), ties by index */
     gi__smc_sortkey *o = s->sortkeys;
     for (uint32_t i = 0; i < s->raw_count; i++) o[i] = (gi__smc_sortkey){-s->raw[i].key, 0, i};
-    qsort(o, s->raw_count, sizeof *o, gi__smc_cmp_sortkey);
+    gi__smc_sort(o, s->sortkeys2, s->raw_count);
     s->cand_count = s->raw_count < s->I ? s->raw_count : s->I;
     for (uint32_t i = 0; i < s->cand_count; i++) s->cand[i] = o[i].i;
     return PF_OK;
@@ -646,48 +750,144 @@ static pf_result gi__smc_resample_candidates(gi__smc_state *s, const gi_vpl_inpu
 
 /* ---------------------------------------------------------------- lines 7 and 18 */
 
-static void gi__smc_rad_cand_job(void *ctx, uint32_t i, uint32_t worker)
+/* Estimates per job item: their shadow and bounce rays share packets. */
+#define GI__SMC_RAD_GROUP 4
+/* The path cache's size limit (records of all VPLs' two estimates, 64 bytes
+ * each): beyond it line 18 traces every estimate again, which gives the
+ * same bits, only slower. 2048 VPLs at spp 16 and 3 bounces take 12 MiB. */
+#define GI__SMC_PATHS_MAX ((size_t)256 << 20)
+#define GI__SMC_PATHS_E 1u
+#define GI__SMC_PATHS_RANK 2u
+#define GI__SMC_RANK_SEED 0x52414e4bull
+
+/* The light-independent part of every estimate depends on the scene, the
+ * area lights, spp and bounces: a change of any of them empties the cache.
+ * Sizes the cache and the per-worker scratch (once, or when they grow). */
+static pf_result gi__smc_paths_prepare(gi__smc_state *s, const gi_vpl_inputs *in, pf_error *err)
 {
-    (void)worker;
-    gi__smc_state *s = ctx;
-    gi__smc_cand *C = &s->raw[s->cand[i]];
-    C->E = gi_radiosity_irradiance(&s->rad, C->surf, C->ng, C->ns, C->seed);
+    const gi_radiosity_ctx *r = &s->rad;
+    uint32_t nv = gi_radiosity_vertex_count(r);
+    if (r->scene != s->paths_rad.scene || r->rt != s->paths_rad.rt || r->area != s->paths_rad.area ||
+        r->spp != s->paths_rad.spp || r->bounces != s->paths_rad.bounces || nv != s->path_nv) {
+        s->paths_epoch++;
+        s->paths_rad = *r;
+        s->path_nv = nv;
+    }
+    uint32_t workers = in->jobs ? pf_jobs_thread_count(in->jobs) : 1;
+    size_t scratch = (size_t)workers * GI__SMC_RAD_GROUP * nv;
+    if (scratch > s->rad_scratch_cap) {
+        gi_radiosity_vertex *p = realloc(s->rad_scratch, scratch * sizeof *p);
+        if (!p) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for the radiosity paths");
+        s->rad_scratch = p, s->rad_scratch_cap = scratch;
+    }
+    size_t cache = (size_t)s->I * 2 * nv;
+    if (cache * sizeof(gi_radiosity_vertex) > GI__SMC_PATHS_MAX) cache = 0; /* too large: no cache */
+    if (cache > s->paths_cap) {
+        free(s->paths);
+        s->paths = malloc(cache * sizeof *s->paths);
+        s->paths_cap = s->paths ? cache : 0;
+        s->paths_epoch++; /* what was cached is gone (a failed allocation only slows line 18) */
+    } else if (!cache && s->paths_cap) {
+        free(s->paths);
+        s->paths = NULL, s->paths_cap = 0;
+        s->paths_epoch++;
+    }
+    return PF_OK;
 }
 
-static void gi__smc_rad_vpl_job(void *ctx, uint32_t i, uint32_t worker)
+/* Line 7 for candidates [GROUP i, GROUP i + GROUP): traced and gathered at
+ * once in the worker's scratch (a candidate is estimated only once). */
+static void gi__smc_rad_cand_job(void *ctx, uint32_t item, uint32_t worker)
 {
-    (void)worker;
     gi__smc_state *s = ctx;
-    gi__smc_vpl *v = &s->y[s->list[i]];
-    /* v->pos is the pushed-off point; the estimator pushes again by the
-     * same rule, a few ulps further: immaterial */
-    if (v->light_epoch != s->light_epoch) {
-        v->E = gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed);
-        v->light_epoch = s->light_epoch;
+    gi_radiosity_site y[GI__SMC_RAD_GROUP] = {0};
+    uint64_t seed[GI__SMC_RAD_GROUP] = {0};
+    gi_radiosity_vertex *v[GI__SMC_RAD_GROUP] = {0};
+    pf_vec3 E[GI__SMC_RAD_GROUP];
+    uint32_t n = 0;
+    for (uint32_t i = item * GI__SMC_RAD_GROUP; i < s->cand_count && n < GI__SMC_RAD_GROUP; i++, n++) {
+        const gi__smc_cand *C = &s->raw[s->cand[i]];
+        y[n] = (gi_radiosity_site){C->surf, C->ng, C->ns};
+        seed[n] = C->seed;
+        v[n] = s->rad_scratch + ((size_t)worker * GI__SMC_RAD_GROUP + n) * s->path_nv;
     }
-    if (v->rank_epoch != s->light_epoch) {
-        v->E_rank = s->prm.independent ? gi_radiosity_irradiance(&s->rad, v->pos, v->ng, v->ns, v->seed ^ 0x52414e4bull)
-                                       : v->E;
-        v->rank_epoch = s->light_epoch;
+    gi_radiosity_trace(&s->rad, y, seed, n, v);
+    gi_radiosity_gather(&s->rad, y, (const gi_radiosity_vertex *const *)v, n, E);
+    for (uint32_t k = 0; k < n; k++) s->raw[s->cand[item * GI__SMC_RAD_GROUP + k]].E = E[k];
+}
+
+/* Line 18 for the estimates est[GROUP i, GROUP i + GROUP): the paths come
+ * from the cache when they were traced for this VPL and estimate in the
+ * cache's epoch, else they are traced (into the cache when there is one);
+ * then all are gathered with the lights of now. */
+static void gi__smc_rad_vpl_job(void *ctx, uint32_t item, uint32_t worker)
+{
+    gi__smc_state *s = ctx;
+    const uint32_t *est = s->est + (size_t)item * GI__SMC_RAD_GROUP;
+    const uint32_t left = s->est_count - item * GI__SMC_RAD_GROUP;
+    const uint32_t n = left < GI__SMC_RAD_GROUP ? left : GI__SMC_RAD_GROUP;
+    gi_radiosity_site y[GI__SMC_RAD_GROUP] = {0}, ty[GI__SMC_RAD_GROUP] = {0};
+    uint64_t tseed[GI__SMC_RAD_GROUP] = {0};
+    gi_radiosity_vertex *v[GI__SMC_RAD_GROUP] = {0}, *tv[GI__SMC_RAD_GROUP] = {0};
+    pf_vec3 E[GI__SMC_RAD_GROUP];
+    uint32_t t = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        gi__smc_vpl *V = &s->y[est[k] >> 1];
+        uint32_t which = est[k] & 1u, bit = which ? GI__SMC_PATHS_RANK : GI__SMC_PATHS_E;
+        /* v->pos is the pushed-off point; the estimator pushes again by the
+         * same rule, a few ulps further: immaterial */
+        y[k] = (gi_radiosity_site){V->pos, V->ng, V->ns};
+        v[k] = s->paths ? s->paths + (size_t)est[k] * s->path_nv
+                        : s->rad_scratch + ((size_t)worker * GI__SMC_RAD_GROUP + k) * s->path_nv;
+        if (s->paths && V->paths_epoch == s->paths_epoch && (V->paths & bit)) continue;
+        ty[t] = y[k];
+        tseed[t] = which ? V->seed ^ GI__SMC_RANK_SEED : V->seed;
+        tv[t++] = v[k];
+    }
+    if (t) gi_radiosity_trace(&s->rad, ty, tseed, t, tv);
+    gi_radiosity_gather(&s->rad, y, (const gi_radiosity_vertex *const *)v, n, E);
+    for (uint32_t k = 0; k < n; k++) {
+        gi__smc_vpl *V = &s->y[est[k] >> 1];
+        if (est[k] & 1u) V->E_rank = E[k];
+        else V->E = E[k];
     }
 }
 
 /* ESTIMATERADIOSITIES for the candidates (line 7): every candidate. */
 static void gi__smc_estimate_radiosities_candidates(gi__smc_state *s, const gi_vpl_inputs *in)
 {
-    pf_jobs_parallel_for(in->jobs, gi__smc_rad_cand_job, s, s->cand_count, 4);
+    pf_jobs_parallel_for(in->jobs, gi__smc_rad_cand_job, s, (s->cand_count + GI__SMC_RAD_GROUP - 1) / GI__SMC_RAD_GROUP,
+                         1);
 }
 
 /* ESTIMATERADIOSITIES for Y (line 18): a VPL's estimate is a pure function
  * of its seed and the lights, so only VPLs whose estimate predates a light
- * change are recomputed (new VPLs carry their candidate's value). */
+ * change are recomputed (new VPLs carry their candidate's value for
+ * ranking). With independent=0 the ranking estimate is the rendering one. */
 static void gi__smc_estimate_radiosities_vpls(gi__smc_state *s, const gi_vpl_inputs *in)
 {
     uint32_t n = 0;
-    for (uint32_t i = 0; i < s->I; i++)
-        if (s->y[i].alive && (s->y[i].light_epoch != s->light_epoch || s->y[i].rank_epoch != s->light_epoch))
-            s->list[n++] = i;
-    pf_jobs_parallel_for(in->jobs, gi__smc_rad_vpl_job, s, n, 4);
+    for (uint32_t i = 0; i < s->I; i++) {
+        const gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        if (v->light_epoch != s->light_epoch) s->est[n++] = 2 * i;
+        if (v->rank_epoch != s->light_epoch && s->prm.independent) s->est[n++] = 2 * i + 1;
+    }
+    s->est_count = n;
+    pf_jobs_parallel_for(in->jobs, gi__smc_rad_vpl_job, s, (n + GI__SMC_RAD_GROUP - 1) / GI__SMC_RAD_GROUP, 1);
+    for (uint32_t k = 0; k < n; k++) { /* the cache now holds these estimates' paths */
+        gi__smc_vpl *v = &s->y[s->est[k] >> 1];
+        if (!s->paths) continue;
+        if (v->paths_epoch != s->paths_epoch) v->paths = 0, v->paths_epoch = s->paths_epoch;
+        v->paths |= (s->est[k] & 1u) ? GI__SMC_PATHS_RANK : GI__SMC_PATHS_E;
+    }
+    for (uint32_t i = 0; i < s->I; i++) {
+        gi__smc_vpl *v = &s->y[i];
+        if (!v->alive) continue;
+        v->light_epoch = s->light_epoch;
+        if (v->rank_epoch != s->light_epoch) v->E_rank = s->prm.independent ? v->E_rank : v->E;
+        v->rank_epoch = s->light_epoch;
+    }
 }
 
 /* ---------------------------------------------------------------- lines 8 and 19 */
@@ -701,11 +901,12 @@ static pf_result gi__smc_build_vpl_tree(gi__smc_state *s, uint32_t *count, pf_er
         s->list2[i] = GI_KNN_NONE;
         if (!s->y[i].alive) continue;
         s->knn_pts[n] = s->y[i].pos;
+        s->knn_nrm[n] = s->y[i].ns;
         s->knn_slot[n] = i;
         s->list2[i] = n++;
     }
     *count = n;
-    return gi_knn_build(&s->tree, s->knn_pts, n, err);
+    return gi_knn_build_facing(&s->tree, s->knn_pts, s->knn_nrm, n, err);
 }
 
 static void gi__smc_density_cand_job(void *ctx, uint32_t i, uint32_t worker)
@@ -837,8 +1038,20 @@ static void gi__smc_estimate_areas_vpls(gi__smc_state *s, const gi_vpl_inputs *i
  * visible point sees light the image only through other surfaces, whose
  * VPLs carry that light already. The VPLs' radiosity estimates still rank
  * them (lines 9-17); only what is rendered changes. */
-#define GI__SMC_PHOTON_CHUNK 16
+#define GI__SMC_PHOTON_CHUNK 64
 #define GI__SMC_REACH 8.0f
+
+/* 10 bits of each coordinate, interleaved (x highest): nearby points get
+ * nearby codes. */
+static uint32_t gi__smc_morton(pf_vec3 p, pf_vec3 lo, pf_vec3 scale)
+{
+    float f[3] = {(p.x - lo.x) * scale.x, (p.y - lo.y) * scale.y, (p.z - lo.z) * scale.z};
+    uint32_t c[3], m = 0;
+    for (int a = 0; a < 3; a++) c[a] = f[a] > 0.0f ? (f[a] < 1023.0f ? (uint32_t)f[a] : 1023u) : 0u;
+    for (int b = 9; b >= 0; b--)
+        for (int a = 0; a < 3; a++) m = (m << 1) | ((c[a] >> b) & 1u);
+    return m;
+}
 
 static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
@@ -846,19 +1059,57 @@ static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
     const gi_lightpath_lights *lights = ((void **)ctx)[1];
     gi__smc_state *s = ((void **)ctx)[0];
     uint32_t B = s->rad.bounces, paths = s->phot_paths;
-    gi_vpl hits[GI_RADIOSITY_MAX_BOUNCES];
-    for (uint32_t i = chunk * GI__SMC_PHOTON_CHUNK; i < paths && i < (chunk + 1) * GI__SMC_PHOTON_CHUNK; i++) {
-        uint32_t got = gi_lightpath_trace_halton(lights, s->in->rt, i + 1, B, B, hits);
+    uint32_t i0 = chunk * GI__SMC_PHOTON_CHUNK, m = paths - i0 < GI__SMC_PHOTON_CHUNK ? paths - i0 : GI__SMC_PHOTON_CHUNK;
+    gi_vpl hits[GI__SMC_PHOTON_CHUNK * GI_RADIOSITY_MAX_BOUNCES];
+    uint32_t got[GI__SMC_PHOTON_CHUNK];
+    gi_lightpath_trace_halton_batch(lights, s->in->rt, i0 + 1, m, B, hits, got); /* path i is Halton index i + 1 */
+    for (uint32_t i = 0; i < m; i++)
         for (uint32_t k = 0; k < B; k++) {
-            gi__smc_photon *P = &s->phot[(size_t)i * B + k];
+            gi__smc_photon *P = &s->phot[(size_t)(i0 + i) * B + k];
+            const gi_vpl *h = &hits[(size_t)i * B + k];
             memset(P, 0, sizeof *P);
-            if (k >= got) continue;
-            P->pos = hits[k].pos;
-            P->nrm = hits[k].nrm;
-            P->intensity = pf_v3_scale(hits[k].intensity, 1.0f / (float)paths);
+            if (k >= got[i]) continue;
+            P->pos = h->pos;
+            P->nrm = h->nrm;
+            P->intensity = pf_v3_scale(h->intensity, 1.0f / (float)paths);
             P->valid = 1;
+            P->morton = gi__smc_morton(P->pos, s->morton_lo, s->morton_scale);
         }
+}
+
+/* phot_order: the valid photons sorted by the Morton code of their
+ * positions (ties in photon order), so the binning's queries come in
+ * spatial order, neighbours after neighbours: the trees' branches and
+ * leaves they walk are the previous query's (about twice as fast as photon
+ * order at 2048 VPLs). Only the order of the queries changes, not their
+ * answers. */
+static void gi__smc_order_photons(gi__smc_state *s)
+{
+    uint32_t *key = s->phot_sort, *key2 = key + s->phot_cap, *ord2 = key2 + s->phot_cap, *ord = s->phot_order;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->phot_count; i++) {
+        s->phot[i].bin = GI__SMC_NONE;
+        if (!s->phot[i].valid) continue;
+        key[n] = s->phot[i].morton;
+        ord[n++] = i;
     }
+    for (uint32_t pass = 0; pass < 3; pass++) { /* stable LSD radix sort, 10 bits a pass */
+        uint32_t cnt[1024] = {0}, shift = 10 * pass;
+        for (uint32_t i = 0; i < n; i++) cnt[(key[i] >> shift) & 1023u]++;
+        for (uint32_t b = 0, sum = 0; b < 1024; b++) {
+            uint32_t c = cnt[b];
+            cnt[b] = sum, sum += c;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t at = cnt[(key[i] >> shift) & 1023u]++;
+            key2[at] = key[i], ord2[at] = ord[i];
+        }
+        uint32_t *t = key;
+        key = key2, key2 = t;
+        t = ord, ord = ord2, ord2 = t;
+    }
+    if (ord != s->phot_order) memcpy(s->phot_order, ord, sizeof(uint32_t) * n);
+    s->phot_valid = n;
 }
 
 /* Traces the photons when the lights changed since they were traced. */
@@ -868,14 +1119,21 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
     if (s->phot_traced && s->phot_epoch == s->light_epoch && s->phot_bounces == B) return PF_OK;
     size_t need = (size_t)paths * B;
     if (need > s->phot_cap) {
-        gi__smc_photon *p = realloc(s->phot, need * sizeof *p);
-        if (!p) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u photon paths", paths);
-        s->phot = p, s->phot_cap = need;
+        free(s->phot), free(s->phot_order), free(s->phot_sort);
+        s->phot = malloc(need * sizeof *s->phot);
+        s->phot_order = malloc(need * sizeof(uint32_t));
+        s->phot_sort = malloc(3 * need * sizeof(uint32_t));
+        s->phot_cap = s->phot && s->phot_order && s->phot_sort ? need : 0;
+        if (!s->phot_cap) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u photon paths", paths);
     }
     s->phot_paths = paths;
     s->phot_count = 0;
     gi_lightpath_lights lights;
     gi_lightpath_lights_init(&lights, in->scene, in->area);
+    pf_vec3 ext = pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min);
+    s->morton_lo = in->scene->bounds_min;
+    s->morton_scale = pf_v3(ext.x > 0.0f ? 1024.0f / ext.x : 0.0f, ext.y > 0.0f ? 1024.0f / ext.y : 0.0f,
+                            ext.z > 0.0f ? 1024.0f / ext.z : 0.0f);
     if (lights.nl && lights.total > 0.0) {
         void *ctx[2] = {s, &lights};
         s->in = in;
@@ -884,6 +1142,7 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
         s->in = NULL;
         s->phot_count = (uint32_t)need;
     }
+    gi__smc_order_photons(s);
     s->phot_traced = 1, s->phot_epoch = s->light_epoch, s->phot_bounces = B;
     return PF_OK;
 }
@@ -899,34 +1158,24 @@ static pf_result gi__smc_trace_photons(gi__smc_state *s, const gi_vpl_inputs *in
  * this); with none, the nearest. */
 #define GI__SMC_COMPAT 0.5f
 
-typedef struct gi__smc_compat_ctx {
-    const gi__smc_state *s;
-    pf_vec3 nrm;
-} gi__smc_compat_ctx;
 
-static int gi__smc_compat_vpl(const void *ctx, uint32_t t)
-{
-    const gi__smc_compat_ctx *c = ctx;
-    return pf_v3_dot(c->s->y[c->s->knn_slot[t]].ns, c->nrm) >= GI__SMC_COMPAT;
-}
-
-static int gi__smc_compat_raw(const void *ctx, uint32_t i)
-{
-    const gi__smc_compat_ctx *c = ctx;
-    return pf_v3_dot(c->s->raw[i].ns, c->nrm) >= GI__SMC_COMPAT;
-}
-
-static void gi__smc_reach_job(void *ctx, uint32_t chunk, uint32_t worker)
+/* Photons [256 chunk, 256 chunk + 256): whether they land where the
+ * intersection points reach, then the VPL each is binned to. */
+static void gi__smc_bin_job(void *ctx, uint32_t chunk, uint32_t worker)
 {
     (void)worker;
     gi__smc_state *s = ctx;
-    for (uint32_t i = chunk * 256; i < s->phot_count && i < (chunk + 1) * 256; i++) {
-        gi__smc_photon *P = &s->phot[i];
+    for (uint32_t o = chunk * 256; o < s->phot_valid && o < (chunk + 1) * 256; o++) {
+        gi__smc_photon *P = &s->phot[s->phot_order[o]]; /* in Morton order; the others stay unbinned */
         float d2;
-        gi__smc_compat_ctx c = {s, P->nrm};
-        uint32_t r = P->valid ? gi_knn_nearest_where(&s->raw_tree, P->pos, gi__smc_compat_raw, &c, &d2) : GI_KNN_NONE;
+        /* the trees carry the points' normals (raw[i].ns, the VPLs' ns) */
+        uint32_t r = gi_knn_nearest_facing(&s->raw_tree, P->pos, P->nrm, GI__SMC_COMPAT, &d2);
         float rk2 = r != GI_KNN_NONE ? s->raw[r].area * (float)s->raw_k * (float)PF_INV_PI : 0.0f;
-        P->in_s = r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2;
+        P->bin = GI__SMC_NONE;
+        if (!(r != GI_KNN_NONE && d2 <= GI__SMC_REACH * GI__SMC_REACH * rk2)) continue;
+        uint32_t t = gi_knn_nearest_facing(&s->tree, P->pos, P->nrm, GI__SMC_COMPAT, NULL);
+        if (t == GI_KNN_NONE) t = gi_knn_nearest(&s->tree, P->pos, NULL);
+        if (t != GI_KNN_NONE) P->bin = s->knn_slot[t];
     }
 }
 
@@ -936,18 +1185,11 @@ static pf_result gi__smc_photons(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
 {
     for (uint32_t i = 0; i < s->I; i++) s->y[i].phot = pf_v3(0, 0, 0);
     pf_result r = gi__smc_trace_photons(s, in, err);
-    if (r != PF_OK || !s->raw_count || !s->phot_count) return r;
-    for (uint32_t i = 0; i < s->raw_count; i++) s->knn_pts[i] = s->raw[i].pos;
-    r = gi_knn_build(&s->raw_tree, s->knn_pts, s->raw_count, err);
-    if (r != PF_OK) return r;
-    pf_jobs_parallel_for(in->jobs, gi__smc_reach_job, s, (s->phot_count + 255) / 256, 1);
+    if (r != PF_OK || !s->raw_count || !s->phot_count) return r; /* raw_tree: built with line 6 */
+    pf_jobs_parallel_for(in->jobs, gi__smc_bin_job, s, (s->phot_valid + 255) / 256, 1);
     for (uint32_t i = 0; i < s->phot_count; i++) { /* in photon order: the same sums for any thread count */
-        if (!s->phot[i].in_s) continue;
-        gi__smc_compat_ctx c = {s, s->phot[i].nrm};
-        uint32_t t = gi_knn_nearest_where(&s->tree, s->phot[i].pos, gi__smc_compat_vpl, &c, NULL);
-        if (t == GI_KNN_NONE) t = gi_knn_nearest(&s->tree, s->phot[i].pos, NULL);
-        if (t == GI_KNN_NONE) continue;
-        gi__smc_vpl *v = &s->y[s->knn_slot[t]];
+        if (s->phot[i].bin == GI__SMC_NONE) continue;
+        gi__smc_vpl *v = &s->y[s->phot[i].bin];
         v->phot = pf_v3_add(v->phot, s->phot[i].intensity);
     }
     return PF_OK;
@@ -964,7 +1206,7 @@ static uint32_t gi__smc_count_undersampled(gi__smc_state *s)
     for (uint32_t i = 0; i < s->I; i++)
         if (s->y[i].alive) v[n++] = (gi__smc_sortkey){s->y[i].intensity, 0, i};
     if (!n) return 0;
-    qsort(v, n, sizeof *v, gi__smc_cmp_sortkey);
+    gi__smc_sort(v, s->sortkeys2, n);
     uint32_t at = (uint32_t)ceil(0.95 * n); /* the candidate must beat v[0 .. at-1] */
     float t = v[(at ? at : 1) - 1].key;
     uint32_t strong = 0;
@@ -988,7 +1230,7 @@ static uint32_t gi__smc_invalidate_and_clamp(gi__smc_state *s, uint32_t m_min)
             o[n++] = (gi__smc_sortkey){s->y[i].intensity, s->y[i].valid ? 1u : 0u, i};
             invalid += !s->y[i].valid;
         }
-    qsort(o, n, sizeof *o, gi__smc_cmp_sortkey); /* invalid first, then weaker first, then slot */
+    gi__smc_sort(o, s->sortkeys2, n); /* invalid first, then weaker first, then slot */
     uint32_t inv = invalid > m_min ? invalid : (m_min < n ? m_min : n);
     uint32_t removed = inv < s->prm.m_max ? inv : s->prm.m_max;
     for (uint32_t k = 0; k < removed; k++) s->y[o[k].i].alive = 0;
@@ -1001,7 +1243,7 @@ static void gi__smc_take_strongest(gi__smc_state *s)
 {
     gi__smc_sortkey *o = s->sortkeys; /* strongest first: ascending on -intensity, ties by candidate order */
     for (uint32_t i = 0; i < s->cand_count; i++) o[i] = (gi__smc_sortkey){-s->raw[s->cand[i]].intensity, 0, i};
-    qsort(o, s->cand_count, sizeof *o, gi__smc_cmp_sortkey);
+    gi__smc_sort(o, s->sortkeys2, s->cand_count);
     uint32_t next = 0;
     for (uint32_t slot = 0; slot < s->I && next < s->cand_count; slot++) {
         if (s->y[slot].alive) continue;
@@ -1131,16 +1373,22 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     s->rad.spp = s->prm.spp;
     s->rad.bounces = s->prm.bounces ? s->prm.bounces : (in->bounces ? in->bounces : 3);
     if (s->rad.bounces > GI_RADIOSITY_MAX_BOUNCES) s->rad.bounces = GI_RADIOSITY_MAX_BOUNCES;
+    r = gi__smc_paths_prepare(s, in, err);
+    if (r != PF_OK) return r;
     uint32_t iters = 1;
     s->parts.count = 0;
     s->t_mark = pf_time_now();
     if (!s->warmed) {
+        s->raw_tree_wanted = 0;
         r = gi__smc_initialize_vpls(s, in, err); /* line 1 */
         gi__smc_part(s, GI__SMC_T_CAND);
         iters = s->prm.warmup;                   /* Sec. 3.2: 100 iterations before the first frame */
         s->warmed = 1;
     }
-    for (uint32_t k = 0; k < iters && r == PF_OK; k++) r = gi__smc_iterate(s, in, err);
+    for (uint32_t k = 0; k < iters && r == PF_OK; k++) {
+        s->raw_tree_wanted = k + 1 == iters && s->prm.flux == GI__SMC_FLUX_PHOTONS;
+        r = gi__smc_iterate(s, in, err);
+    }
     s->in = NULL;
     if (r == PF_OK && s->prm.flux == GI__SMC_FLUX_PHOTONS) {
         r = gi__smc_photons(s, in, err);

@@ -192,7 +192,7 @@ static const struct {
     {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},
     {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
     {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},
-    {"--moving-light", NULL, {0}},     {"--quality", NULL, {0}},        {"--aa", "4", {0}},
+    {"--moving-light", NULL, {0}},     {"--moving-object", NULL, {0}},  {"--quality", NULL, {0}},        {"--aa", "4", {0}},
     {"--taa", "8", {0}},               {"--time", "1", {0}},             {"--animation", "0", {"--time", "1"}},
 };
 
@@ -292,7 +292,7 @@ static void test_help_per_command(void **state)
          {"--hdr", "--screenshot", "--dump-stages", "--scenes"}},
         {"bench --help", {"usage: softgi bench raster", "usage: softgi bench frame", "--scenes", "--moving-light"},
          {"--size", "--output", "--camera", "--hash"}},
-        {"bench frame --help", {"usage: softgi bench frame", "--moving-light", "--vpls", "--pipeline"},
+        {"bench frame --help", {"usage: softgi bench frame", "--moving-object", "--vpls", "--pipeline"},
          {"usage: softgi bench raster", "--size", "--camera", "--spp"}},
     };
     for (size_t i = 0; i < sizeof k / sizeof k[0]; i++) {

@@ -75,6 +75,7 @@ typedef struct bm_world {
     pf_light light;
     uint32_t v0, nv, t0, nt; /* the object's vertices and triangles */
     pf_vec3 *rest_p, *rest_n; /* object space, centred */
+    pf_vec3 static_lo, static_hi; /* the loaded scene's bounds (the scene's are these and the object's) */
     pf_anim anim;             /* two instanced primitives: the scene (static), the object (dynamic) */
     pf_anim_prim prims[2];
     pf_anim_moved moved[2];
@@ -93,6 +94,7 @@ static pf_result bm__world_scene(bm_world *w, const pf_scene *src, pf_error *err
     w->nv = (BM_SEG + 1) * (BM_RING + 1);
     w->nt = BM_SEG * BM_RING * 2;
     w->v0 = src->vertex_count, w->t0 = src->tri_count;
+    w->static_lo = src->bounds_min, w->static_hi = src->bounds_max;
     size_t nv = (size_t)src->vertex_count + w->nv, nt = (size_t)src->tri_count + w->nt;
     s->positions = malloc(sizeof(pf_vec3) * (nv + 1));
     s->normals = malloc(sizeof(pf_vec3) * nv);
@@ -173,14 +175,10 @@ static void bm__pose(bm_world *w, uint32_t i)
     s->positions[s->vertex_count] = s->positions[s->vertex_count - 1];
     m->after_min = lo, m->after_max = hi;
     m->moved = i > 0;
-    /* the scene's bounds as pf_scene_validate keeps them */
-    pf_vec3 blo = s->positions[0], bhi = s->positions[0];
-    for (uint32_t v = 1; v < s->vertex_count; v++) {
-        pf_vec3 p = s->positions[v];
-        blo = pf_v3(fminf(blo.x, p.x), fminf(blo.y, p.y), fminf(blo.z, p.z));
-        bhi = pf_v3(fmaxf(bhi.x, p.x), fmaxf(bhi.y, p.y), fmaxf(bhi.z, p.z));
-    }
-    s->bounds_min = blo, s->bounds_max = bhi;
+    /* the scene's bounds, as pf_scene_validate keeps them */
+    pf_vec3 blo = w->static_lo, bhi = w->static_hi;
+    s->bounds_min = pf_v3(fminf(blo.x, lo.x), fminf(blo.y, lo.y), fminf(blo.z, lo.z));
+    s->bounds_max = pf_v3(fmaxf(bhi.x, hi.x), fmaxf(bhi.y, hi.y), fmaxf(bhi.z, hi.z));
 }
 
 static void bm__world_free(bm_world *w)
@@ -268,6 +266,12 @@ int app_bench_frame_moving(const pf_options *o)
 {
     pf_error err;
     pf_isa isa;
+    if (o->moving_light || o->aa > 1 || o->taa || o->tiles_n) {
+        fprintf(stderr, "softgi: bench frame --moving-object: %s does not apply (it takes --threads, --frames, "
+                        "--scenes, --isa, --vpls, --method, --param, --visibility, --pipeline)\n",
+                o->moving_light ? "--moving-light" : o->aa > 1 ? "--aa" : o->taa ? "--taa" : "--tiles");
+        return 2;
+    }
     if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     const char *dir = o->scenes_dir ? o->scenes_dir : "../shared/scenes";
     const uint32_t frames = o->frames ? o->frames : 15, vpls = o->vpls ? o->vpls : 256;

@@ -151,6 +151,7 @@ typedef struct gi__smc_vpl {
     float cell;         /* this iteration's estimate of its cell's area */
     uint32_t area_n;    /* estimates in the mean (capped at area_window) */
     uint32_t id, alive, valid, born;
+    uint32_t prim;        /* the triangle it sits on (moved geometry removes it) */
     uint32_t paths;       /* GI__SMC_PATHS_E / _RANK: the estimate's paths are in the cache */
     uint32_t paths_epoch; /* the cache's epoch they were traced in */
 } gi__smc_vpl;
@@ -170,6 +171,7 @@ typedef struct gi__smc_cand {
     uint64_t seed;
     uint32_t x;        /* index into X of the point it was traced from */
     uint32_t hit;
+    uint32_t prim;     /* the triangle hit */
     float key;         /* resampling key, then density */
     float area;        /* the area it stands for among the intersection points: pi r_k^2 / k */
     float intensity;
@@ -453,6 +455,29 @@ static pf_result gi__smc_track_lights(gi__smc_state *s, const pf_scene *scene, p
     return PF_OK;
 }
 
+/* Moved geometry (issue 19; gi_motion.h). Hedman 2017 Sec. 1 and 6: SMC
+ * "is able to illuminate moving objects": its VPLs are validated every
+ * frame by the mail-boxed visibility rays of line 4, which, cast against
+ * the updated Embree scene, catch the VPLs a moved object now hides from
+ * the camera's points, and lines 5-17 sample the posed surfaces. Beyond the
+ * paper (its moving objects carry no VPLs of their own): a VPL that sits on
+ * a moved triangle is removed at once (its position is where the surface
+ * was; lines 14-17 refill the slot this frame), and, since moved geometry
+ * can shadow or light any VPL's surroundings, every radiosity estimate is
+ * stale, as under a moving light: the light epoch is bumped (line 18
+ * re-estimates, the photons are traced again) and the cache of the
+ * estimates' light-independent paths is emptied. */
+static void gi__smc_motion(gi__smc_state *s, const gi_motion *m)
+{
+    if (!gi_motion_any(m)) return;
+    for (uint32_t i = 0; i < s->I; i++) {
+        gi__smc_vpl *v = &s->y[i];
+        if (v->alive && gi_motion_tri(m, v->prim)) v->alive = 0, v->valid = 0;
+    }
+    s->light_epoch++;
+    s->paths_epoch++;
+}
+
 /* ---------------------------------------------------------------- line 3 */
 
 /* X: one pixel per cell of a gx x gy grid over the image (gx gy >= points),
@@ -657,6 +682,7 @@ static void gi__smc_trace_job(void *ctx, uint32_t chunk, uint32_t worker)
         C->pos = pf_rt_offset_origin(sf.p, C->ng, C->ng);
         C->albedo = pf_v3(sf.albedo[0], sf.albedo[1], sf.albedo[2]);
         C->hit = 1;
+        C->prim = hits[i].prim;
     }
 }
 
@@ -1251,6 +1277,7 @@ static void gi__smc_take_strongest(gi__smc_state *s)
         gi__smc_vpl *v = &s->y[slot];
         memset(v, 0, sizeof *v);
         v->pos = C->pos, v->ng = C->ng, v->ns = C->ns, v->albedo = C->albedo;
+        v->prim = C->prim;
         v->id = s->next_id++;
         /* its own radiosity seed, independent of the candidate's: the
          * candidate won on its noisy estimate, so reusing that estimate
@@ -1366,6 +1393,7 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     if (s->I != in->budget) r = gi__smc_alloc(s, in->budget, err);
     if (r == PF_OK) r = gi__smc_track_lights(s, in->scene, err);
     if (r != PF_OK) return r;
+    if (s->warmed) gi__smc_motion(s, in->motion);
     s->in = in;
     s->rad.scene = in->scene;
     s->rad.rt = in->rt;

@@ -104,7 +104,7 @@ void gi_stage_area_shadow_maps(gi_frame *f)
         } else {
             rs_para_stats st;
             rs_para_render_box(m->atlas + k0 * map, m->para, f->jobs, pos, nrm, NULL, n, m->range, mb->lo, mb->hi,
-                               &st);
+                               mb->ranges, mb->range_count, &st);
             f->motion_stats.area_maps += st.maps;
         }
     }

@@ -239,6 +239,7 @@ void gi_frame_free(gi_frame *f)
     gi_aa_free(&f->aa);
     free(f->motion.tri_moved);
     free(f->motion.ranges);
+    free(f->moved_shadows.ranges), free(f->moved_area.ranges), free(f->moved_maps.ranges);
     pf_arena_release(&f->mem); /* direct, final */
     memset(f, 0, sizeof *f);
 }

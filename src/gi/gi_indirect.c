@@ -330,7 +330,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         }
         rs_para_stats st;
         rs_para_render_box(ind->atlas, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
-                           ind->range, mb->lo, mb->hi, &st);
+                           ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
         f->motion_stats.vpl_maps += (uint32_t)st.maps;
         f->motion_stats.vpl_texels += st.texels_tested;
         mb->pending = 0;

@@ -10,11 +10,46 @@
 static pf_vec3 gi__vmin(pf_vec3 a, pf_vec3 b) { return pf_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
 static pf_vec3 gi__vmax(pf_vec3 a, pf_vec3 b) { return pf_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 
-static void gi__box_add(gi_moved_box *b, pf_vec3 lo, pf_vec3 hi)
+/* The reports merged into *ranges (count entries, instanced primitive k at
+ * k): `moved` where any report moved it, the bounds the union. A report of
+ * another length starts the merge afresh. 0 when out of memory. */
+static int gi__ranges_merge(pf_anim_moved **ranges, uint32_t *have, int fresh, const pf_anim_moved *moved,
+                            uint32_t count)
 {
+    if (*have != count) {
+        pf_anim_moved *rg = realloc(*ranges, sizeof *rg * (count ? count : 1));
+        if (!rg) return 0;
+        *ranges = rg;
+        *have = count;
+        fresh = 1;
+    }
+    for (uint32_t k = 0; k < count; k++) {
+        pf_anim_moved *g = &(*ranges)[k];
+        if (fresh) memset(g, 0, sizeof *g);
+        if (!moved[k].moved) {
+            if (!g->moved) *g = moved[k];
+            continue;
+        }
+        if (!g->moved) {
+            *g = moved[k];
+            g->moved = 1;
+            continue;
+        }
+        g->before_min = gi__vmin(g->before_min, moved[k].before_min);
+        g->before_max = gi__vmax(g->before_max, moved[k].before_max);
+        g->after_min = gi__vmin(g->after_min, moved[k].after_min);
+        g->after_max = gi__vmax(g->after_max, moved[k].after_max);
+    }
+    return 1;
+}
+
+static int gi__box_add(gi_moved_box *b, pf_vec3 lo, pf_vec3 hi, const pf_anim_moved *moved, uint32_t count)
+{
+    if (!gi__ranges_merge(&b->ranges, &b->range_count, !b->pending, moved, count)) return 0;
     if (!b->pending) b->lo = lo, b->hi = hi;
     else b->lo = gi__vmin(b->lo, lo), b->hi = gi__vmax(b->hi, hi);
     b->pending = 1;
+    return 1;
 }
 
 static int gi__emissive(const pf_scene *s, uint32_t t)
@@ -52,31 +87,8 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
         if (!mo->tri_moved) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved triangles");
         mo->tri_count = s->tri_count;
     }
-    if (mo->range_count != count) {
-        pf_anim_moved *rg = realloc(mo->ranges, sizeof *rg * count);
-        if (!rg) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved geometry's ranges");
-        memset(rg, 0, sizeof *rg * count);
-        mo->ranges = rg;
-        mo->range_count = count;
-    }
-    for (uint32_t k = 0; k < count; k++) {
-        pf_anim_moved *g = &mo->ranges[k];
-        if (!moved[k].moved) {
-            if (!g->moved) *g = moved[k];
-            continue;
-        }
-        if (!g->moved) {
-            *g = moved[k];
-            g->moved = 1;
-            continue;
-        }
-        /* moved again: the range stays, the bounds grow (before: the first
-         * report's before, after: this one's after, both kept as a union) */
-        g->before_min = gi__vmin(g->before_min, moved[k].before_min);
-        g->before_max = gi__vmax(g->before_max, moved[k].before_max);
-        g->after_min = gi__vmin(g->after_min, moved[k].after_min);
-        g->after_max = gi__vmax(g->after_max, moved[k].after_max);
-    }
+    if (!gi__ranges_merge(&mo->ranges, &mo->range_count, 0, moved, count))
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved geometry's ranges");
     int emitters = 0;
     for (uint32_t k = 0; k < count; k++) {
         const pf_anim_moved *m = &moved[k];
@@ -107,12 +119,15 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
         if ((r = gi_area_lights_build(&f->area, s, err)) != PF_OK) goto failed;
         if ((r = gi_frame_set_area_sampling(f, f->area_strata, f->area_points, err)) != PF_OK) goto failed;
         f->moved_area.pending = 0;
-    } else if (f->area_maps.rendered) {
-        gi__box_add(&f->moved_area, lo, hi);
+    } else if (f->area_maps.rendered && !gi__box_add(&f->moved_area, lo, hi, moved, count)) {
+        goto oom;
     }
-    if (f->shadows_rendered) gi__box_add(&f->moved_shadows, lo, hi);
-    if (f->indirect && f->ind.para && f->ind.atlas_slots) gi__box_add(&f->moved_maps, lo, hi);
+    if (f->shadows_rendered && !gi__box_add(&f->moved_shadows, lo, hi, moved, count)) goto oom;
+    if (f->indirect && f->ind.para && f->ind.atlas_slots && !gi__box_add(&f->moved_maps, lo, hi, moved, count))
+        goto oom;
     return PF_OK;
+oom:
+    r = pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved geometry's ranges");
 failed: /* the frame's copies are part-updated: the caller makes the frame again */
     return r;
 }

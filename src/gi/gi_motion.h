@@ -69,6 +69,8 @@ typedef struct gi_motion {
 typedef struct gi_moved_box {
     int pending;
     pf_vec3 lo, hi;
+    pf_anim_moved *ranges; /* the pose reports merged as gi_motion.ranges (for rs_para_render_box) */
+    uint32_t range_count;
 } gi_moved_box;
 
 /* What the last frame redid for moved geometry (for `softgi bench frame

@@ -77,6 +77,8 @@ typedef struct rs__scratch {
     _Alignas(64) float *depth; /* R*R: nearest distance so far (INFINITY: nothing) */
     float *tile_max;     /* tiles*tiles: maximum depth over a tile's inside texels */
     uint8_t *tile_dirty; /* tiles*tiles: tile_max is stale (too large) */
+    uint8_t *tile_skip;  /* tiles*tiles: the pass does not draw the tile (rs_para_render_box's classes) */
+    uint8_t *tile_class; /* tiles*tiles: rs_para_render_box's class of each tile */
     rs__rect *crect;     /* per cluster: texel rectangle of its image */
     float *cnear;        /* per cluster: nearest possible hit distance */
     uint16_t *key;       /* sort keys */
@@ -106,6 +108,7 @@ struct rs_para_context {
      * a super-cluster whose image misses its texels without testing each */
     rs__cluster *supers;
     uint32_t super_count;
+    uint8_t *cluster_moved; /* rs_para_render_box's scratch: the clusters holding moved triangles */
     /* levels of detail (rs_para_lod.h; lod 0: none, every cluster is drawn) */
     float lod;
     uint32_t lod_count;

@@ -303,6 +303,8 @@ static void rs__scratch_free(rs__scratch *s)
     free(s->depth);
     free(s->tile_max);
     free(s->tile_dirty);
+    free(s->tile_skip);
+    free(s->tile_class);
     free(s->crect);
     free(s->cnear);
     free(s->key);
@@ -318,6 +320,8 @@ static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
     s->depth = malloc(texels * sizeof(float));
     s->tile_max = malloc((size_t)ctx->tiles * ctx->tiles * sizeof(float));
     s->tile_dirty = malloc((size_t)ctx->tiles * ctx->tiles);
+    s->tile_skip = calloc((size_t)ctx->tiles * ctx->tiles, 1);
+    s->tile_class = calloc((size_t)ctx->tiles * ctx->tiles, 1);
     s->crect = malloc(cl * sizeof(rs__rect));
     s->cnear = malloc(cl * sizeof(float));
     s->key = malloc(cl * sizeof(uint16_t));
@@ -326,7 +330,7 @@ static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
     /* 26 arrays of cluster_size 4-byte words: tri, 9 l, 3 len, 3 pu, 3 pv,
      * c2max, 4 rect, crossing */
     s->batch_block = malloc(26 * cs * 4);
-    if (!s->depth || !s->tile_max || !s->tile_dirty || !s->crect || !s->cnear || !s->key || !s->order ||
+    if (!s->depth || !s->tile_max || !s->tile_dirty || !s->tile_skip || !s->tile_class || !s->crect || !s->cnear || !s->key || !s->order ||
         !s->order_tmp || !s->batch_block) {
         rs__scratch_free(s);
         return 0;
@@ -507,6 +511,7 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     }
     ctx->soa_block = aligned_alloc(64, (size_t)13 * ctx->tri_padded * sizeof(float));
     ctx->clusters = calloc(ctx->cluster_count, sizeof(rs__cluster));
+    ctx->cluster_moved = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
     ctx->lane_count = ctx->tri_padded / RS__LANES;
     ctx->lanes = calloc(ctx->lane_count ? ctx->lane_count : 1, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
@@ -515,7 +520,7 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->w = malloc((size_t)R * R * sizeof(float));
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
-    if (!ctx->soa_block || !ctx->clusters || !ctx->lanes || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
+    if (!ctx->soa_block || !ctx->clusters || !ctx->cluster_moved || !ctx->lanes || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
         !ctx->row_hi || (o.lod > 0.0f && !ctx->lod_groups)) {
         rs__lod_free(&lod);
         rs_para_context_destroy(ctx);
@@ -646,6 +651,7 @@ void rs_para_context_destroy(rs_para_context *ctx)
     free(ctx->clusters);
     free(ctx->lanes);
     free(ctx->supers);
+    free(ctx->cluster_moved);
     free(ctx->lod_groups);
     free(ctx->u);
     free(ctx->d2);
@@ -989,6 +995,7 @@ static int rs__occluded(const rs_para_context *ctx, rs__scratch *sc, rs__rect r,
     for (int32_t tj = r.j0 / RS__TILE; tj <= r.j1 / RS__TILE; tj++)
         for (int32_t ti = r.i0 / RS__TILE; ti <= r.i1 / RS__TILE; ti++) {
             uint32_t t = tj * ctx->tiles + ti;
+            if (sc->tile_skip[t]) continue; /* a tile this pass does not draw: nothing there can matter */
             if (sc->tile_dirty[t]) {
                 sc->tile_max[t] = rs__tile_max(ctx, sc, ti, tj);
                 sc->tile_dirty[t] = 0;
@@ -1078,25 +1085,41 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
     return dirty;
 }
 
-/* Renders one map, or with `limit` not covering the whole map only the
- * texels of that rectangle (the others keep their codes in `out`): every
- * texel's depth is the nearest hit over all triangles whatever else is
- * drawn, so the rectangle's codes are those of a whole render. */
-static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, pf_vec3 nrm, float range,
-                           uint16_t *out, rs__rect limit)
+/* What rs_para_render_box knows besides the texels: which clusters hold
+ * moved triangles and the moved bounds' distance range from the map's
+ * origin (the sphere's nearest and farthest points, with the clusters'
+ * 1e-4 margin). */
+typedef struct rs__moved {
+    const uint8_t *cluster_moved;
+    float near, far;
+} rs__moved;
+
+/* One pass over the texels of `limit` whose tiles sc->tile_skip does not
+ * skip: depth starts at INFINITY, or (start_old) at an upper bound of the
+ * distance `out`'s code stands for; the clusters (those `only` flags when
+ * not NULL) are culled, sorted front to back and drawn; each texel's code
+ * is then its depth's, or (min_old) the smaller of that and its old code. */
+static void rs__pass(rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *fr, float range, uint16_t *out,
+                     rs__rect limit, const uint8_t *only, int start_old, int min_old)
 {
     const uint32_t R = ctx->res;
-    if (rs__rect_empty(limit)) return;
-    rs_para_frame f = rs_para_frame_make(pos, nrm);
-    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++) /* only these texels are read */
-        for (uint32_t i = (uint32_t)limit.i0; i <= (uint32_t)limit.i1; i++) sc->depth[(size_t)j * R + i] = INFINITY;
+    const rs_para_frame f = *fr;
+    const float inv_scale = range / RS_PARA_CODES;
+    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++) { /* only these texels are read */
+        const uint8_t *skip = sc->tile_skip + (j / RS__TILE) * ctx->tiles;
+        for (uint32_t i = (uint32_t)limit.i0; i <= (uint32_t)limit.i1; i++) {
+            if (skip[i / RS__TILE]) continue;
+            size_t idx = (size_t)j * R + i;
+            float d = INFINITY;
+            if (start_old && out[idx] < RS_PARA_MAX_CODE) /* the code's upper end, rounded up */
+                d = (float)(((double)out[idx] + 1.0) * (double)inv_scale * (1.0 + 1e-6));
+            sc->depth[idx] = d;
+        }
+    }
     for (uint32_t k = 0; k < ctx->tiles * ctx->tiles; k++) {
         sc->tile_max[k] = INFINITY;
-        sc->tile_dirty[k] = 0;
+        sc->tile_dirty[k] = start_old ? 1 : 0; /* the maxima of what the old codes put there */
     }
-    sc->limit = limit;
-    sc->partial = limit.i0 > 0 || limit.j0 > 0 || limit.i1 < (int32_t)R - 1 || limit.j1 < (int32_t)R - 1;
-    sc->stats.maps++;
 
     /* 1. cull clusters, bound the rest (with levels of detail: the clusters
      * of each group's level for this map) */
@@ -1120,7 +1143,8 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             sc->stats.lod_levels += L;
         }
         for (uint32_t c = c0; c < c1; c++) {
-            if (sc->partial && ctx->supers && c % RS__SUPER == 0) { /* a whole super-cluster outside the texels? */
+            if (only && !only[c]) continue;
+            if (!only && sc->partial && ctx->supers && c % RS__SUPER == 0) { /* a whole super-cluster outside? */
                 rs__rect sr;
                 float snear;
                 const rs__cluster *sp = &ctx->supers[c / RS__SUPER];
@@ -1168,12 +1192,103 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
 
     /* 4. quantise */
     float scale = RS_PARA_CODES / range;
-    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++)
+    for (uint32_t j = (uint32_t)limit.j0; j <= (uint32_t)limit.j1; j++) {
+        const uint8_t *skip = sc->tile_skip + (j / RS__TILE) * ctx->tiles;
         for (uint32_t i = (uint32_t)limit.i0; i <= (uint32_t)limit.i1; i++) {
+            if (skip[i / RS__TILE]) continue;
             size_t idx = (size_t)j * R + i;
             int inside = (int32_t)i >= ctx->row_lo[j] && (int32_t)i <= ctx->row_hi[j];
-            out[idx] = inside ? rs__quantise_one(sc->depth[idx], scale) : RS_PARA_OUTSIDE;
+            uint16_t q = inside ? rs__quantise_one(sc->depth[idx], scale) : RS_PARA_OUTSIDE;
+            out[idx] = min_old && inside && out[idx] < q ? out[idx] : q;
         }
+    }
+}
+
+/* Tile classes of a partial render after geometry moved (rs__render_map). */
+enum { RS__KEEP = 0, RS__MOVED_ONLY = 1, RS__ALL = 2 };
+
+/* Renders one map, or with `limit` not covering the whole map only the
+ * texels of that rectangle (the others keep their codes in `out`): every
+ * texel's depth is the nearest hit over all triangles whatever else is
+ * drawn, so the rectangle's codes are those of a whole render.
+ *
+ * With `mv` (rs_para_render_box: `out` holds the map drawn before the
+ * geometry of mv->cluster_moved moved inside the bounds whose distances
+ * from the origin lie in [mv->near, mv->far]) each 8 x 8 tile of the
+ * rectangle is classed by the old codes of its inside texels, each code c
+ * standing for a distance in [c, c + 1) range / RS_PARA_CODES:
+ *   KEEP        every old hit nearer than the bounds: static geometry in
+ *               front of everything that moved, so the codes stay;
+ *   MOVED_ONLY  every old hit nearer than the bounds or beyond them (or
+ *               nothing hit): the old hit is static and stays, and only the
+ *               moved triangles can come nearer: code = min(old, the moved
+ *               triangles' own), drawn with only the moved clusters;
+ *   ALL         some old hit within the bounds' range (it may have been the
+ *               moved geometry): drawn with every triangle.
+ * min commutes with the (monotonic) quantisation, so every texel gets the
+ * code a whole render gives it (tests/test_moving.c). */
+static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, pf_vec3 nrm, float range,
+                           uint16_t *out, rs__rect limit, const rs__moved *mv)
+{
+    const uint32_t R = ctx->res, T = ctx->tiles;
+    if (rs__rect_empty(limit)) return;
+    rs_para_frame f = rs_para_frame_make(pos, nrm);
+    sc->limit = limit;
+    sc->partial = limit.i0 > 0 || limit.j0 > 0 || limit.i1 < (int32_t)R - 1 || limit.j1 < (int32_t)R - 1;
+    sc->stats.maps++;
+    memset(sc->tile_skip, 0, (size_t)T * T);
+    if (!mv) {
+        rs__pass(ctx, sc, &f, range, out, limit, NULL, 0, 0);
+        return;
+    }
+    /* classify the tiles the rectangle meets */
+    const double step = (double)range / RS_PARA_CODES;
+    const double near = mv->near, far = mv->far;
+    int any_all = 0, any_moved = 0;
+    for (int32_t tj = limit.j0 / RS__TILE; tj <= limit.j1 / RS__TILE; tj++)
+        for (int32_t ti = limit.i0 / RS__TILE; ti <= limit.i1 / RS__TILE; ti++) {
+            int cls = RS__KEEP;
+            int32_t j0 = tj * RS__TILE > limit.j0 ? tj * RS__TILE : limit.j0;
+            int32_t j1 = (tj + 1) * RS__TILE - 1 < limit.j1 ? (tj + 1) * RS__TILE - 1 : limit.j1;
+            for (int32_t j = j0; j <= j1 && cls != RS__ALL; j++) {
+                int32_t i0 = ti * RS__TILE > limit.i0 ? ti * RS__TILE : limit.i0;
+                int32_t i1 = (ti + 1) * RS__TILE - 1 < limit.i1 ? (ti + 1) * RS__TILE - 1 : limit.i1;
+                i0 = i0 > ctx->row_lo[j] ? i0 : ctx->row_lo[j];
+                i1 = i1 < ctx->row_hi[j] ? i1 : ctx->row_hi[j];
+                for (int32_t i = i0; i <= i1; i++) {
+                    uint16_t c = out[(size_t)j * R + i];
+                    double lo = c == RS_PARA_EMPTY ? INFINITY : (double)c * step * (1.0 - 1e-6);
+                    double hi = c >= RS_PARA_MAX_CODE ? INFINITY : ((double)c + 1.0) * step * (1.0 + 1e-6);
+                    if (hi < near) continue;                    /* in front of the bounds */
+                    if (lo > far) cls = RS__MOVED_ONLY;         /* beyond them */
+                    else {
+                        cls = RS__ALL;
+                        break;
+                    }
+                }
+            }
+            sc->tile_class[tj * T + ti] = (uint8_t)cls;
+            any_all |= cls == RS__ALL, any_moved |= cls == RS__MOVED_ONLY;
+        }
+    if (any_all) { /* every triangle, over the ALL tiles */
+        for (int32_t tj = 0; tj < (int32_t)T; tj++)
+            for (int32_t ti = 0; ti < (int32_t)T; ti++) {
+                int in = tj >= limit.j0 / RS__TILE && tj <= limit.j1 / RS__TILE && ti >= limit.i0 / RS__TILE &&
+                         ti <= limit.i1 / RS__TILE;
+                sc->tile_skip[tj * T + ti] = !in || sc->tile_class[tj * T + ti] != RS__ALL;
+            }
+        rs__pass(ctx, sc, &f, range, out, limit, NULL, 0, 0);
+    }
+    if (any_moved) { /* the moved triangles, over the MOVED_ONLY tiles */
+        for (int32_t tj = 0; tj < (int32_t)T; tj++)
+            for (int32_t ti = 0; ti < (int32_t)T; ti++) {
+                int in = tj >= limit.j0 / RS__TILE && tj <= limit.j1 / RS__TILE && ti >= limit.i0 / RS__TILE &&
+                         ti <= limit.i1 / RS__TILE;
+                sc->tile_skip[tj * T + ti] = !in || sc->tile_class[tj * T + ti] != RS__MOVED_ONLY;
+            }
+        rs__pass(ctx, sc, &f, range, out, limit, mv->cluster_moved, 1, 1);
+    }
+    memset(sc->tile_skip, 0, (size_t)T * T);
 }
 
 /* ------------------------------------------------------------------ render calls */
@@ -1186,6 +1301,7 @@ typedef struct rs__job {
     float range;
     const rs__cluster *box; /* not NULL: re-render only the texels this sphere can be seen through */
     pf_vec3 lo, hi;         /* with box: the world box the sphere bounds */
+    const uint8_t *cluster_moved; /* with box, not NULL: the clusters holding moved triangles (rs__render_map) */
 } rs__job;
 
 static void rs__map_job(void *p, uint32_t item, uint32_t worker)
@@ -1195,6 +1311,7 @@ static void rs__map_job(void *p, uint32_t item, uint32_t worker)
     size_t texels = (size_t)ctx->res * ctx->res;
     size_t slot = job->slots ? job->slots[item] : item;
     rs__rect limit = {0, (int32_t)ctx->res - 1, 0, (int32_t)ctx->res - 1};
+    rs__moved mv, *mvp = NULL;
     if (job->box) {
         rs_para_frame f = rs_para_frame_make(job->positions[item], job->normals[item]);
         /* every corner of the box behind the tangent plane (a margin of 1e-6
@@ -1208,9 +1325,18 @@ static void rs__map_job(void *p, uint32_t item, uint32_t worker)
         }
         float near;
         if (!front || !rs__cluster_bound(ctx, &f, job->box, &limit, &near)) return;
+        if (job->cluster_moved) { /* the distance range of the sphere, with the clusters' margin */
+            float c[3];
+            rs__local_f(&f, job->box->cx, job->box->cy, job->box->cz, c);
+            float dist = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+            mv.cluster_moved = job->cluster_moved;
+            mv.near = (dist - job->box->r) - 1e-4f * dist;
+            mv.far = (dist + job->box->r) + 1e-4f * dist;
+            mvp = &mv;
+        }
     }
     rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
-                   job->atlas + texels * slot, limit);
+                   job->atlas + texels * slot, limit, mvp);
 }
 
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
@@ -1221,19 +1347,20 @@ void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const 
 
 static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                             const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
-                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, rs_para_stats *stats);
+                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, const uint8_t *cluster_moved,
+                            rs_para_stats *stats);
 
 void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                           const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
                           rs_para_stats *stats)
 {
     rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, NULL, pf_v3(0, 0, 0), pf_v3(0, 0, 0),
-                    stats);
+                    NULL, stats);
 }
 
 void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                         const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
-                        pf_vec3 hi, rs_para_stats *stats)
+                        pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count, rs_para_stats *stats)
 {
     /* the box's bounding sphere, radius rounded up as the clusters' are */
     rs__cluster box = {0};
@@ -1242,12 +1369,30 @@ void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, co
     double ex = (double)box.cx - lo.x, ey = (double)box.cy - lo.y, ez = (double)box.cz - lo.z;
     dx = dx > ex ? dx : ex, dy = dy > ey ? dy : ey, dz = dz > ez ? dz : ez;
     box.r = nextafterf((float)(sqrt(dx * dx + dy * dy + dz * dz) * (1.0 + 1e-6)), INFINITY);
-    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, &box, lo, hi, stats);
+    /* the clusters the moved triangles lie in (exact maps: triangle t in
+     * cluster t / cluster_size); with levels of detail, or ranges outside
+     * the context, every texel the sphere reaches is drawn with everything */
+    const uint8_t *cm = NULL;
+    if (moved && ctx->cluster_moved && !ctx->lod_groups) {
+        memset(ctx->cluster_moved, 0, ctx->cluster_count);
+        int ok = 1;
+        for (uint32_t m = 0; m < moved_count && ok; m++) {
+            const pf_anim_moved *r = &moved[m];
+            if (!r->moved || !r->tri_count) continue;
+            ok = (uint64_t)r->tri_first + r->tri_count <= ctx->tri_count;
+            for (uint32_t c = r->tri_first / ctx->cluster_size;
+                 ok && c <= (r->tri_first + r->tri_count - 1) / ctx->cluster_size; c++)
+                ctx->cluster_moved[c] = 1;
+        }
+        if (ok) cm = ctx->cluster_moved;
+    }
+    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, &box, lo, hi, cm, stats);
 }
 
 static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                             const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
-                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, rs_para_stats *stats)
+                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, const uint8_t *cluster_moved,
+                            rs_para_stats *stats)
 {
     assert(range > 0.0f);
     uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
@@ -1258,7 +1403,7 @@ static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs
         jobs = NULL;
     }
     for (uint32_t k = 0; k < ctx->scratch_count; k++) memset(&ctx->scratch[k]->stats, 0, sizeof(rs_para_stats));
-    rs__job job = {ctx, atlas, positions, normals, slots, range, box, lo, hi};
+    rs__job job = {ctx, atlas, positions, normals, slots, range, box, lo, hi, cluster_moved};
     if (jobs)
         pf_jobs_parallel_for(jobs, rs__map_job, &job, count, 1);
     else

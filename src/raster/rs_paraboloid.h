@@ -180,15 +180,20 @@ void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, 
                           rs_para_stats *stats);
 
 /* rs_para_render_slots restricted to what moved geometry can change: for
- * each map, only the texels through which the world box [lo, hi] (the moved
- * geometry's bounds before and after it moved) can be seen from the VPL (the
- * cap of the box's bounding sphere) are rendered again; maps the box lies
- * behind are not touched. Each such texel gets exactly the code a whole
- * render gives (its depth is the nearest hit over all triangles), so the
- * maps equal maps rendered afresh (tests/test_paraboloid.c). */
+ * each map (holding its codes from before the move), only the texels through
+ * which the world box [lo, hi] (the moved geometry's bounds before and after
+ * it moved) can be seen from the VPL (the cap of the box's bounding sphere)
+ * are rendered again; maps the box lies behind are not touched. With
+ * `moved` (the ranges pose reported moved, moved_count entries; may be
+ * NULL) the cap's 8 x 8 tiles are classed by their old codes: tiles whose
+ * old hits are all nearer than the box are kept, tiles whose old hits are
+ * all nearer or beyond it are drawn with the moved triangles alone (code =
+ * min(old, theirs)), the rest with every triangle (rs_paraboloid.c,
+ * rs__render_map). Each texel gets exactly the code a whole render gives,
+ * so the maps equal maps rendered afresh (tests/test_moving.c). */
 void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                         const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
-                        pf_vec3 hi, rs_para_stats *stats);
+                        pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count, rs_para_stats *stats);
 
 /* Brings the context's copy of the triangles and its cluster spheres up to
  * date after the scene's positions changed in place (pf_anim_pose) for the

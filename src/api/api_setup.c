@@ -68,6 +68,15 @@ pf_result api_scene_pose(pf_scene *scene, pf_anim *anim, const char *scene_name,
     return r;
 }
 
+pf_result api_geometry_moved(pf_rt *rt, rs_context *raster, gi_frame *frame, const pf_anim_moved *moved,
+                             uint32_t count, pf_error *err)
+{
+    pf_result r = pf_rt_update(rt, moved, count, PF_RT_REBUILD, err);
+    if (r == PF_OK && raster) r = rs_context_update(raster, moved, count, err);
+    if (r == PF_OK && frame) r = gi_frame_geometry_moved(frame, moved, count, err);
+    return r;
+}
+
 /* One number as the program prints it (printf "%.*g" with `digits`) and
  * parses it back (strtof, as pf_cli does). */
 static float api__text_round(int digits, float v)

@@ -6,6 +6,7 @@
  *   api_scene_read        the .gltf / .glb file, or the built-in Cornell box,
  *                         under the memory budget, with its animations
  *   api_scene_pose        the scene posed at a time (--time, --animation)
+ *   api_geometry_moved    Embree, the rasterizer and a frame updated for it
  *   api_default_camera    pf_defaults_camera as the program prints it (its
  *                         --camera text) and parses it back
  *   api_default_light     pf_defaults_light likewise (its --light text)
@@ -76,6 +77,17 @@ pf_result api_anim_clip(const struct pf_anim *anim, const char *scene_name, cons
  * static pose, so an animation is framed alike at every time. */
 pf_result api_scene_pose(pf_scene *scene, struct pf_anim *anim, const char *scene_name, double seconds,
                          const char *animation, uint32_t *moved, struct pf_anim_moved *report, pf_error *err);
+
+/* The renderer brought up to date in place after a pose moved geometry
+ * (issue 19 item 2; docs/architecture.md "Moving geometry"): Embree
+ * (pf_rt_update, REBUILD: the moved primitives' BVHs built afresh, a fresh
+ * build's bytes, so nothing depends on the poses before), the rasterizer
+ * (rs_context_update; raster may be NULL) and the frame (gi_frame_geometry_moved:
+ * maps redrawn only where the moved bounds reach them, the VPL method told;
+ * frame may be NULL). `moved` is pose's report, count entries. A failure
+ * leaves them part-updated: the caller makes them again or stops. */
+pf_result api_geometry_moved(struct pf_rt *rt, struct rs_context *raster, struct gi_frame *frame,
+                             const struct pf_anim_moved *moved, uint32_t count, pf_error *err);
 
 /* The automatic camera of a validated scene without one: pf_defaults_camera
  * (its reasons into *dc when not NULL), rounded through the --camera value

@@ -595,19 +595,6 @@ softgi_result softgi_internal_set_scene_lights(softgi_context *c, const pf_light
     return SOFTGI_OK;
 }
 
-/* Embree's scene (pf_rt_update, REBUILD: a fresh build's bytes), the
- * rasterizer (rs_context_update) and the frame (gi_frame_geometry_moved)
- * updated in place for the posed geometry (issue 19 item 2, gi_motion.h):
- * the frame's state carries on, as after softgi_set_lights. */
-static pf_result api__geometry_moved(softgi_context *c, pf_error *e)
-{
-    const uint32_t n = c->anim.prim_count;
-    pf_result r = pf_rt_update(c->rt, c->moved, n, PF_RT_REBUILD, e);
-    if (r == PF_OK && c->raster) r = rs_context_update(c->raster, c->moved, n, e);
-    if (r == PF_OK && c->frame_ready) r = gi_frame_geometry_moved(&c->frame, c->moved, n, e);
-    return r;
-}
-
 softgi_result softgi_set_time(softgi_context *c, double seconds, const char *animation, softgi_error *err)
 {
     if (!c) return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_set_time: the context is NULL");
@@ -625,7 +612,8 @@ softgi_result softgi_set_time(softgi_context *c, double seconds, const char *ani
     int updated = 0;
     if (r == PF_OK && moved) {
         updated = 1;
-        r = api__geometry_moved(c, &e);
+        r = api_geometry_moved(c->rt, c->raster, c->frame_ready ? &c->frame : NULL, c->moved, c->anim.prim_count,
+                               &e); /* in place: the frame goes on, as after softgi_set_lights */
     }
     api__fpenv_leave(env);
     if (r != PF_OK) {

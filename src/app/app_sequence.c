@@ -51,7 +51,7 @@
  * gi_frame_geometry_moved: shadow, VPL and emitter maps redrawn only where
  * the moved bounds can change them; gi_motion.h): the VPL method keeps its
  * state and is told what moved, and the --temporal / --taa / pipeline
- * histories go on, as under a moving light (app__seq_update). The first
+ * histories go on, as under a moving light (api_geometry_moved). The first
  * frame rendered is posed before anything is built. Updating is
  * deterministic, so --frames A:B still gives a full run's bytes (the frames
  * before A are rendered to carry the state). The pose's time is in the mean
@@ -271,23 +271,6 @@ static pf_result app__seq_pose(app__seq_run *s, uint32_t f, uint32_t *moved, pf_
         snprintf(m, sizeof m, "%s", err->message);
         pf_error_set(err, r, "%s: frame %u: %s", s->seq.file, f, m);
     }
-    return r;
-}
-
-/* The renderer brought up to date for the posed geometry in place (issue
- * 19 item 2; gi_motion.h): Embree (pf_rt_update, REBUILD: the moved
- * primitives' BVHs built afresh, a fresh build's bytes, so the run does not
- * depend on where it started), the rasterizer (rs_context_update) and the
- * frame (gi_frame_geometry_moved: the maps redrawn only where the moved
- * bounds reach them, the VPL method told what moved). The frame's state
- * carries on, as under a moving light. A failure (out of memory) stops
- * the run. */
-static pf_result app__seq_update(app__seq_run *s, pf_error *err)
-{
-    const uint32_t n = s->anim.prim_count;
-    pf_result r = pf_rt_update(s->rt, s->moved, n, PF_RT_REBUILD, err);
-    if (r == PF_OK && s->raster) r = rs_context_update(s->raster, s->moved, n, err);
-    if (r == PF_OK && s->frame_ready) r = gi_frame_geometry_moved(&s->frame, s->moved, n, err);
     return r;
 }
 
@@ -541,12 +524,14 @@ int app_sequence(const pf_options *o)
         prog->stages = 0;
         app__seq_progress_show(prog, 0.0, NULL);
         /* the animation at frame f: what moved updates Embree, the
-         * rasterizer and the frame (app__seq_update) */
+         * rasterizer and the frame (api_geometry_moved) */
         moved_objects = 0;
         double t_pose = pf_time_now();
         if (seq->anim_set && f != f_start) {
             r = app__seq_pose(&s, f, &moved_objects, &err);
-            if (r == PF_OK && moved_objects) r = app__seq_update(&s, &err);
+            if (r == PF_OK && moved_objects) /* in place; a failure (out of memory) stops the run */
+                r = api_geometry_moved(s.rt, s.raster, s.frame_ready ? &s.frame : NULL, s.moved, s.anim.prim_count,
+                                       &err);
             if (r != PF_OK) break;
         }
         t_pose = (pf_time_now() - t_pose) * 1e3;

@@ -89,6 +89,7 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
     }
     if (!gi__ranges_merge(&mo->ranges, &mo->range_count, 0, moved, count))
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the moved geometry's ranges");
+    const int fresh = !mo->moved && !mo->emitters; /* nothing recorded since the method last looked */
     int emitters = 0;
     for (uint32_t k = 0; k < count; k++) {
         const pf_anim_moved *m = &moved[k];
@@ -99,7 +100,7 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
             if (f->area.count && gi__emissive(s, t)) emitters = 1;
         }
     }
-    if (!mo->moved && !mo->emitters) mo->lo = lo, mo->hi = hi;
+    if (fresh) mo->lo = lo, mo->hi = hi;
     else mo->lo = gi__vmin(mo->lo, lo), mo->hi = gi__vmax(mo->hi, hi);
     mo->epoch++;
     mo->emitters |= emitters;

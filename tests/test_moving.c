@@ -168,8 +168,6 @@ static void test_raster_update(void **state)
     unload(&l);
 }
 
-static pf_vec3 vmin(pf_vec3 a, pf_vec3 b) { return pf_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
-static pf_vec3 vmax(pf_vec3 a, pf_vec3 b) { return pf_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 
 /* VPLs spread over the room's surfaces (fixed points, facing inwards), and
  * two above the ceiling facing up, with every moving object behind them. */
@@ -196,8 +194,8 @@ static void moved_box(const loaded *l, pf_vec3 *lo, pf_vec3 *hi)
     for (uint32_t k = 0; k < l->anim.prim_count; k++) {
         const pf_anim_moved *m = &l->moved[k];
         if (!m->moved) continue;
-        *lo = vmin(*lo, vmin(m->before_min, m->after_min));
-        *hi = vmax(*hi, vmax(m->before_max, m->after_max));
+        *lo = pf_v3_min(*lo, pf_v3_min(m->before_min, m->after_min));
+        *hi = pf_v3_max(*hi, pf_v3_max(m->before_max, m->after_max));
     }
 }
 

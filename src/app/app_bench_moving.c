@@ -169,16 +169,16 @@ static void bm__pose(bm_world *w, uint32_t i)
         pf_vec3 p = pf_v3_add(at, bm__rot_y(w->rest_p[k], c, sn));
         s->positions[w->v0 + k] = p;
         s->normals[w->v0 + k] = bm__rot_y(w->rest_n[k], c, sn);
-        lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
-        hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+        lo = pf_v3_min(lo, p);
+        hi = pf_v3_max(hi, p);
     }
     s->positions[s->vertex_count] = s->positions[s->vertex_count - 1];
     m->after_min = lo, m->after_max = hi;
     m->moved = i > 0;
     /* the scene's bounds, as pf_scene_validate keeps them */
     pf_vec3 blo = w->static_lo, bhi = w->static_hi;
-    s->bounds_min = pf_v3(fminf(blo.x, lo.x), fminf(blo.y, lo.y), fminf(blo.z, lo.z));
-    s->bounds_max = pf_v3(fmaxf(bhi.x, hi.x), fmaxf(bhi.y, hi.y), fmaxf(bhi.z, hi.z));
+    s->bounds_min = pf_v3_min(blo, lo);
+    s->bounds_max = pf_v3_max(bhi, hi);
 }
 
 static void bm__world_free(bm_world *w)

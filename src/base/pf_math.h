@@ -44,6 +44,9 @@ static inline pf_vec3 pf_v3_normalize_safe(pf_vec3 a)
     if (!(m > 0.0f) || !isfinite(m)) return pf_v3(0.0f, 0.0f, 0.0f);
     return pf_v3_normalize(pf_v3_scale(a, 1.0f / m));
 }
+/* Componentwise min / max (box bounds). */
+static inline pf_vec3 pf_v3_min(pf_vec3 a, pf_vec3 b) { return pf_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
+static inline pf_vec3 pf_v3_max(pf_vec3 a, pf_vec3 b) { return pf_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 static inline float pf_v3_max_comp(pf_vec3 a) { return fmaxf(a.x, fmaxf(a.y, a.z)); }
 static inline int pf_v3_is_finite(pf_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 static inline float pf_clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }

@@ -7,8 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static pf_vec3 gi__vmin(pf_vec3 a, pf_vec3 b) { return pf_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)); }
-static pf_vec3 gi__vmax(pf_vec3 a, pf_vec3 b) { return pf_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)); }
 
 /* The reports merged into *ranges (count entries, instanced primitive k at
  * k): `moved` where any report moved it, the bounds the union. A report of
@@ -35,10 +33,10 @@ static int gi__ranges_merge(pf_anim_moved **ranges, uint32_t *have, int fresh, c
             g->moved = 1;
             continue;
         }
-        g->before_min = gi__vmin(g->before_min, moved[k].before_min);
-        g->before_max = gi__vmax(g->before_max, moved[k].before_max);
-        g->after_min = gi__vmin(g->after_min, moved[k].after_min);
-        g->after_max = gi__vmax(g->after_max, moved[k].after_max);
+        g->before_min = pf_v3_min(g->before_min, moved[k].before_min);
+        g->before_max = pf_v3_max(g->before_max, moved[k].before_max);
+        g->after_min = pf_v3_min(g->after_min, moved[k].after_min);
+        g->after_max = pf_v3_max(g->after_max, moved[k].after_max);
     }
     return 1;
 }
@@ -47,7 +45,7 @@ static int gi__box_add(gi_moved_box *b, pf_vec3 lo, pf_vec3 hi, const pf_anim_mo
 {
     if (!gi__ranges_merge(&b->ranges, &b->range_count, !b->pending, moved, count)) return 0;
     if (!b->pending) b->lo = lo, b->hi = hi;
-    else b->lo = gi__vmin(b->lo, lo), b->hi = gi__vmax(b->hi, hi);
+    else b->lo = pf_v3_min(b->lo, lo), b->hi = pf_v3_max(b->hi, hi);
     b->pending = 1;
     return 1;
 }
@@ -73,8 +71,8 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
                                 "moved geometry: triangles %u..+%u, vertices %u..+%u outside the scene's %u, %u",
                                 m->tri_first, m->tri_count, m->vertex_first, m->vertex_count, s->tri_count,
                                 s->vertex_count);
-        lo = gi__vmin(lo, gi__vmin(m->before_min, m->after_min));
-        hi = gi__vmax(hi, gi__vmax(m->before_max, m->after_max));
+        lo = pf_v3_min(lo, pf_v3_min(m->before_min, m->after_min));
+        hi = pf_v3_max(hi, pf_v3_max(m->before_max, m->after_max));
         n++;
     }
     if (!n) return PF_OK;
@@ -101,7 +99,7 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
         }
     }
     if (fresh) mo->lo = lo, mo->hi = hi;
-    else mo->lo = gi__vmin(mo->lo, lo), mo->hi = gi__vmax(mo->hi, hi);
+    else mo->lo = pf_v3_min(mo->lo, lo), mo->hi = pf_v3_max(mo->hi, hi);
     mo->epoch++;
     mo->emitters |= emitters;
 

@@ -1205,7 +1205,7 @@ static void rs__pass(rs_para_context *ctx, rs__scratch *sc, const rs_para_frame 
 }
 
 /* Tile classes of a partial render after geometry moved (rs__render_map). */
-enum { RS__KEEP = 0, RS__MOVED_ONLY = 1, RS__ALL = 2 };
+enum { RS__KEEP = 0, RS__MOVED_ONLY = 1, RS__ALL = 2, RS__OUT = 3 /* a tile the rectangle does not meet */ };
 
 /* Renders one map, or with `limit` not covering the whole map only the
  * texels of that rectangle (the others keep their codes in `out`): every
@@ -1245,6 +1245,7 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
     const double step = (double)range / RS_PARA_CODES;
     const double near = mv->near, far = mv->far;
     int any_all = 0, any_moved = 0;
+    memset(sc->tile_class, RS__OUT, (size_t)T * T);
     for (int32_t tj = limit.j0 / RS__TILE; tj <= limit.j1 / RS__TILE; tj++)
         for (int32_t ti = limit.i0 / RS__TILE; ti <= limit.i1 / RS__TILE; ti++) {
             int cls = RS__KEEP;
@@ -1271,21 +1272,11 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             any_all |= cls == RS__ALL, any_moved |= cls == RS__MOVED_ONLY;
         }
     if (any_all) { /* every triangle, over the ALL tiles */
-        for (int32_t tj = 0; tj < (int32_t)T; tj++)
-            for (int32_t ti = 0; ti < (int32_t)T; ti++) {
-                int in = tj >= limit.j0 / RS__TILE && tj <= limit.j1 / RS__TILE && ti >= limit.i0 / RS__TILE &&
-                         ti <= limit.i1 / RS__TILE;
-                sc->tile_skip[tj * T + ti] = !in || sc->tile_class[tj * T + ti] != RS__ALL;
-            }
+        for (uint32_t k = 0; k < T * T; k++) sc->tile_skip[k] = sc->tile_class[k] != RS__ALL;
         rs__pass(ctx, sc, &f, range, out, limit, NULL, 0, 0);
     }
     if (any_moved) { /* the moved triangles, over the MOVED_ONLY tiles */
-        for (int32_t tj = 0; tj < (int32_t)T; tj++)
-            for (int32_t ti = 0; ti < (int32_t)T; ti++) {
-                int in = tj >= limit.j0 / RS__TILE && tj <= limit.j1 / RS__TILE && ti >= limit.i0 / RS__TILE &&
-                         ti <= limit.i1 / RS__TILE;
-                sc->tile_skip[tj * T + ti] = !in || sc->tile_class[tj * T + ti] != RS__MOVED_ONLY;
-            }
+        for (uint32_t k = 0; k < T * T; k++) sc->tile_skip[k] = sc->tile_class[k] != RS__MOVED_ONLY;
         rs__pass(ctx, sc, &f, range, out, limit, mv->cluster_moved, 1, 1);
     }
     memset(sc->tile_skip, 0, (size_t)T * T);

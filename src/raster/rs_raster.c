@@ -295,8 +295,8 @@ static void rs__cluster_box(rs_context *ctx, uint32_t c)
     for (uint32_t t = c * RS_CLUSTER; t < t1; t++)
         for (int k = 0; k < 3; k++) {
             pf_vec3 p = scene->positions[scene->indices[3 * t + k]];
-            lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
-            hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+            lo = pf_v3_min(lo, p);
+            hi = pf_v3_max(hi, p);
         }
     ctx->clusters[c].lo = lo;
     ctx->clusters[c].hi = hi;

@@ -22,6 +22,21 @@
 
 /* ---------------------------------------------------------------- ownership */
 
+void pf_anim_prim_free(pf_anim_prim *p)
+{
+    free(p->local_pos);
+    free(p->local_nrm);
+    free(p->src);
+    free(p->target_pos);
+    free(p->target_nrm);
+    free(p->joint);
+    free(p->weight);
+    p->local_pos = p->local_nrm = p->target_pos = p->target_nrm = NULL;
+    p->src = NULL;
+    p->joint = NULL;
+    p->weight = NULL;
+}
+
 void pf_anim_free(pf_anim *a)
 {
     if (!a) return;
@@ -48,16 +63,7 @@ void pf_anim_free(pf_anim *a)
         free(c->channels);
     }
     free(a->clips);
-    for (uint32_t i = 0; i < a->prim_count && a->prims; i++) {
-        pf_anim_prim *p = &a->prims[i];
-        free(p->local_pos);
-        free(p->local_nrm);
-        free(p->src);
-        free(p->target_pos);
-        free(p->target_nrm);
-        free(p->joint);
-        free(p->weight);
-    }
+    for (uint32_t i = 0; i < a->prim_count && a->prims; i++) pf_anim_prim_free(&a->prims[i]);
     free(a->prims);
     free(a->scratch_pos);
     free(a->scratch_nrm);

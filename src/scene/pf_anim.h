@@ -208,6 +208,9 @@ typedef struct pf_anim_moved {
 } pf_anim_moved;
 
 void pf_anim_free(pf_anim *anim);
+/* Frees a primitive's own data (its arrays, then NULL); the loader's and
+ * pf_anim_free's one way to do it. */
+void pf_anim_prim_free(pf_anim_prim *p);
 
 /* The animation `name` (when not NULL; the first of that name) or the
  * animation `index` into *clip. PF_ERR_ARGUMENT, with the file's

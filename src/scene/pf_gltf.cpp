@@ -654,26 +654,11 @@ struct AnimReader {
     }
     ~AnimReader()
     {
-        for (pf_anim_prim &p : prims) free_prim(&p);
+        for (pf_anim_prim &p : prims) pf_anim_prim_free(&p);
         pf_anim_free(&a);
     }
     AnimReader(const AnimReader &) = delete;
     AnimReader &operator=(const AnimReader &) = delete;
-
-    static void free_prim(pf_anim_prim *p)
-    {
-        free(p->local_pos);
-        free(p->local_nrm);
-        free(p->src);
-        free(p->target_pos);
-        free(p->target_nrm);
-        free(p->joint);
-        free(p->weight);
-        p->local_pos = p->local_nrm = p->target_pos = p->target_nrm = nullptr;
-        p->src = nullptr;
-        p->joint = nullptr;
-        p->weight = nullptr;
-    }
 
     void warn(const std::string &w)
     {
@@ -1110,11 +1095,11 @@ struct AnimReader {
     void finish(pf_anim_prim *ap, std::vector<uint32_t> *src)
     {
         if (!keep) {
-            free_prim(ap);
+            pf_anim_prim_free(ap);
             return;
         }
         if (!ap->dynamic) {
-            free_prim(ap);
+            pf_anim_prim_free(ap);
             ap->local_count = 0;
             ap->target_count = ap->joint_sets = 0;
         } else if (ap->flat) {
@@ -1285,7 +1270,7 @@ struct Builder {
         ap.node = uint32_t(node_index), ap.mesh = uint32_t(mesh_index), ap.prim = uint32_t(prim_index);
         struct PrimGuard {
             pf_anim_prim *p;
-            ~PrimGuard() { AnimReader::free_prim(p); }
+            ~PrimGuard() { pf_anim_prim_free(p); }
         } prim_guard{&ap};
         const bool deformed = anim->prepare(p, node_index, P, N, what, &ap);
         const bool mirror = ap.skin < 0 && pf_mat4_det3(&world) < 0.0; /* skinned: the file's winding */
@@ -1610,8 +1595,8 @@ void check_camera_ranges(const std::vector<pf_camera> &cams, const std::vector<p
     if (pos.empty()) return;
     pf_vec3 lo = pos[0], hi = pos[0];
     for (const pf_vec3 &p : pos) {
-        lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
-        hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+        lo = pf_v3_min(lo, p);
+        hi = pf_v3_max(hi, p);
     }
     for (size_t c = 0; c < cams.size(); c++) {
         const pf_camera &cam = cams[c];

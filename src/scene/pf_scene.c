@@ -45,8 +45,8 @@ pf_result pf_scene_validate(pf_scene *s, pf_error *err)
             return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite normal", v);
         if (!isfinite(s->uvs[v].x) || !isfinite(s->uvs[v].y))
             return pf_error_set(err, PF_ERR_NONFINITE, "vertex %u has a non-finite texture coordinate", v);
-        lo = pf_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
-        hi = pf_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+        lo = pf_v3_min(lo, p);
+        hi = pf_v3_max(hi, p);
     }
     for (uint32_t t = 0; t < s->tri_count; t++) {
         for (int k = 0; k < 3; k++)

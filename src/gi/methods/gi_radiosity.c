@@ -33,14 +33,16 @@ float gi_radiosity_random(uint64_t seed, uint32_t a, uint32_t b, uint32_t c)
     return (float)(h >> 40) * 0x1p-24f; /* k 2^-24, k < 2^24: exactly in [0, 1) */
 }
 
-/* Cosine-weighted direction around unit n (Malley's method, pdf cos / pi). */
-static pf_vec3 gi__cosine_dir(pf_vec3 n, float u0, float u1)
+pf_vec3 gi_radiosity_bounce_dir(pf_vec3 ns, pf_vec3 ng, float u0, float u1)
 {
     float r = sqrtf(u0), phi = 2.0f * PF_PI * u1;
     pf_vec3 t, b;
-    pf_v3_basis(n, &t, &b);
-    return pf_v3_add(pf_v3_add(pf_v3_scale(t, r * cosf(phi)), pf_v3_scale(b, r * sinf(phi))),
-                     pf_v3_scale(n, sqrtf(fmaxf(0.0f, 1.0f - u0))));
+    pf_v3_basis(ns, &t, &b);
+    pf_vec3 w = pf_v3_add(pf_v3_add(pf_v3_scale(t, r * cosf(phi)), pf_v3_scale(b, r * sinf(phi))),
+                          pf_v3_scale(ns, sqrtf(fmaxf(0.0f, 1.0f - u0))));
+    /* below the geometric surface (interpolated normals): mirror, as gi_reference.c */
+    float d = pf_v3_dot(w, ng);
+    return d < 0.0f ? pf_v3_sub(w, pf_v3_scale(ng, 2.0f * d)) : w;
 }
 
 #define GI__RAYS 256   /* rays per Embree call (stack arrays) */
@@ -162,10 +164,7 @@ static void gi__trace(const gi_radiosity_ctx *c, const gi__range *g, const gi_ra
                 if (!(V->flags & GI_RADIOSITY_ALIVE)) continue;
                 uint32_t s = g->s0 + k;
                 float u0 = gi_radiosity_random(seeds[e], s, j, 3), u1 = gi_radiosity_random(seeds[e], s, j, 4);
-                pf_vec3 wi = gi__cosine_dir(V->ns, u0, u1);
-                /* below the geometric surface (interpolated normals): mirror, as gi_reference.c */
-                float d = pf_v3_dot(wi, V->ng);
-                if (d < 0.0f) wi = pf_v3_sub(wi, pf_v3_scale(V->ng, 2.0f * d));
+                pf_vec3 wi = gi_radiosity_bounce_dir(V->ns, V->ng, u0, u1);
                 rays[q].org = pf_rt_offset_origin(V->p, V->ng, V->ng);
                 rays[q].dir = wi;
                 rays[q].tnear = 0.0f;

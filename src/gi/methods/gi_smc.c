@@ -652,13 +652,7 @@ static void gi__smc_trace_job(void *ctx, uint32_t chunk, uint32_t worker)
         if (j >= s->x_count) j = s->x_count - 1;
         const gi__smc_point *X = &s->x[j];
         float u0 = gi__rand(c->key, 10, r, 1), u1 = gi__rand(c->key, 10, r, 2);
-        float rr = sqrtf(u0), phi = 2.0f * PF_PI * u1;
-        pf_vec3 t, b;
-        pf_v3_basis(X->ns, &t, &b);
-        pf_vec3 w = pf_v3_add(pf_v3_add(pf_v3_scale(t, rr * cosf(phi)), pf_v3_scale(b, rr * sinf(phi))),
-                              pf_v3_scale(X->ns, sqrtf(fmaxf(0.0f, 1.0f - u0))));
-        float d = pf_v3_dot(w, X->ng);
-        if (d < 0.0f) w = pf_v3_sub(w, pf_v3_scale(X->ng, 2.0f * d));
+        pf_vec3 w = gi_radiosity_bounce_dir(X->ns, X->ng, u0, u1);
         rays[i].org = pf_rt_offset_origin(X->p, X->ng, X->ng);
         rays[i].dir = w;
         rays[i].tnear = 0.0f;

@@ -199,12 +199,18 @@ static void moved_box(const loaded *l, pf_vec3 *lo, pf_vec3 *hi)
     }
 }
 
-static void para_case(int k_para_ranges);
+/* mode 0: the cap drawn with everything; 1: tiles classed by the moved
+ * ranges; 2: static maps (the animated primitives declared dynamic before
+ * the first render); 3: static maps of a declaration that misses the moved
+ * ranges (drawn as mode 1, then whole once declared) */
+static void para_case(int mode);
 static void test_para_update(void **state)
 {
     (void)state;
     para_case(0);
     para_case(1);
+    para_case(2);
+    para_case(3);
 }
 
 static void test_shadow_box(void **state)
@@ -268,8 +274,9 @@ static void test_shadow_box(void **state)
     unload(&l);
 }
 
-static void para_case(int k_para_ranges)
+static void para_case(int mode)
 {
+    const int k_para_ranges = mode >= 1;
     loaded l;
     load(&l);
     pf_jobs *jobs = pf_jobs_create(2);
@@ -280,10 +287,24 @@ static void para_case(int k_para_ranges)
     vpls(p, n);
     const float range = 20.0f;
     const size_t bytes = rs_para_atlas_bytes(rs_para_resolution(kept), NV);
-    uint16_t *maps = malloc(bytes), *whole = malloc(bytes), *before = malloc(bytes);
-    assert_true(maps && whole && before);
+    uint16_t *maps = malloc(bytes), *whole = malloc(bytes), *before = malloc(bytes), *statics = malloc(bytes);
+    assert_true(maps && whole && before && statics);
     pose(&l, 0.0);
-    rs_para_render(maps, kept, jobs, p, n, NV, range, NULL);
+    /* the dynamic primitives, as a caller that knows the animation declares
+     * them (mode 3: one that does not: nothing declared) */
+    pf_anim_moved *dyn = calloc(l.anim.prim_count, sizeof *dyn);
+    assert_non_null(dyn);
+    for (uint32_t k = 0; k < l.anim.prim_count; k++)
+        dyn[k] = (pf_anim_moved){.tri_first = l.anim.prims[k].tri_first, .tri_count = l.anim.prims[k].tri_count,
+                                 .moved = l.anim.prims[k].dynamic && mode == 2};
+    int grew = 0;
+    assert_int_equal(rs_para_set_dynamic(kept, dyn, l.anim.prim_count, &grew, &e), PF_OK);
+    assert_int_equal(grew, mode == 2);
+    if (mode >= 2) rs_para_render_split(maps, statics, kept, jobs, p, n, NULL, NV, range, NULL);
+    else rs_para_render(maps, kept, jobs, p, n, NV, range, NULL);
+    /* a static map is the map without the dynamic clusters: no code nearer */
+    for (size_t i = 0; mode >= 2 && i < bytes / 2; i++)
+        if (statics[i] < maps[i]) fail_msg("static texel %zu nearer than the whole map's", i);
     uint64_t changed = 0, redrawn_maps = 0, tested_part = 0, tested_whole = 0;
     for (int f = 1; f <= 8; f++) {
         double t = 0.5 * f;
@@ -294,10 +315,19 @@ static void para_case(int k_para_ranges)
         memcpy(before, maps, bytes);
         if (moving) {
             rs_para_stats st;
-            rs_para_render_box(maps, kept, jobs, p, n, NULL, NV, range, lo, hi, (k_para_ranges ? l.moved : NULL),
-                               l.anim.prim_count, &st);
+            if (mode >= 2)
+                rs_para_render_box_split(maps, statics, kept, jobs, p, n, NULL, NV, range, lo, hi, l.moved,
+                                         l.anim.prim_count, &st);
+            else
+                rs_para_render_box(maps, kept, jobs, p, n, NULL, NV, range, lo, hi, (k_para_ranges ? l.moved : NULL),
+                                   l.anim.prim_count, &st);
             redrawn_maps += st.maps;
             tested_part += st.texels_tested;
+        }
+        if (mode == 3 && f == 4) { /* now declared: the static maps drawn whole once, as the frame does */
+            assert_int_equal(rs_para_set_dynamic(kept, l.moved, l.anim.prim_count, &grew, &e), PF_OK);
+            assert_int_equal(grew, 1);
+            rs_para_render_split(maps, statics, kept, jobs, p, n, NULL, NV, range, NULL);
         }
         rs_para_context *fresh;
         assert_int_equal(rs_para_context_create(&fresh, &l.scene, NULL, &e), PF_OK);
@@ -312,9 +342,11 @@ static void para_case(int k_para_ranges)
         for (size_t i = 0; i < bytes / 2; i++) changed += before[i] != maps[i];
         rs_para_context_destroy(fresh);
     }
+    static const char *what[] = {"", " (tiles classed, moved triangles alone where they can be)",
+                                 " (static maps declared first)", " (static maps declared late)"};
     print_message("paraboloid update%s: %llu texels changed over 8 poses; %llu of %d maps re-rendered in part, "
                   "%llu texel tests against %llu for whole maps\n",
-                  k_para_ranges ? " (tiles classed, moved triangles alone where they can be)" : "",
+                  what[mode],
                   (unsigned long long)changed, (unsigned long long)redrawn_maps, 8 * NV,
                   (unsigned long long)tested_part, (unsigned long long)tested_whole);
     assert_true(changed > 0);
@@ -322,7 +354,11 @@ static void para_case(int k_para_ranges)
     assert_true(tested_part < tested_whole);
     pf_anim_moved bad = {.tri_first = l.scene.tri_count, .tri_count = 1, .moved = 1};
     assert_int_equal(rs_para_context_update(kept, &l.scene, &bad, 1, &e), PF_ERR_ARGUMENT);
-    free(maps), free(whole), free(before);
+    if (mode == 2) { /* a range outside the context is refused */
+        assert_int_equal(rs_para_set_dynamic(kept, &bad, 1, &grew, &e), PF_ERR_ARGUMENT);
+        assert_int_equal(grew, 0);
+    }
+    free(maps), free(whole), free(before), free(statics), free(dyn);
     rs_para_context_destroy(kept);
     pf_jobs_destroy(jobs);
     unload(&l);
@@ -354,7 +390,10 @@ static void frame_set_free(frame_set *x)
     pf_rt_destroy(x->rt);
 }
 
-static void frame_case(const char *what, const gi_vpl_method *method, int ism)
+/* declare: the animated primitives declared dynamic before the first
+ * frame (the static VPL maps drawn with the first maps); otherwise the
+ * first move declares them (the kept maps drawn whole once) */
+static void frame_case(const char *what, const gi_vpl_method *method, int ism, int declare)
 {
     loaded l;
     load(&l);
@@ -370,12 +409,17 @@ static void frame_case(const char *what, const gi_vpl_method *method, int ism)
     pose(&l, 0.0);
     frame_set kept;
     frame_set_make(&kept, &l.scene, jobs, &io);
+    pf_error e;
+    for (uint32_t k = 0; declare && k < l.anim.prim_count; k++) {
+        const pf_anim_prim *p = &l.anim.prims[k];
+        pf_anim_moved m = {.tri_first = p->tri_first, .tri_count = p->tri_count, .moved = p->dynamic};
+        assert_int_equal(gi_frame_declare_dynamic(&kept.f, &m, 1, &e), PF_OK);
+    }
     gi_frame_render_raster(&kept.f);
     assert_int_equal(kept.f.status, PF_OK);
     gi_motion_stats sum;
     memset(&sum, 0, sizeof sum);
     uint32_t poses = 0;
-    pf_error e;
     for (int k = 1; k <= 6; k++) {
         double t = 0.7 * k;
         if (!pose(&l, t)) continue;
@@ -436,6 +480,7 @@ static void frame_case(const char *what, const gi_vpl_method *method, int ism)
     assert_true(sum.shadow_faces < 6 * poses);
     assert_true(sum.shadow_texels < (uint64_t)6 * 128 * 128 * poses);
     if (!ism) {
+        assert_non_null(kept.f.ind.static_atlas); /* the maps were drawn from static maps */
         assert_true(sum.vpl_maps > 0);
         assert_true(sum.vpl_maps < io.vpls * poses);
     }
@@ -554,19 +599,19 @@ static void test_vpls_on_posed_surfaces(void **state)
 static void test_frame_ir(void **state)
 {
     (void)state;
-    frame_case("IR, paraboloid maps", &gi_method_ir, 0);
+    frame_case("IR, paraboloid maps", &gi_method_ir, 0, 0);
 }
 
 static void test_frame_ir_ism(void **state)
 {
     (void)state;
-    frame_case("IR, imperfect shadow maps", &gi_method_ir, 1);
+    frame_case("IR, imperfect shadow maps", &gi_method_ir, 1, 0);
 }
 
 static void test_frame_tcas(void **state)
 {
     (void)state;
-    frame_case("TCAS, paraboloid maps", &gi_method_tcas, 0);
+    frame_case("TCAS, paraboloid maps (dynamic primitives declared first)", &gi_method_tcas, 0, 1);
 }
 
 int main(void)

@@ -77,6 +77,19 @@ pf_result api_geometry_moved(pf_rt *rt, rs_context *raster, gi_frame *frame, con
     return r;
 }
 
+pf_result api_declare_dynamic(gi_frame *frame, const pf_anim *anim, pf_error *err)
+{
+    for (uint32_t k = 0; k < anim->prim_count; k++) {
+        const pf_anim_prim *p = &anim->prims[k];
+        if (!p->dynamic) continue;
+        pf_anim_moved m = {.vertex_first = p->vertex_first, .vertex_count = p->vertex_count,
+                           .tri_first = p->tri_first, .tri_count = p->tri_count, .moved = 1};
+        pf_result r = gi_frame_declare_dynamic(frame, &m, 1, err);
+        if (r != PF_OK) return r;
+    }
+    return PF_OK;
+}
+
 /* One number as the program prints it (printf "%.*g" with `digits`) and
  * parses it back (strtof, as pf_cli does). */
 static float api__text_round(int digits, float v)

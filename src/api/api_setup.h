@@ -7,6 +7,7 @@
  *                         under the memory budget, with its animations
  *   api_scene_pose        the scene posed at a time (--time, --animation)
  *   api_geometry_moved    Embree, the rasterizer and a frame updated for it
+ *   api_declare_dynamic   the scene's animated primitives told to a frame
  *   api_default_camera    pf_defaults_camera as the program prints it (its
  *                         --camera text) and parses it back
  *   api_default_light     pf_defaults_light likewise (its --light text)
@@ -88,6 +89,11 @@ pf_result api_scene_pose(pf_scene *scene, struct pf_anim *anim, const char *scen
  * leaves them part-updated: the caller makes them again or stops. */
 pf_result api_geometry_moved(struct pf_rt *rt, struct rs_context *raster, struct gi_frame *frame,
                              const struct pf_anim_moved *moved, uint32_t count, pf_error *err);
+
+/* Declares the scene's dynamic primitives (anim->prims[k].dynamic) to the
+ * frame (gi_frame_declare_dynamic), so its first frame draws the static
+ * VPL maps with the maps; a static file declares nothing. */
+pf_result api_declare_dynamic(struct gi_frame *frame, const struct pf_anim *anim, pf_error *err);
 
 /* The automatic camera of a validated scene without one: pf_defaults_camera
  * (its reasons into *dc when not NULL), rounded through the --camera value

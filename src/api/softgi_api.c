@@ -664,6 +664,7 @@ softgi_result softgi_render(softgi_context *c, const softgi_target *t, softgi_er
     if (!c->frame_ready) {
         r = api_frame_create(&c->frame, &c->desc, &c->scene, c->rt, c->raster, c->jobs, &c->camera, 1, c->warn, &e);
         if (r == PF_OK) c->frame_ready = 1;
+        if (r == PF_OK) r = api_declare_dynamic(&c->frame, &c->anim, &e);
     }
     if (r == PF_OK) {
         /* progress: the stages through the timer's hook, the VPL maps

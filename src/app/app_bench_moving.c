@@ -39,6 +39,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "api_setup.h"
 #include "app.h"
 #include "pf_jobs.h"
 #include "gi_frame.h"
@@ -303,6 +304,10 @@ int app_bench_frame_moving(const pf_options *o)
                       ? PF_OK
                       : pf_error_set(&err, PF_ERR_OUT_OF_MEMORY, "out of memory for the bench");
     for (int k = 0; k < 2 && r == PF_OK; k++) r = bm__world_make(&w[k], &src, isa, jobs, threads, o, vpls, &err);
+    /* the moving world's object declared dynamic, as a caller that knows
+     * its animation does: its VPL maps keep static maps (gi_frame_declare_
+     * dynamic); the static world, where nothing moves, declares nothing */
+    if (r == PF_OK) r = api_declare_dynamic(&w[1].frame, &w[1].anim, &err);
     if (r == PF_OK)
         printf("softgi bench frame --moving-object: sibenik + a %u-triangle torus, %dx%d, isa %s, %u threads, method "
                "%s, %u VPLs, pipelining %s, indirect light at 1/%u resolution; 1 warm-up frame then median of %u\n",

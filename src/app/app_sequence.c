@@ -486,6 +486,7 @@ int app_sequence(const pf_options *o)
     if (r == PF_OK) {
         r = app_frame_init(o, &s.frame, &s.scene, s.rt, s.raster, s.jobs, &camera, width, height, !o->reference, &err);
         s.frame_ready = r == PF_OK;
+        if (r == PF_OK) r = api_declare_dynamic(&s.frame, &s.anim, &err);
     }
     if (r != PF_OK) return app__fail_run(&s, &err);
     t_build = pf_time_now() - t_build;

@@ -282,6 +282,18 @@ pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, u
  * memory (the frame's copies are then part-updated: make the frame again). */
 pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err);
 
+/* Declares the ranges that may move from now on (entries flagged `moved`;
+ * gi_frame_geometry_moved declares what it is told moved): the exact VPL
+ * maps then keep static maps, the maps of the geometry that cannot move,
+ * and a map the moved geometry changes is drawn again from its static map
+ * and the dynamic triangles instead of from everything behind them (the
+ * same bytes; rs_para_render_box_split). A range new to the set has the
+ * kept maps drawn whole, with their static maps, at the next VPL maps stage
+ * (once), so a caller that knows what is animated (the scene's dynamic
+ * primitives) declares it before the first frame. Fails on a range outside
+ * the scene. No-op without exact VPL maps. */
+pf_result gi_frame_declare_dynamic(gi_frame *f, const pf_anim_moved *ranges, uint32_t count, pf_error *err);
+
 /* Stages. */
 void gi_stage_gbuffer_raytrace(gi_frame *f);
 void gi_stage_gbuffer_raster(gi_frame *f);  /* visibility: triangle id + depth per pixel */

@@ -162,6 +162,7 @@ void gi_indirect_free(gi_indirect *ind)
     gi_vpl_set_free(&ind->vpls);
     gi_vpl_set_free(&ind->vpls_next);
     rs_para_context_destroy(ind->para);
+    free(ind->static_atlas);
     gi_ism_destroy(ind->ism);
     rs_gbuffer_free(&ind->low);
     pf_arena_release(&ind->mem); /* every buffer above */
@@ -321,7 +322,12 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
      * seen, before the new and moved VPLs' maps are drawn whole. */
     uint32_t N = ind->vpls.count, todo = 0;
     gi_moved_box *mb = &f->moved_maps;
-    if (mb->pending) {
+    /* With static maps (gi_frame_declare_dynamic), the partial renders
+     * start from the static codes (rs_para_render_box_split); when a range
+     * became dynamic, the kept maps are drawn whole once, static maps with
+     * them. */
+    uint16_t *sa = ind->static_atlas;
+    if (mb->pending || (sa && ind->static_stale)) {
         for (uint32_t i = 0; i < N && i < ind->atlas_slots; i++) {
             if (ind->vpls.v[i].moved && !ind->maps_current) continue; /* drawn whole below */
             ind->map_pos[todo] = ind->vpls.v[i].pos; /* what its map was drawn for (not moved) */
@@ -329,13 +335,21 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
             ind->map_slot[todo++] = i;
         }
         rs_para_stats st;
-        rs_para_render_box(ind->atlas, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
-                           ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
+        if (sa && ind->static_stale)
+            rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
+                                 ind->range, &st);
+        else if (sa)
+            rs_para_render_box_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot,
+                                     todo, ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
+        else
+            rs_para_render_box(ind->atlas, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
+                               ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
         f->motion_stats.vpl_maps += (uint32_t)st.maps;
         f->motion_stats.vpl_texels += st.texels_tested;
         mb->pending = 0;
         todo = 0;
     }
+    ind->static_stale = 0;
     /* pipelined frame 1 shades with frame 0's set again: its maps are there */
     if (ind->maps_current) return;
     ind->maps_current = 1;
@@ -356,7 +370,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     const uint32_t chunk = f->progress ? GI__MAPS_CHUNK : UINT32_MAX;
     for (uint32_t k = 0; k < todo;) {
         uint32_t n = todo - k < chunk ? todo - k : chunk;
-        rs_para_render_slots(ind->atlas, ind->para, f->jobs, ind->map_pos + k, ind->map_nrm + k, ind->map_slot + k,
+        rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos + k, ind->map_nrm + k, ind->map_slot + k,
                              n, ind->range, NULL);
         k += n;
         ind->maps_rendered = k;

@@ -137,6 +137,12 @@ typedef struct gi_indirect {
     float bias_scale;         /* map bias x this: 1 for exact maps, the ISM bias scale for ISMs */
     uint16_t *atlas;          /* exact maps or ISMs, rs_paraboloid layout, R = opt.para_res */
     uint32_t atlas_slots;
+    /* static maps (exact maps of a scene whose geometry moves: the maps of
+     * what cannot move, slot for slot; rs_para_render_split): malloc'd when
+     * the first dynamic range is declared (gi_frame_declare_dynamic), NULL
+     * before or when that failed (the maps are then drawn without) */
+    uint16_t *static_atlas;
+    int static_stale;         /* a range became dynamic: the kept slots' static maps are drawn again */
     rs_para_frame *frames;
     float range;
     uint32_t maps_rendered;   /* this frame */

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define GI__STATIC_MAX ((size_t)1 << 30) /* the largest static-map atlas (gi_frame_declare_dynamic) */
 
 /* The reports merged into *ranges (count entries, instanced primitive k at
  * k): `moved` where any report moved it, the bounds the union. A report of
@@ -54,6 +55,23 @@ static int gi__emissive(const pf_scene *s, uint32_t t)
 {
     const float *e = s->materials[s->tri_material[t]].emission;
     return e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
+}
+
+pf_result gi_frame_declare_dynamic(gi_frame *f, const pf_anim_moved *ranges, uint32_t count, pf_error *err)
+{
+    gi_indirect *ind = &f->ind;
+    if (!f->indirect || !ind->para) return PF_OK; /* no exact VPL maps */
+    int grew = 0;
+    pf_result r = rs_para_set_dynamic(ind->para, ranges, count, &grew, err);
+    if (r != PF_OK) return r;
+    if (!grew) return PF_OK;
+    /* the static maps double the maps' memory: kept up to GI__STATIC_MAX
+     * bytes (32768 VPLs at 128^2); beyond, or when the allocation fails,
+     * the maps are drawn without them (rs_para_render_box) */
+    size_t bytes = rs_para_atlas_bytes(ind->opt.para_res, ind->opt.vpls);
+    if (!ind->static_atlas && bytes <= GI__STATIC_MAX) ind->static_atlas = malloc(bytes);
+    ind->static_stale = 1; /* the kept maps' static maps are drawn at the next VPL maps stage */
+    return PF_OK;
 }
 
 pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err)
@@ -108,6 +126,7 @@ pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint3
         goto failed;
     if (f->indirect && f->ind.para && (r = rs_para_context_update(f->ind.para, s, moved, count, err)) != PF_OK)
         goto failed;
+    if ((r = gi_frame_declare_dynamic(f, moved, count, err)) != PF_OK) goto failed; /* what moved may move again */
     if (f->indirect && f->ind.ism && (r = gi_ism_update(f->ind.ism, s, moved, count, err)) != PF_OK) goto failed;
 
     /* area lights: a moved emitter is sampled again (new points, new maps,

@@ -22,7 +22,10 @@
  *       maps of VPLs that did not move are drawn again only over the texels
  *       through which the bounds can be seen (rs_para_render_box); maps the
  *       bounds lie behind are not touched; new and moved VPLs get whole
- *       maps as always;
+ *       maps as always; with dynamic primitives declared (gi_frame_declare_
+ *       dynamic, which this call does for what it is told moved) each map
+ *       keeps a static map, and the redraw starts from its codes and draws
+ *       the dynamic triangles alone (rs_para_render_box_split);
  *     - the area-light maps likewise, or, when an emitter moved, the
  *       emitters' sampling and their K maps afresh;
  *     - the VPL method: the next update sees a gi_motion (gi_vpl_inputs.

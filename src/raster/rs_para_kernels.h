@@ -109,6 +109,10 @@ struct rs_para_context {
     rs__cluster *supers;
     uint32_t super_count;
     uint8_t *cluster_moved; /* rs_para_render_box's scratch: the clusters holding moved triangles */
+    /* rs_para_set_dynamic: the clusters holding a triangle that may move
+     * (cluster_dynamic) and the others (cluster_static, its complement);
+     * a static map (rs_para_render_split) draws the cluster_static ones */
+    uint8_t *cluster_dynamic, *cluster_static;
     /* levels of detail (rs_para_lod.h; lod 0: none, every cluster is drawn) */
     float lod;
     uint32_t lod_count;

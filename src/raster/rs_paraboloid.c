@@ -512,6 +512,8 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->soa_block = aligned_alloc(64, (size_t)13 * ctx->tri_padded * sizeof(float));
     ctx->clusters = calloc(ctx->cluster_count, sizeof(rs__cluster));
     ctx->cluster_moved = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
+    ctx->cluster_dynamic = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
+    ctx->cluster_static = malloc(ctx->cluster_count ? ctx->cluster_count : 1);
     ctx->lane_count = ctx->tri_padded / RS__LANES;
     ctx->lanes = calloc(ctx->lane_count ? ctx->lane_count : 1, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
@@ -520,7 +522,9 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->w = malloc((size_t)R * R * sizeof(float));
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
-    if (!ctx->soa_block || !ctx->clusters || !ctx->cluster_moved || !ctx->lanes || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
+    if (ctx->cluster_static) memset(ctx->cluster_static, 1, ctx->cluster_count ? ctx->cluster_count : 1);
+    if (!ctx->soa_block || !ctx->clusters || !ctx->cluster_moved || !ctx->cluster_dynamic || !ctx->cluster_static ||
+        !ctx->lanes || !ctx->u || !ctx->d2 || !ctx->dz || !ctx->w || !ctx->row_lo ||
         !ctx->row_hi || (o.lod > 0.0f && !ctx->lod_groups)) {
         rs__lod_free(&lod);
         rs_para_context_destroy(ctx);
@@ -639,6 +643,41 @@ pf_result rs_para_context_update(rs_para_context *ctx, const pf_scene *scene, co
     return PF_OK;
 }
 
+/* Sets flags[c] = 1 for every cluster holding a triangle of the ranges
+ * flagged moved (triangle t lies in cluster t / cluster_size on exact
+ * maps); 0 when a range lies outside the context's triangles. */
+static int rs__mark_clusters(const rs_para_context *ctx, uint8_t *flags, const pf_anim_moved *ranges, uint32_t count)
+{
+    for (uint32_t m = 0; m < count; m++) {
+        const pf_anim_moved *r = &ranges[m];
+        if (!r->moved || !r->tri_count) continue;
+        if ((uint64_t)r->tri_first + r->tri_count > ctx->tri_count) return 0;
+        for (uint32_t c = r->tri_first / ctx->cluster_size; c <= (r->tri_first + r->tri_count - 1) / ctx->cluster_size;
+             c++)
+            flags[c] = 1;
+    }
+    return 1;
+}
+
+pf_result rs_para_set_dynamic(rs_para_context *ctx, const pf_anim_moved *ranges, uint32_t count, int *grew,
+                              pf_error *err)
+{
+    *grew = 0;
+    if (ctx->lod_groups)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: levels of detail cannot follow moving geometry");
+    memset(ctx->cluster_moved, 0, ctx->cluster_count);
+    if (!rs__mark_clusters(ctx, ctx->cluster_moved, ranges, count))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: a dynamic range lies outside the scene's %u triangles",
+                            ctx->tri_count);
+    for (uint32_t c = 0; c < ctx->cluster_count; c++)
+        if (ctx->cluster_moved[c] && !ctx->cluster_dynamic[c]) {
+            ctx->cluster_dynamic[c] = 1;
+            ctx->cluster_static[c] = 0;
+            *grew = 1;
+        }
+    return PF_OK;
+}
+
 void rs_para_context_destroy(rs_para_context *ctx)
 {
     if (!ctx) return;
@@ -652,6 +691,8 @@ void rs_para_context_destroy(rs_para_context *ctx)
     free(ctx->lanes);
     free(ctx->supers);
     free(ctx->cluster_moved);
+    free(ctx->cluster_dynamic);
+    free(ctx->cluster_static);
     free(ctx->lod_groups);
     free(ctx->u);
     free(ctx->d2);
@@ -1228,7 +1269,7 @@ enum { RS__KEEP = 0, RS__MOVED_ONLY = 1, RS__ALL = 2, RS__OUT = 3 /* a tile the 
  * min commutes with the (monotonic) quantisation, so every texel gets the
  * code a whole render gives it (tests/test_moving.c). */
 static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, pf_vec3 nrm, float range,
-                           uint16_t *out, rs__rect limit, const rs__moved *mv)
+                           uint16_t *out, rs__rect limit, const rs__moved *mv, uint16_t *static_out)
 {
     const uint32_t R = ctx->res, T = ctx->tiles;
     if (rs__rect_empty(limit)) return;
@@ -1237,6 +1278,13 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
     sc->partial = limit.i0 > 0 || limit.j0 > 0 || limit.i1 < (int32_t)R - 1 || limit.j1 < (int32_t)R - 1;
     sc->stats.maps++;
     memset(sc->tile_skip, 0, (size_t)T * T);
+    if (!mv && static_out) { /* the static map, then the dynamic clusters over it */
+        assert(!sc->partial);
+        rs__pass(ctx, sc, &f, range, static_out, limit, ctx->cluster_static, 0, 0);
+        memcpy(out, static_out, (size_t)R * R * sizeof(uint16_t));
+        rs__pass(ctx, sc, &f, range, out, limit, ctx->cluster_dynamic, 1, 1);
+        return;
+    }
     if (!mv) {
         rs__pass(ctx, sc, &f, range, out, limit, NULL, 0, 0);
         return;
@@ -1271,6 +1319,20 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             sc->tile_class[tj * T + ti] = (uint8_t)cls;
             any_all |= cls == RS__ALL, any_moved |= cls == RS__MOVED_ONLY;
         }
+    if (any_all && static_out) {
+        /* with the static map: an ALL tile starts from the static codes
+         * and, like the MOVED_ONLY ones, takes the dynamic clusters' over
+         * them (a superset of the moved ones: min(static, dynamic) is the
+         * whole render's code, min(old, dynamic) too) */
+        for (int32_t j = limit.j0; j <= limit.j1; j++)
+            for (int32_t i = limit.i0; i <= limit.i1; i++)
+                if (sc->tile_class[(j / RS__TILE) * T + i / RS__TILE] == RS__ALL)
+                    out[(size_t)j * R + i] = static_out[(size_t)j * R + i];
+        for (uint32_t k = 0; k < T * T; k++) sc->tile_skip[k] = sc->tile_class[k] != RS__ALL && sc->tile_class[k] != RS__MOVED_ONLY;
+        rs__pass(ctx, sc, &f, range, out, limit, ctx->cluster_dynamic, 1, 1);
+        memset(sc->tile_skip, 0, (size_t)T * T);
+        return;
+    }
     if (any_all) { /* every triangle, over the ALL tiles */
         for (uint32_t k = 0; k < T * T; k++) sc->tile_skip[k] = sc->tile_class[k] != RS__ALL;
         rs__pass(ctx, sc, &f, range, out, limit, NULL, 0, 0);
@@ -1293,6 +1355,7 @@ typedef struct rs__job {
     const rs__cluster *box; /* not NULL: re-render only the texels this sphere can be seen through */
     pf_vec3 lo, hi;         /* with box: the world box the sphere bounds */
     const uint8_t *cluster_moved; /* with box, not NULL: the clusters holding moved triangles (rs__render_map) */
+    uint16_t *static_atlas;       /* not NULL: the static maps (rs_para_render_split), slots as in atlas */
 } rs__job;
 
 static void rs__map_job(void *p, uint32_t item, uint32_t worker)
@@ -1327,7 +1390,7 @@ static void rs__map_job(void *p, uint32_t item, uint32_t worker)
         }
     }
     rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
-                   job->atlas + texels * slot, limit, mvp);
+                   job->atlas + texels * slot, limit, mvp, job->static_atlas ? job->static_atlas + texels * slot : NULL);
 }
 
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
@@ -1336,22 +1399,33 @@ void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const 
     rs_para_render_slots(atlas, ctx, jobs, positions, normals, NULL, count, range, stats);
 }
 
-static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
-                            const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
-                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, const uint8_t *cluster_moved,
-                            rs_para_stats *stats);
+static void rs__render_jobs(uint16_t *atlas, uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                            const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                            float range, const rs__cluster *box, pf_vec3 lo, pf_vec3 hi,
+                            const uint8_t *cluster_moved, rs_para_stats *stats);
 
 void rs_para_render_slots(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
                           const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
                           rs_para_stats *stats)
 {
-    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, NULL, pf_v3(0, 0, 0), pf_v3(0, 0, 0),
-                    NULL, stats);
+    rs__render_jobs(atlas, NULL, ctx, jobs, positions, normals, slots, count, range, NULL, pf_v3(0, 0, 0),
+                    pf_v3(0, 0, 0), NULL, stats);
 }
 
-void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
-                        const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
-                        pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count, rs_para_stats *stats)
+void rs_para_render_split(uint16_t *atlas, uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                          const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                          float range, rs_para_stats *stats)
+{
+    rs__render_jobs(atlas, ctx->lod_groups ? NULL : static_atlas, ctx, jobs, positions, normals, slots, count, range,
+                    NULL, pf_v3(0, 0, 0), pf_v3(0, 0, 0), NULL, stats);
+}
+
+/* rs_para_render_box and its split twin: static_atlas NULL, or the static
+ * maps (read only here: a box render never draws them) */
+static void rs__render_box(uint16_t *atlas, uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                           const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                           float range, pf_vec3 lo, pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count,
+                           rs_para_stats *stats)
 {
     /* the box's bounding sphere, radius rounded up as the clusters' are */
     rs__cluster box = {0};
@@ -1364,26 +1438,38 @@ void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, co
      * cluster t / cluster_size); with levels of detail, or ranges outside
      * the context, every texel the sphere reaches is drawn with everything */
     const uint8_t *cm = NULL;
-    if (moved && ctx->cluster_moved && !ctx->lod_groups) {
+    if (moved && !ctx->lod_groups) {
         memset(ctx->cluster_moved, 0, ctx->cluster_count);
-        int ok = 1;
-        for (uint32_t m = 0; m < moved_count && ok; m++) {
-            const pf_anim_moved *r = &moved[m];
-            if (!r->moved || !r->tri_count) continue;
-            ok = (uint64_t)r->tri_first + r->tri_count <= ctx->tri_count;
-            for (uint32_t c = r->tri_first / ctx->cluster_size;
-                 ok && c <= (r->tri_first + r->tri_count - 1) / ctx->cluster_size; c++)
-                ctx->cluster_moved[c] = 1;
-        }
-        if (ok) cm = ctx->cluster_moved;
+        if (rs__mark_clusters(ctx, ctx->cluster_moved, moved, moved_count)) cm = ctx->cluster_moved;
     }
-    rs__render_jobs(atlas, ctx, jobs, positions, normals, slots, count, range, &box, lo, hi, cm, stats);
+    /* static maps need every moved cluster declared dynamic (else the
+     * static maps hold what moved): without, the maps are drawn as above */
+    for (uint32_t c = 0; static_atlas && c < ctx->cluster_count; c++)
+        if (!cm || (cm[c] && !ctx->cluster_dynamic[c])) static_atlas = NULL;
+    rs__render_jobs(atlas, static_atlas, ctx, jobs, positions, normals, slots, count, range, &box, lo, hi, cm, stats);
 }
 
-static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
-                            const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range,
-                            const rs__cluster *box, pf_vec3 lo, pf_vec3 hi, const uint8_t *cluster_moved,
-                            rs_para_stats *stats)
+void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,
+                        const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
+                        pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count, rs_para_stats *stats)
+{
+    rs__render_box(atlas, NULL, ctx, jobs, positions, normals, slots, count, range, lo, hi, moved, moved_count,
+                   stats);
+}
+
+void rs_para_render_box_split(uint16_t *atlas, const uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                              const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                              float range, pf_vec3 lo, pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count,
+                              rs_para_stats *stats)
+{
+    rs__render_box(atlas, (uint16_t *)static_atlas, ctx, jobs, positions, normals, slots, count, range, lo, hi, moved,
+                   moved_count, stats);
+}
+
+static void rs__render_jobs(uint16_t *atlas, uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                            const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                            float range, const rs__cluster *box, pf_vec3 lo, pf_vec3 hi,
+                            const uint8_t *cluster_moved, rs_para_stats *stats)
 {
     assert(range > 0.0f);
     uint32_t threads = jobs ? pf_jobs_thread_count(jobs) : 1;
@@ -1394,7 +1480,7 @@ static void rs__render_jobs(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs
         jobs = NULL;
     }
     for (uint32_t k = 0; k < ctx->scratch_count; k++) memset(&ctx->scratch[k]->stats, 0, sizeof(rs_para_stats));
-    rs__job job = {ctx, atlas, positions, normals, slots, range, box, lo, hi, cluster_moved};
+    rs__job job = {ctx, atlas, positions, normals, slots, range, box, lo, hi, cluster_moved, static_atlas};
     if (jobs)
         pf_jobs_parallel_for(jobs, rs__map_job, &job, count, 1);
     else

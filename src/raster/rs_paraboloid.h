@@ -195,6 +195,41 @@ void rs_para_render_box(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, co
                         const pf_vec3 *normals, const uint32_t *slots, uint32_t count, float range, pf_vec3 lo,
                         pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count, rs_para_stats *stats);
 
+/* Static maps (beyond the papers; docs/raster.md "Static maps"): a map
+ * that moved geometry changes is drawn again, over the texels its bounds
+ * can be seen through, from a copy of the map of the geometry that cannot
+ * move, instead of from every triangle behind the bounds.
+ *
+ * rs_para_set_dynamic declares the triangle ranges that may move (entries
+ * flagged `moved`, as pf_anim_pose reports them; the clusters holding any
+ * of their triangles are the dynamic ones, the rest static). *grew = 1 when
+ * a cluster became dynamic: static maps drawn before are stale (draw them
+ * again with rs_para_render_split). Fails for levels of detail or a range
+ * outside the context.
+ *
+ * rs_para_render_split is rs_para_render_slots that also writes each map's
+ * static map (the static clusters alone) to the same slot of static_atlas:
+ * the static map, copied, then the dynamic clusters drawn over it (min of
+ * the codes: the bytes of rs_para_render_slots). Without levels of detail
+ * only (with them, static_atlas is left alone).
+ *
+ * rs_para_render_box_split is rs_para_render_box given the static maps of
+ * the same slots (drawn for the same positions and normals since the
+ * static geometry last changed): the tiles whose old codes the moved bounds
+ * may have made (class ALL) start from the static codes and take the
+ * dynamic clusters' over them, with the moved-only tiles. Every moved range
+ * must lie in the declared dynamic ones, else the maps are drawn as
+ * rs_para_render_box draws them. The maps equal maps rendered afresh. */
+pf_result rs_para_set_dynamic(rs_para_context *ctx, const pf_anim_moved *ranges, uint32_t count, int *grew,
+                              pf_error *err);
+void rs_para_render_split(uint16_t *atlas, uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                          const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                          float range, rs_para_stats *stats);
+void rs_para_render_box_split(uint16_t *atlas, const uint16_t *static_atlas, rs_para_context *ctx, pf_jobs *jobs,
+                              const pf_vec3 *positions, const pf_vec3 *normals, const uint32_t *slots, uint32_t count,
+                              float range, pf_vec3 lo, pf_vec3 hi, const pf_anim_moved *moved, uint32_t moved_count,
+                              rs_para_stats *stats);
+
 /* Brings the context's copy of the triangles and its cluster spheres up to
  * date after the scene's positions changed in place (pf_anim_pose) for the
  * ranges reported moved. Fails for a context with levels of detail (their

@@ -203,12 +203,42 @@ static void test_smc_frames(void **state)
     tu_fx_end(&x);
 }
 
+/* The assignment's and the VPL maps' scratch comes from the frame's arena,
+ * reset every frame: after the first frame no block is added (no malloc),
+ * and every frame takes it afresh. */
+static void test_frame_scratch(void **state)
+{
+    (void)state;
+    tu_fx x;
+    pf_error err;
+    memset(&x, 0, sizeof x);
+    if (pf_gltf_load(&x.scene, CORNELL, NULL, &err) != PF_OK) fail_msg("%s", err.message);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.method = gi_vpl_method_find("iir");
+    io.vpls = 128;
+    io.para_res = 32; /* paraboloid maps: their lists are scratch too */
+    tu_fx_begin(&x, 2, RS_SIMD_SCALAR, 48, 36, &x.scene.cameras[0], &io, 1);
+    size_t reserved = 0, used = 0;
+    for (int n = 0; n < 6; n++) {
+        gi_frame_render_raster(&x.f);
+        assert_int_equal(x.f.status, PF_OK);
+        assert_true(x.f.scratch.used > 0);
+        if (n == 0) reserved = x.f.scratch.reserved, used = x.f.scratch.used;
+        assert_int_equal(x.f.scratch.reserved, reserved); /* nothing allocated after the first frame */
+        assert_true(x.f.scratch.used <= reserved);
+        assert_true(x.f.scratch.used == used); /* the same VPL budget: the same scratch each frame */
+    }
+    tu_fx_end(&x);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_first_deal),
         cmocka_unit_test(test_survivors_keep_tiles),
         cmocka_unit_test(test_smc_frames),
+        cmocka_unit_test(test_frame_scratch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

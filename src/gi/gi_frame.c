@@ -241,7 +241,25 @@ void gi_frame_free(gi_frame *f)
     free(f->motion.ranges);
     free(f->moved_shadows.ranges), free(f->moved_area.ranges), free(f->moved_maps.ranges);
     pf_arena_release(&f->mem); /* direct, final */
+    pf_arena_release(&f->scratch);
     memset(f, 0, sizeof *f);
+}
+
+void *gi_frame_scratch(gi_frame *f, size_t count, size_t size, const char *what)
+{
+    void *p = count ? pf_arena_calloc(&f->scratch, count, size) : NULL;
+    if (!p && count && f->status == PF_OK)
+        f->status = pf_error_set(&f->error, PF_ERR_OUT_OF_MEMORY, "out of memory for %s (%zu x %zu bytes)", what,
+                                 count, size);
+    return p;
+}
+
+/* What every frame does first: its scratch and status afresh. */
+static void gi__frame_begin(gi_frame *f)
+{
+    memset(&f->times, 0, sizeof f->times);
+    pf_arena_reset(&f->scratch);
+    f->status = PF_OK;
 }
 
 pf_ray gi_camera_ray(const pf_camera *cam, uint32_t width, uint32_t height, uint32_t x, uint32_t y)
@@ -375,7 +393,7 @@ static void gi__indirect_stages(gi_frame *f, int first, int last)
  * (N > 1), and the temporal anti-aliasing (--taa) follows the last. */
 void gi_frame_render_raytraced(gi_frame *f)
 {
-    memset(&f->times, 0, sizeof f->times);
+    gi__frame_begin(f);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     const uint32_t N = f->aa.samples;
     for (uint32_t k = 0; k < N; k++) {
@@ -393,7 +411,7 @@ void gi_frame_render_raytraced(gi_frame *f)
 
 void gi_frame_render_raster(gi_frame *f)
 {
-    memset(&f->times, 0, sizeof f->times);
+    gi__frame_begin(f);
     memset(&f->motion_stats, 0, sizeof f->motion_stats);
     gi_stage_vpl_update_begin(f, 0); /* pipelined, G-buffer-free methods: overlap everything */
     const uint32_t N = f->aa.samples;
@@ -415,6 +433,7 @@ void gi_frame_render_raster(gi_frame *f)
     if (f->aa.taa.frames) gi__run(f, GI_STAGE_TAA);
     pf_jobs_wait_all(f->jobs);
     gi_stage_vpl_update_end(f);
-    /* the G-buffer's and the shadow maps' passes, all at once */
-    f->status = rs_context_status(f->raster, &f->error);
+    /* the G-buffer's and the shadow maps' passes, all at once (after a
+     * stage's own failure, which came first) */
+    if (f->status == PF_OK) f->status = rs_context_status(f->raster, &f->error);
 }

@@ -194,6 +194,12 @@ typedef struct gi_frame {
     gi_area_maps area_maps; /* rasterized direct light: K emitter points */
     /* buffers (owned, frame lifetime) */
     pf_arena mem;          /* direct and final (the indirect part has its own, ind.mem) */
+    /* per-frame scratch (the assignment's keys, loads and cursors, the VPL
+     * maps' lists): taken with gi_frame_scratch, reset at the start of
+     * every gi_frame_render_*, released by gi_frame_free; after the first
+     * frame a steady loop takes it without malloc (pf_arena_reset keeps
+     * the blocks) */
+    pf_arena scratch;
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
     pf_light *shadow_lights;  /* the lights the maps were rendered for (static lights: maps reused) */
@@ -204,8 +210,9 @@ typedef struct gi_frame {
     int indirect;          /* run steps 3-9 */
     int show_direct;       /* compose adds emission + direct (0 for --indirect-only) */
     /* PF_OK, or the first failure of the last frame (a rasterizer pass that
-     * ran out of memory drew fewer triangles: rs_context_status); the
-     * commands check it after every frame and refuse its image */
+     * ran out of memory drew fewer triangles: rs_context_status; a stage's
+     * scratch not had: gi_frame_scratch); the commands check it after every
+     * frame and refuse its image */
     pf_result status;
     pf_error error;
     float *direct; /* RGB, width*height*3 */
@@ -281,6 +288,13 @@ pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, u
  * how). Fails on a range outside the scene (nothing changed then) or out of
  * memory (the frame's copies are then part-updated: make the frame again). */
 pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err);
+
+/* count * size bytes of this frame's scratch (zeroed, 64-byte aligned),
+ * valid until the next frame starts; NULL when memory is short, the frame's
+ * status then PF_ERR_OUT_OF_MEMORY naming `what` (the stage skips its work
+ * and the frame's image is refused). Frame thread only. A stage called on
+ * its own (tests) takes scratch until the next frame resets it. */
+void *gi_frame_scratch(gi_frame *f, size_t count, size_t size, const char *what);
 
 /* Declares the ranges that may move from now on (entries flagged `moved`;
  * gi_frame_geometry_moved declares what it is told moved): the exact VPL

@@ -69,11 +69,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->tile_h = pf_arena_calloc(mem, T, sizeof(uint32_t));
     ind->assign_start = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
     ind->assign = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
-    ind->sort_keys = pf_arena_calloc(mem, o.vpls, sizeof(gi__lumkey));
     ind->tile_of = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
     ind->assigned_id = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
-    ind->tile_load = pf_arena_calloc(mem, T, sizeof(double));
-    ind->cursor = pf_arena_calloc(mem, T, sizeof(uint32_t));
     float **planes[] = {&ind->split_px, &ind->split_py, &ind->split_pz, &ind->split_nx, &ind->split_ny, &ind->split_nz};
     for (size_t k = 0; k < 6; k++) *planes[k] = pf_arena_calloc(mem, px, sizeof(float));
     ind->split_valid = pf_arena_calloc(mem, px, sizeof(uint32_t));
@@ -111,8 +108,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         if (r != PF_OK) return r;
     }
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
-             ind->split_e && ind->combined && ind->filtered && (o.scale == 1 || ind->filtered_low) && ind->sort_keys && ind->tile_of && ind->cursor &&
-             ind->assigned_id && ind->tile_load;
+             ind->split_e && ind->combined && ind->filtered && (o.scale == 1 || ind->filtered_low) && ind->tile_of &&
+             ind->assigned_id;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
     if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
         return pf_error_set(err, PF_ERR_ARGUMENT,
@@ -135,11 +132,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         /* +64 bytes: the SIMD accumulation gathers 4 bytes at a 2-byte texel */
         ind->atlas = pf_arena_alloc(mem, rs_para_atlas_bytes(o.para_res, o.vpls) + 64);
         ind->frames = pf_arena_calloc(mem, o.vpls, sizeof(rs_para_frame));
-        ind->map_pos = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
-        ind->map_nrm = pf_arena_calloc(mem, o.vpls, sizeof(pf_vec3));
-        ind->map_slot = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
         ind->range = rs_para_default_range(s);
-        ok = ind->atlas && ind->frames && ind->map_pos && ind->map_nrm && ind->map_slot;
+        ok = ind->atlas && ind->frames;
     }
     if (!ok) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the indirect-light buffers");
     /* tile (i, j): columns i, i + n, ... and rows j, j + m, ... */
@@ -317,6 +311,12 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         return;
     }
     if (!ind->para) return;
+    /* this frame's maps to render, k-th: its VPL's position, normal and
+     * atlas slot (the frame's scratch) */
+    pf_vec3 *map_pos = gi_frame_scratch(f, ind->vpls.count, sizeof(pf_vec3), "the VPL maps' list");
+    pf_vec3 *map_nrm = gi_frame_scratch(f, ind->vpls.count, sizeof(pf_vec3), "the VPL maps' list");
+    uint32_t *map_slot = gi_frame_scratch(f, ind->vpls.count, sizeof(uint32_t), "the VPL maps' list");
+    if (!map_pos || !map_nrm || !map_slot) return; /* the frame's status says so */
     /* Moved geometry (gi_motion.h): the maps of the VPLs that keep theirs
      * are drawn again over the texels through which the moved bounds can be
      * seen, before the new and moved VPLs' maps are drawn whole. */
@@ -330,19 +330,19 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     if (mb->pending || (sa && ind->static_stale)) {
         for (uint32_t i = 0; i < N && i < ind->atlas_slots; i++) {
             if (ind->vpls.v[i].moved && !ind->maps_current) continue; /* drawn whole below */
-            ind->map_pos[todo] = ind->vpls.v[i].pos; /* what its map was drawn for (not moved) */
-            ind->map_nrm[todo] = ind->vpls.v[i].nrm;
-            ind->map_slot[todo++] = i;
+            map_pos[todo] = ind->vpls.v[i].pos; /* what its map was drawn for (not moved) */
+            map_nrm[todo] = ind->vpls.v[i].nrm;
+            map_slot[todo++] = i;
         }
         rs_para_stats st;
         if (sa && ind->static_stale)
-            rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
+            rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, map_pos, map_nrm, map_slot, todo,
                                  ind->range, &st);
         else if (sa)
-            rs_para_render_box_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot,
+            rs_para_render_box_split(ind->atlas, sa, ind->para, f->jobs, map_pos, map_nrm, map_slot,
                                      todo, ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
         else
-            rs_para_render_box(ind->atlas, ind->para, f->jobs, ind->map_pos, ind->map_nrm, ind->map_slot, todo,
+            rs_para_render_box(ind->atlas, ind->para, f->jobs, map_pos, map_nrm, map_slot, todo,
                                ind->range, mb->lo, mb->hi, mb->ranges, mb->range_count, &st);
         f->motion_stats.vpl_maps += (uint32_t)st.maps;
         f->motion_stats.vpl_texels += st.texels_tested;
@@ -359,9 +359,9 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
      * however scattered the slots are; unmoved VPLs keep last frame's maps. */
     for (uint32_t i = 0; i < N; i++) {
         if (!ind->vpls.v[i].moved && i < ind->atlas_slots) continue;
-        ind->map_pos[todo] = ind->vpls.v[i].pos;
-        ind->map_nrm[todo] = ind->vpls.v[i].nrm;
-        ind->map_slot[todo++] = i;
+        map_pos[todo] = ind->vpls.v[i].pos;
+        map_nrm[todo] = ind->vpls.v[i].nrm;
+        map_slot[todo++] = i;
         ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
     }
     /* Calls of at most GI__MAPS_CHUNK maps, so a listener hears of progress
@@ -370,7 +370,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     const uint32_t chunk = f->progress ? GI__MAPS_CHUNK : UINT32_MAX;
     for (uint32_t k = 0; k < todo;) {
         uint32_t n = todo - k < chunk ? todo - k : chunk;
-        rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, ind->map_pos + k, ind->map_nrm + k, ind->map_slot + k,
+        rs_para_render_split(ind->atlas, sa, ind->para, f->jobs, map_pos + k, map_nrm + k, map_slot + k,
                              n, ind->range, NULL);
         k += n;
         ind->maps_rendered = k;
@@ -499,9 +499,9 @@ typedef struct gi__assign_io {
     uint32_t *tile_of;            /* state: each slot's tile (UINT32_MAX: none) */
     uint32_t *assigned_id;        /* state: the id each slot had when assigned */
     uint32_t *assigned_count;     /* state: slots assigned last time */
-    gi__lumkey *keys;             /* scratch, N */
-    double *load;                 /* scratch, T */
-    uint32_t *cursor;             /* scratch, T */
+    gi__lumkey *keys;             /* scratch (the frame's), N */
+    double *load;                 /* scratch (the frame's), T */
+    uint32_t *cursor;             /* scratch (the frame's), T */
     uint32_t *assign, *assign_start; /* ASSIGNMENT */
     uint32_t *kept;               /* survivors kept in their tile (statistic) */
 } gi__assign_io;
@@ -576,11 +576,19 @@ static int gi__assign_keep(const gi__assign_io *io)
 void gi_stage_assign(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    const gi__assign_io io = {ind->vpls.v,      ind->vpls.count,   ind->n * ind->m, ind->tile_of,
-                              ind->assigned_id, &ind->assigned_count, ind->sort_keys, ind->tile_load,
-                              ind->cursor,      ind->assign,       ind->assign_start, &ind->assign_kept};
-    const uint32_t T = io.T, N = io.N;
-    *io.kept = 0;
+    const uint32_t T = ind->n * ind->m, N = ind->vpls.count;
+    gi__lumkey *keys = gi_frame_scratch(f, N, sizeof(gi__lumkey), "the VPL assignment");
+    double *load = gi_frame_scratch(f, T, sizeof(double), "the VPL assignment");
+    uint32_t *cursor = gi_frame_scratch(f, T, sizeof(uint32_t), "the VPL assignment");
+    ind->assign_kept = 0;
+    if ((N && !keys) || !load || !cursor) { /* no tile gets a VPL; the frame's status says why */
+        memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
+        ind->assigned_count = 0;
+        return;
+    }
+    const gi__assign_io io = {ind->vpls.v,      N,      T,           ind->tile_of,
+                              ind->assigned_id, &ind->assigned_count, keys, load,
+                              cursor,           ind->assign,       ind->assign_start, &ind->assign_kept};
     if (!gi__assign_keep(&io)) gi__assign_deal(&io);
     const uint32_t *tile_of = io.tile_of;
     for (uint32_t i = 0; i < N; i++) io.assigned_id[i] = io.v[i].id;

@@ -146,12 +146,6 @@ typedef struct gi_indirect {
     rs_para_frame *frames;
     float range;
     uint32_t maps_rendered;   /* this frame */
-    pf_vec3 *map_pos, *map_nrm; /* this frame's maps to render: VPL positions / normals, */
-    uint32_t *map_slot;         /* and the atlas slot of each */
-    /* per-frame scratch, allocated once at init for the VPL budget */
-    void *sort_keys;          /* luminance keys for gi_stage_assign */
-    uint32_t *cursor;
-    double *tile_load;        /* per tile: luminance of its VPLs (gi_stage_assign) */
     /* kept between frames: each slot's tile and the id it had when assigned
      * (a survivor keeps its tile) */
     uint32_t *tile_of, *assigned_id;

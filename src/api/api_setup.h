@@ -80,7 +80,7 @@ pf_result api_scene_pose(pf_scene *scene, struct pf_anim *anim, const char *scen
                          const char *animation, uint32_t *moved, struct pf_anim_moved *report, pf_error *err);
 
 /* The renderer brought up to date in place after a pose moved geometry
- * (issue 19 item 2; docs/architecture.md "Moving geometry"): Embree
+ * (docs/architecture.md "Moving geometry"): Embree
  * (pf_rt_update, REBUILD: the moved primitives' BVHs built afresh, a fresh
  * build's bytes, so nothing depends on the poses before), the rasterizer
  * (rs_context_update; raster may be NULL) and the frame (gi_frame_geometry_moved:

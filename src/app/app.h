@@ -190,7 +190,7 @@ int app_view(const pf_options *opts);
  * against per-frame references (app_evaluate.c). Parses its own arguments. */
 int app_evaluate(int argc, char **argv);
 
-/* `softgi evaluate --quality` (issue 18 item 5, app_quality.c): every
+/* `softgi evaluate --quality` (app_quality.c): every
  * method at its paper defaults, with clamp compensation and with temporal
  * accumulation, on a static view of each scene, against a path-traced
  * reference and a many-VPL proxy of the indirect light: a Markdown table of

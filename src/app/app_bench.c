@@ -28,7 +28,7 @@
  * 2-thread time, adjacent turns), and their median over the frames.
  * Output: a table on stdout and one JSON line (prefix "json: ").
  *
- * Scaling past two cores (issue 13 item 4): the job profile (pf_jobs.h) is
+ * Scaling past two cores: the job profile (pf_jobs.h) is
  * on for every timed call, and per scene and thread count a table gives
  * each pass's serial part (outside parallel-fors) beside its parallel work
  * and span, and its predicted time and speed-up on 8, 16 and 64 cores
@@ -67,7 +67,7 @@ static const bench_scene k_scenes[] = {
 /* The jobs, each timed on both sides. */
 enum { BENCH_VIS, BENCH_GBUF, BENCH_PARA, BENCH_CUBE, BENCH_JOBS };
 static const char *const k_job_names[BENCH_JOBS] = {"visibility", "gbuffer", "paraboloid", "cube"};
-/* issue 13's targets: softgi over Embree per job (0: none) */
+/* the targets: softgi over Embree per job (0: none) */
 static const double k_job_target[BENCH_JOBS] = {5.0, 4.0, 2.0, 0.0};
 #define BENCH_SPEEDUP_TARGET 1.8 /* 2 threads over 1 */
 #define BENCH_AGREE_TARGET 0.99  /* the baselines' agreement with softgi */
@@ -472,7 +472,7 @@ static void bench__result(bench_run *r, const bench_run *base, const char *scene
 }
 
 /* With levels of detail the paraboloid codes cannot agree within a step;
- * their error must stay within issue 13's 1% of texels instead. */
+ * their error must stay within 1% of texels instead (the target's bound). */
 static int bench__check_ok(const bench_check *c, float para_lod)
 {
     return c->vis_ids >= BENCH_AGREE_TARGET &&
@@ -586,8 +586,8 @@ int app_bench_raster(const pf_options *o)
                r->embree_ms[BENCH_PARA], r->x[BENCH_PARA], r->ms[BENCH_CUBE], r->embree_ms[BENCH_CUBE],
                r->x[BENCH_CUBE], r->tris_per_s * 1e-6, r->pixels_per_s * 1e-6);
     }
-    /* issue 13's targets, on the paired medians */
-    printf("\ntargets (issue 13): visibility >= %.0fx Embree, whole G-buffer >= %.0fx, paraboloid map >= %.0fx;\n"
+    /* the targets, on the paired medians */
+    printf("\ntargets: visibility >= %.0fx Embree, whole G-buffer >= %.0fx, paraboloid map >= %.0fx;\n"
            "2 threads >= %.1fx 1 thread\n",
            k_job_target[BENCH_VIS], k_job_target[BENCH_GBUF], k_job_target[BENCH_PARA], BENCH_SPEEDUP_TARGET);
     for (uint32_t i = 0; i < nres; i++) {

@@ -1,5 +1,5 @@
 /* app_bench_frame: `softgi bench frame` — the whole many-light frame, stage
- * by stage (issue 4), and what frame pipelining gains (issue 7; Laine 2007
+ * by stage, and what frame pipelining gains (Laine 2007
  * Sec. 3 and 6: VPL management overlapped with the frame).
  *
  * For Sibenik and the conference room (from --scenes, default
@@ -39,11 +39,11 @@
  * ms and share of the frame), the same frame in Hedman 2017 Table 2's
  * columns (with the method's own parts of its update where it reports
  * them: SMC's candidate sampling, resampling, indirect visibility,
- * radiosity and kNN), the target line (issue 4: IR with 256 VPLs and
+ * radiosity and kNN), the target line (IR with 256 VPLs and
  * a static light at >= 15 frames/s on 2 threads) and one JSON line (prefix
  * "json: ").
  *
- * Scaling past two cores (issue 13 item 4): the job profile (pf_jobs.h) is
+ * Scaling past two cores: the job profile (pf_jobs.h) is
  * on for every frame of the run, and for each configuration without
  * pipelining a table gives every stage's serial part (outside
  * parallel-fors) beside its parallel work and span, with the frame's
@@ -84,7 +84,7 @@
 #define BF_TARGET_THREADS 2u
 #define BF_MAPS_STAGE (gi_stage_get(GI_STAGE_VPL_MAPS)->name) /* and of step 4 */
 #define BF_TAIL_STAGE "(end of frame: wait for jobs)"
-#define BF_SERIAL_TARGET 0.05 /* issue 13: serial part <= 5% of the 1-thread frame */
+#define BF_SERIAL_TARGET 0.05 /* the serial part's target: <= 5% of the 1-thread frame */
 
 typedef struct bf_scene {
     const char *name, *file;
@@ -784,7 +784,7 @@ int app_bench_frame(const pf_options *o)
         printf("\nstatic light: %s\n", static_ok ? "no VPL moved and no map was re-rendered after the first frame"
                                                  : "WARNING: VPLs moved or maps were re-rendered after the first frame");
 
-    /* target (issue 4): IR, static light, without pipelining */
+    /* the target: IR, static light, without pipelining */
     printf("target: IR %u VPLs, static light, %ux%u tiles, >= %.0f frames/s on %u threads:\n", BF_TARGET_VPLS, tn, tm,
            BF_TARGET_FPS, BF_TARGET_THREADS);
     int target_run = !strcmp(method, "ir") && !o->moving_light;

@@ -1,5 +1,5 @@
 /* app_bench_moving: `softgi bench frame --moving-object` — what a moving
- * object costs the frame (issue 19 items 2 and 4).
+ * object costs the frame.
  *
  * Sibenik (from --scenes, textures ignored, as `bench frame`) at 1024x768
  * with `bench frame`'s camera and point light, and one object appended to
@@ -22,7 +22,7 @@
  *                              bytes; counted in the frame)
  *             embree refit     pf_rt_update REFIT of a second Embree
  *                              scene of the same world, timed for
- *                              comparison and not counted (issue 19: "refit
+ *                              comparison and not counted ("refit
  *                              ... where that is enough, rebuild where it
  *                              is not; measure both")
  *             raster update    rs_context_update
@@ -32,8 +32,8 @@
  * "frame" row the median of the whole frame (updates included for the
  * moving world). What the frame redrew for the object is printed
  * (gi_motion_stats means): shadow-map faces and texels, VPL maps drawn
- * again in part and the texels tested in them. The target (issue 19 item
- * 4): moving / static - 1 <= 25% with 2 threads. */
+ * again in part and the texels tested in them. The target:
+ * moving / static - 1 <= 25% with 2 threads. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -371,7 +371,7 @@ int app_bench_frame_moving(const pf_options *o)
                (double)sum.shadow_faces / frames, (double)sum.shadow_texels / frames,
                (double)sum.shadow_faces_whole / frames, (double)sum.vpl_maps / frames, w[1].frame.ind.vpls.count,
                (double)sum.vpl_texels / frames);
-        printf("target (issue 19 item 4): the moving object costs the %s frame %+.1f%% (<= +%.0f%% with %u threads): "
+        printf("target: the moving object costs the %s frame %+.1f%% (<= +%.0f%% with %u threads): "
                "%s\n",
                w[1].frame.ind.opt.method->name, 100.0 * cost, 100.0 * BM_TARGET, BM_TARGET_THREADS,
                threads != BM_TARGET_THREADS ? "not measured (needs 2 threads)" : cost <= BM_TARGET ? "met" : "NOT met");

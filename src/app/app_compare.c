@@ -1,4 +1,4 @@
-/* app_compare: `softgi compare`, the metrics of issue 4 (gi_metrics.h).
+/* app_compare: `softgi compare`, the evaluation's metrics (gi_metrics.h).
  *
  *   softgi compare IMAGE REFERENCE
  *     RMSE and MAE over linear RGB, and |E| over all pixels; each image a

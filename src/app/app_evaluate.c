@@ -9,7 +9,7 @@
  * For each sequence file (default: eight in scenes/sequences: the McGuire
  * Cornell box, Sibenik and the conference room, each with a moving camera and
  * a moving light, and the anim-box room with a moving object (anim-move)
- * and with a deforming one (anim-deform), issue 19 item 3):
+ * and with a deforming one (anim-deform)):
  *   1. the reference: `softgi sequence FILE --reference --spp N --track-spp T`
  *      (the tracked pixels, where |E| and |E'| are measured, with T samples, so
  *      the reference's own noise stays out of |E'|) into
@@ -41,7 +41,7 @@
  * term for every method, so leaving it in would only add the same error to
  * each. --full compares the whole images instead.
  *
- * --frames A:B (issue 13 item 4): only the references' frames A..B-1 of
+ * --frames A:B: only the references' frames A..B-1 of
  * every sequence (zero-based, B excluded, clipped to each sequence's
  * length; a sequence that ends before A is skipped), the one step that
  * outgrows a machine, so that a batch scheduler can spread them: no
@@ -59,7 +59,7 @@
  * Progress (app_progress.h): one bar over the steps (a reference or a
  * method run each), on a terminal and without -q.
  *
- * --quality (issue 18 item 5) runs app_quality instead (app_quality.c):
+ * --quality runs app_quality instead (app_quality.c):
  * the image-quality table of single static frames against a reference and
  * a many-VPL proxy; the sequence options (--sequences, --track-spp,
  * --frames, --full) do not apply to it, and its own (--quality-scenes,
@@ -147,7 +147,7 @@ static void ev__usage(FILE *f)
           "                      again without --frames for the methods and tables\n"
           "  -q, --quiet         no progress lines or bar\n"
           "\n"
-          "--quality (issue 18): one static frame per method and scene at three settings (paper:\n"
+          "--quality: one static frame per method and scene at three settings (paper:\n"
           "the paper defaults; softgi: --compensate on; temporal: also --temporal 16, frame 15),\n"
           "indirect light only, against a path-traced reference and a proxy (IR, every VPL at every\n"
           "pixel, no clamp, no filter) with the method's bounce count: mean relative error per\n"

@@ -1,5 +1,5 @@
-/* app_progress: the one progress bar of the long commands (issue 16 item
- * 4): `softgi reference` (rows of the path tracer), `softgi sequence`
+/* app_progress: the one progress bar of the long commands:
+ * `softgi reference` (rows of the path tracer), `softgi sequence`
  * (frames, and the stages of the frame being rendered), `softgi evaluate`
  * (references and method runs) and `softgi render` (the stages of a frame
  * that takes long, e.g. with --vpls 100000).

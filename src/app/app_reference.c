@@ -1,4 +1,4 @@
-/* app_reference: `softgi reference` (issue 4), the path-traced reference
+/* app_reference: `softgi reference`, the path-traced reference
  * image (gi_reference.h: estimator, bounces, random numbers).
  *
  * load scene -> apply --camera/--light overrides (exactly as `softgi render`,

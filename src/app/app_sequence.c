@@ -1,4 +1,4 @@
-/* app_sequence: `softgi sequence FILE.seq.json [render options]` (issue 4).
+/* app_sequence: `softgi sequence FILE.seq.json [render options]`.
  *
  * Renders the frames of a sequence (pf_sequence.h: scene, camera and light
  * keyframes) to a folder, keeping one gi_frame alive across frames so the
@@ -72,7 +72,7 @@
  * "Pipelining"). The moved count printed is that of the set the frame
  * shaded with.
  *
- * --frames A:B (issue 13 item 4: offline work spread over machines by a
+ * --frames A:B (offline work spread over machines by a
  * batch scheduler): only frames A..B-1 are written (zero-based as the
  * file names, B excluded; "A:" to the end), under the names and with the
  * bytes a full run gives them, so the folders of runs 0:10, 10:20, ...

@@ -1,5 +1,5 @@
 /* app_view: `softgi view [SCENE]`, the interactive viewer, frame-stage
- * stepper and pixel inspector (issue 7; issue 16, item 7).
+ * stepper and pixel inspector.
  *
  * Every frame is the CPU frame of `softgi render` (gi_frame_render_raster,
  * or the ray-traced one with --raytrace) with the same options, shown in a

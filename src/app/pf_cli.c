@@ -187,7 +187,7 @@ static const pf__opt k_options[] = {
      NULL},
     {PF__OPT_MOVING_LIGHT, "--moving-light", NULL, NULL, BF, "the light moves on a small circle every frame", NULL},
     {PF__OPT_MOVING_OBJECT, "--moving-object", NULL, NULL, BF,
-     "Sibenik with a 4096-triangle object moving every frame, against the same frame with it still (issue 19)",
+     "Sibenik with a 4096-triangle object moving every frame, against the same frame with it still",
      NULL},
     {PF__OPT_PARA_LOD, "--para-lod", NULL, "F", BR,
      "paraboloid maps from levels of detail: per group of triangles\nthe coarsest whose error is at most F texel "

@@ -64,7 +64,7 @@ typedef struct pf_options {
     uint32_t shadow_size;   /* direct-light shadow map texels per side (0: 1024) */
     uint32_t area_strata;   /* ray-traced area-light samples: N x N per pixel (0: default 4) */
     uint32_t area_points;   /* rasterized area light: K emitter points with paraboloid maps (0: default 32) */
-    /* many-light frame (issue 4) and the reference path tracer */
+    /* many-light frame and the reference path tracer */
     int indirect_only, direct_only;
     int no_interleave;       /* every pixel sees every VPL */
     int visibility_raytrace; /* --visibility raytrace: Embree shadow rays to VPLs */
@@ -116,7 +116,7 @@ typedef struct pf_options {
     uint32_t light_count;
     pf_light lights[PF_CLI_MAX_LIGHTS];
     int print_hash;
-    int raytrace; /* --raytrace: Embree primary rays (the only path until the rasterizer lands) */
+    int raytrace; /* --raytrace: Embree primary rays for the G-buffer and ray-traced direct light */
     int quiet;
     int help, version;
 } pf_options;

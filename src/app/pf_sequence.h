@@ -1,4 +1,4 @@
-/* pf_sequence: sequence files for `softgi sequence` (issue 4): a scene, a
+/* pf_sequence: sequence files for `softgi sequence`: a scene, a
  * frame count, and camera and light keyframes, linearly interpolated.
  *
  * Format (JSON, parsed with cJSON; keys are case-sensitive, unknown or

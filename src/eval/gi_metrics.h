@@ -1,5 +1,5 @@
 /* gi_metrics: image and sequence metrics for comparing renders with a
- * reference (issue 4), and the per-frame camera/depth files a sequence
+ * reference, and the per-frame camera/depth files a sequence
  * carries so that the temporal metric can reproject.
  *
  * This work is based on:
@@ -93,7 +93,7 @@ float gi_metrics_display_luminance(const float *rgb, float exposure_scale);
  * channels of linear RGB. 0 for pixel_count 0. */
 double gi_metrics_rmse(const float *rgb, const float *ref, size_t pixel_count);
 double gi_metrics_mae(const float *rgb, const float *ref, size_t pixel_count);
-/* The mean relative error per pixel the quality targets use (issue 18):
+/* The mean relative error per pixel the quality targets use:
  * mean over the pixels whose reference luminance Y_ref exceeds `floor` of
  * |Y - Y_ref| / Y_ref (Rec. 709 luminance of linear RGB); *counted (may be
  * NULL) gets how many pixels took part. 0 when none does. */

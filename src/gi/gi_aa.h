@@ -97,8 +97,8 @@
  *   2014), so a surface uncovered by the motion, or a moved shadow, takes
  *   the current image's colours instead of a ghost. In a frame with the
  *   camera and lights unchanged no clamp applies: the clamp would cut thin
- *   features no sample of the neighbourhood hit this frame (the dashes of
- *   issue 18), so a still view keeps converging; changes of the VPL set
+ *   features no sample of the neighbourhood hit this frame (the dashes
+ *   along Sibenik's ribs), so a still view keeps converging; changes of the VPL set
  *   alone (IIR, SMC) are followed within N frames, as the indirect light's
  *   temporal stage follows them.
  * Changing the TAA's settings restarts its history and its pattern. */

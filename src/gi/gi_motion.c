@@ -1,5 +1,5 @@
-/* gi_motion: a frame brought up to date for moved geometry (issue 19 item
- * 2; see gi_motion.h for what is redone and how). */
+/* gi_motion: a frame brought up to date for moved geometry (see
+ * gi_motion.h for what is redone and how). */
 #include "gi_frame.h"
 #include "gi_ism.h"
 

@@ -1,5 +1,5 @@
-/* gi_motion: what moved geometry asks of a frame (issue 19 item 2), and
- * what a VPL method is told about it (item 3).
+/* gi_motion: what moved geometry asks of a frame, and
+ * what a VPL method is told about it.
  *
  * A rasterizer needs no acceleration structure, so after a pose
  * (pf_anim_pose) the renderer redoes only what the moved geometry can

@@ -155,7 +155,7 @@ typedef struct gi_vpl_method {
      * methods with camera-side samples (SMC's X, TCAS's and InvTM's
      * importance, SSVP's screen-space VPLs, MIR's camera paths). */
     int gbuffer_free;
-    /* Optional (NULL: none), for learners (issue 16 item 6; gi_view.h's
+    /* Optional (NULL: none), for learners (gi_view.h's
      * GI_VIEW_METHOD and captions). Kept at the end so positional
      * initialisers stay valid.
      * why: one line, why the method chooses its VPLs this way, with the

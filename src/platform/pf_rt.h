@@ -22,7 +22,7 @@
  * Alpha-masked materials (alphaMode MASK) are honoured by Embree filter
  * functions: a hit whose texture alpha is below the cutoff is ignored.
  *
- * Moving geometry (glTF animations, pf_anim.h; issue 19 item 2). A scene an
+ * Moving geometry (glTF animations, pf_anim.h). A scene an
  * animation can move is built with a dynamic split (pf_rt_create_dynamic):
  *
  *   top scene (static BVH over instances, identity transforms)

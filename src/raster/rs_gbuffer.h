@@ -3,7 +3,7 @@
  *
  * Layout: structure of arrays, one plane per attribute, row-major from the
  * top-left pixel, so a shading job that walks a tile touches only the planes
- * it needs. Filled by the rasterizer (issue "rasterizer") or by Embree
+ * it needs. Filled by the rasterizer or by Embree
  * primary rays (gi_raytrace.c, the --raytrace reference path).
  *
  * Conventions

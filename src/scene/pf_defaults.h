@@ -1,5 +1,5 @@
 /* pf_defaults: what softgi assumes when a scene or the command line leaves
- * something out, so that any scene "just works" (issue 16, item 2):
+ * something out, so that any scene "just works":
  *
  * - no camera (none in the file, no --camera, no sequence camera keys):
  *   pf_defaults_camera frames the scene from its bounds. If the bounds'

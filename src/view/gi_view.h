@@ -9,7 +9,7 @@
  * the image and from above with the camera frustum (Hedman 2017 Fig. 3's
  * overhead view), one VPL's paraboloid shadow map (Sec. 4.6, Brabec 2002),
  * the split tiles, the per-tile accumulation, the combined and the filtered
- * irradiance (Sec. 5) and the final image. Issue 16 item 6 ("the frame
+ * irradiance (Sec. 5) and the final image. The learner's views ("the frame
  * taken apart", gi_view_learn.c) adds the VPLs coloured by light bounce and
  * by "moved this frame", the VPL method's own view (gi_vpl_method.view: IR's
  * light paths, IIR's Delaunay/Voronoi domain, SMC's candidates and kNN
@@ -41,7 +41,7 @@
  * mapping.
  *
  * Numbers: a view's gi_view_id is its file number in the dumps
- * (NN-name.png); the views of issue 16 item 6 were appended (15..20), and
+ * (NN-name.png); the learner's views were appended (15..20), and
  * gi_view_order gives the order the frame computes them, which the stepper
  * and the viewer's list follow. */
 #ifndef GI_VIEW_H
@@ -68,7 +68,7 @@ typedef enum gi_view_id {
     GI_VIEW_COMBINED,
     GI_VIEW_FILTERED,
     GI_VIEW_FINAL,
-    /* issue 16 item 6, "the frame taken apart" (appended: the numbers of the
+    /* "the frame taken apart" (appended: the numbers of the
      * views above are kept; gi_view_order gives the stepper's order, by
      * stage) */
     GI_VIEW_VPL_BOUNCE,   /* the VPLs the camera sees, coloured by light bounce */

@@ -1,5 +1,5 @@
 /* gi_view_draw: the drawing helpers the view files share (gi_view.c, the
- * stage pictures; gi_view_learn.c, the views of issue 16 item 6, "the frame
+ * stage pictures; gi_view_learn.c, the views of "the frame
  * taken apart"). Private to src/view: RGB8 images, top row first, every
  * helper clipped to the image and deterministic. */
 #ifndef GI_VIEW_DRAW_H

@@ -1,4 +1,4 @@
-/* gi_view_learn: the views of issue 16 item 6, "the frame taken apart"
+/* gi_view_learn: the views of "the frame taken apart"
  * (gi_view.h lists them): the VPL overlays that test each VPL against what
  * the camera sees (an Embree ray from the eye) and colour it by intensity,
  * by light bounce or by "moved this frame"; every VPL's paraboloid map as an

@@ -592,7 +592,7 @@ static pf_result gi__iir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     return gi__iir_emit(s, out, err);
 }
 
-/* ------------------------------------------------------------ the view (issue 16 item 6) */
+/* ------------------------------------------------------------ the view */
 
 /* Where sampling point dp of a domain is drawn: the disc as itself; the
  * sphere as two discs side by side, the upper hemisphere (z >= 0) left and

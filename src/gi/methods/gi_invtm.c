@@ -234,7 +234,7 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
     return gi_vpl_mark_moved(out, &s->prev, err);
 }
 
-/* ------------------------------------------------------------ the view (issue 16 item 6) */
+/* ------------------------------------------------------------ the view */
 
 /* The importance map f (Eq. 1-2) over the RSM texels, one square cell per
  * map face in heat colours (black: invalid texels), and the texel each VPL

@@ -105,7 +105,7 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     return PF_OK;
 }
 
-/* The light paths over the image (issue 16 item 6): each VPL the camera
+/* The light paths over the image (the learner's view): each VPL the camera
  * sees as a dot in its bounce's colour, and every path segment between two
  * VPLs of one path (ids path * B + k and + k + 1, consecutive in the set)
  * as a line, so the random walks of Keller 1997 can be followed; segments
@@ -157,8 +157,8 @@ static int gi__ir_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb
     return 1;
 }
 
-/* VPL ids are path * bounces + k, k = 0 for the first hit (issue 16 item
- * 6's bounce overlay). */
+/* VPL ids are path * bounces + k, k = 0 for the first hit (the learner's
+ * bounce overlay). */
 static uint32_t gi__ir_bounce(const void *state, const gi_vpl *v, uint32_t bounces)
 {
     (void)state;

@@ -430,7 +430,7 @@ static pf_result gi__mir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
     return PF_OK;
 }
 
-/* ------------------------------------------------------------ the view (issue 16 item 6) */
+/* ------------------------------------------------------------ the view */
 
 /* Steps 1-4 over the image: the camera points (grey), the candidates the
  * camera sees, in heat colours by their image-contribution estimate g

@@ -455,7 +455,7 @@ static pf_result gi__smc_track_lights(gi__smc_state *s, const pf_scene *scene, p
     return PF_OK;
 }
 
-/* Moved geometry (issue 19; gi_motion.h). Hedman 2017 Sec. 1 and 6: SMC
+/* Moved geometry (gi_motion.h). Hedman 2017 Sec. 1 and 6: SMC
  * "is able to illuminate moving objects": its VPLs are validated every
  * frame by the mail-boxed visibility rays of line 4, which, cast against
  * the updated Embree scene, catch the VPLs a moved object now hides from
@@ -1424,7 +1424,7 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
 
 static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc_state *)state)->parts; }
 
-/* ---------------------------------------------------------------- the view (issue 16 item 6) */
+/* ---------------------------------------------------------------- the view */
 
 /* A circle of radius r around p in the plane of normal n, projected. */
 static void gi__smc_view_circle(const gi_vpl_view_ctx *c, uint8_t *rgb, pf_vec3 p, pf_vec3 n, float r,

@@ -58,8 +58,8 @@
  *   m) for points uniform on the paraboloid map's disc (the paper's
  *   reading, --param disc=paraboloid; dOmega_t = 4 / (1 + r_t^2)^2 (2 /
  *   R)^2, r_t = |uv| of the texel centre). The sample points are shifted
- *   per cluster so that this is unbiased for any m (gi_ssvp_second_bounce,
- *   issue 14 item 6).
+ *   per cluster so that this is unbiased for any m (gi_ssvp_second_bounce;
+ *   docs/ssvp.md).
  *
  * Deviations from the paper (README "ssvp"):
  * - Eq. 6 prints the geometry term as (cos theta + cos sigma) / d^2 and
@@ -362,7 +362,7 @@ static void gi__map_row(void *p, uint32_t item, uint32_t worker)
     pf_rt_intersect(J->rt, rays, m->hit + (size_t)j * R, R);
 }
 
-/* Moved geometry (issue 19; EXTENSION, the paper's scenes are static): a
+/* Moved geometry (EXTENSION, the paper's scenes are static): a
  * cluster's map (the closest hits of rays into the hemisphere in front of
  * its centroid) is traced again unless the moved bounds, before and after,
  * lie wholly behind the centroid's tangent plane, where no such ray can
@@ -450,7 +450,7 @@ static pf_vec3 gi__cluster_intensity(const gi_vpl *first, uint32_t nfirst, const
  * same every frame, so a static cluster keeps its VPLs):
  * u = (k + xi) / m, v = radical_inverse_2(k) + zeta (mod 1), then r =
  * sqrt(u), phi = 2 pi v. Each point is uniform over its own ring of equal
- * area, so the estimate is unbiased for any m. Issue 14 item 6: without the
+ * area, so the estimate is unbiased for any m. Without the
  * shift (u = k / m), point k = 0 sat at r = 0, on the centroid's normal, in
  * every cluster, and every point at the inner edge of its ring. For a
  * cluster facing its normal the paraboloid weight J / pdf = 4 pi sum I_i
@@ -625,7 +625,7 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     return PF_OK;
 }
 
-/* ------------------------------------------------------------- the view (issue 16 item 6) */
+/* ------------------------------------------------------------- the view */
 
 /* The clusters of III-B over the image: each first-bounce VPL the camera
  * sees in its cluster's colour (3x3), each centroid as a cross with its

@@ -273,7 +273,7 @@ static pf_result gi__tcas_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     return gi_vpl_mark_moved(out, &s->prev, err);
 }
 
-/* ------------------------------------------------------- the view (issue 16 item 6) */
+/* ------------------------------------------------------- the view */
 
 /* Where RSM texel t is drawn: every face of every map is one square cell of
  * a grid (cells across, cell pixels a side, from (ox, oy)). */

@@ -639,6 +639,42 @@ static void test_deps_on_finished_jobs(void **state)
     }
 }
 
+/* Out of memory for the bookkeeping: the job runs at once on the caller,
+ * after its deps, and its id is PF_JOB_NONE (no abort); the pool goes on. */
+static void count_item(void *ctx, uint32_t item, uint32_t worker);
+static void test_add_without_memory(void **state)
+{
+    (void)state;
+    for (uint32_t c = 0; c < THREAD_CONFIGS; c++) {
+        pf_jobs *jobs = create_jobs(thread_counts[c]);
+        /* a dependency edge cannot be had: b waits for a inline */
+        slot s = {0};
+        pf_job_id a = pf_jobs_add(jobs, slow_write_item, &s, 1, 1, NULL, 0);
+        pf_jobs_test_fail_growth(jobs, 1);
+        pf_job_id b = pf_jobs_add(jobs, copy_item, &s, 1, 1, &a, 1);
+        assert_int_equal(b, PF_JOB_NONE);
+        assert_int_equal(s.copy, 0x1234567890abcdefull); /* done when add returned, after a */
+        pf_jobs_wait(jobs, b);
+        /* a job page cannot be had: the first add that needs one runs inline */
+        atomic_uint n = 0;
+        pf_jobs_test_fail_growth(jobs, 1);
+        uint32_t added = 0, inline_runs = 0;
+        for (; added < 1u << 17 && !inline_runs; added++) {
+            pf_job_id id = pf_jobs_add(jobs, count_item, &n, 3, 1, NULL, 0);
+            if (id == PF_JOB_NONE) {
+                inline_runs++;
+                assert_true(atomic_load(&n) >= 3); /* its items ran before add returned */
+            }
+        }
+        assert_int_equal(inline_runs, 1);
+        pf_job_id after = pf_jobs_add(jobs, count_item, &n, 5, 1, &b, 1); /* a NONE dep: ready at once */
+        assert_int_not_equal(after, PF_JOB_NONE);
+        pf_jobs_wait_all(jobs);
+        assert_int_equal(atomic_load(&n), 3 * added + 5);
+        pf_jobs_destroy(jobs);
+    }
+}
+
 /* ------------------------------------------------------------ create/destroy */
 
 static void count_item(void *ctx, uint32_t item, uint32_t worker)
@@ -809,6 +845,7 @@ int main(void)
         cmocka_unit_test(test_wait_inside_job),
         cmocka_unit_test(test_count_zero_jobs),
         cmocka_unit_test(test_deps_on_finished_jobs),
+        cmocka_unit_test(test_add_without_memory),
         cmocka_unit_test(test_create_destroy_many),
         cmocka_unit_test(test_wait_all_then_reuse),
         cmocka_unit_test(test_workers_set_fpenv),

@@ -131,6 +131,7 @@ struct pf_jobs {
 
     pf__edge *edges;
     uint32_t edge_count, edge_cap;
+    uint32_t fail_growth; /* tests (pf_jobs_test_fail_growth): refuse this many growths of the bookkeeping */
 
     uint32_t idle_workers;     /* asleep on work_cv */
     uint32_t sleeping_waiters; /* asleep on wait_cv */
@@ -161,15 +162,6 @@ static uint64_t pf__ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
-static void pf__fatal(const char *what)
-{
-    /* pf_jobs_add has no error path (it runs inside hot loops and inside
-     * jobs); running out of memory for a few bytes of bookkeeping is not
-     * worth one. */
-    fprintf(stderr, "pf_jobs: %s\n", what);
-    abort();
-}
-
 static pf__job *pf__job_at(const pf_jobs *jobs, uint32_t id)
 {
     return &jobs->pages[id >> PF__PAGE_SHIFT]->jobs[id & (PF__PAGE_JOBS - 1)];
@@ -183,6 +175,10 @@ static uint32_t pf__self(const pf_jobs *jobs)
 /* Adds one page of job slots. Under the mutex. */
 static int pf__grow_jobs(pf_jobs *jobs)
 {
+    if (jobs->fail_growth) {
+        jobs->fail_growth--;
+        return 0;
+    }
     if (jobs->page_count == jobs->page_cap) {
         uint32_t cap = jobs->page_cap ? jobs->page_cap * 2 : 8;
         /* Ids are 32-bit with PF_JOB_NONE reserved; never need more pages. */
@@ -494,6 +490,49 @@ uint32_t pf_jobs_thread_count(const pf_jobs *jobs)
     return jobs->thread_count;
 }
 
+/* Room for `more` dependency edges; 0 when memory is short. Under the mutex. */
+static int pf__reserve_edges(pf_jobs *jobs, uint32_t more)
+{
+    if (more <= jobs->edge_cap - jobs->edge_count) return 1;
+    if (jobs->fail_growth) {
+        jobs->fail_growth--;
+        return 0;
+    }
+    uint64_t need = (uint64_t)jobs->edge_count + more, cap = jobs->edge_cap ? jobs->edge_cap : 256;
+    while (cap < need) cap *= 2;
+    if (cap > UINT32_MAX) return 0;
+    pf__edge *edges = realloc(jobs->edges, (size_t)cap * sizeof *edges);
+    if (!edges) return 0;
+    jobs->edges = edges;
+    jobs->edge_cap = (uint32_t)cap;
+    return 1;
+}
+
+/* pf_jobs_add has no error path (it runs inside hot loops): when the
+ * bookkeeping cannot grow (out of memory, or 2^32-1 jobs since the last
+ * pf_jobs_wait_all) the job runs at once on the calling thread, after its
+ * dependencies (waited for, helping, as pf_jobs_wait), and its id is
+ * PF_JOB_NONE, which later jobs' deps and pf_jobs_wait take as finished.
+ * Items write disjoint outputs, so the bytes are those of a scheduled run;
+ * only the parallelism is lost. */
+static pf_job_id pf__run_inline(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, const pf_job_id *deps,
+                                uint32_t dep_count)
+{
+    for (uint32_t i = 0; i < dep_count; i++) pf_jobs_wait(jobs, deps[i]);
+    const uint32_t worker = pf__self(jobs);
+    pf__tls_depth++;
+    for (uint32_t item = 0; item < count; item++) fn(ctx, item, worker);
+    pf__tls_depth--;
+    return PF_JOB_NONE;
+}
+
+void pf_jobs_test_fail_growth(pf_jobs *jobs, uint32_t times)
+{
+    pthread_mutex_lock(&jobs->mutex);
+    jobs->fail_growth = times;
+    pthread_mutex_unlock(&jobs->mutex);
+}
+
 pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, uint32_t grain,
                       const pf_job_id *deps, uint32_t dep_count)
 {
@@ -507,8 +546,11 @@ pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, ui
 
     pthread_mutex_lock(&jobs->mutex);
     pf_job_id id = jobs->job_count;
-    if (id == PF_JOB_NONE) pf__fatal("more than 2^32-1 jobs between two pf_jobs_wait_all calls");
-    if (id == jobs->page_count * PF__PAGE_JOBS && !pf__grow_jobs(jobs)) pf__fatal("out of memory adding a job");
+    if (id == PF_JOB_NONE || (id == jobs->page_count * PF__PAGE_JOBS && !pf__grow_jobs(jobs)) ||
+        !pf__reserve_edges(jobs, dep_count)) {
+        pthread_mutex_unlock(&jobs->mutex);
+        return pf__run_inline(jobs, fn, ctx, count, deps, dep_count);
+    }
     jobs->job_count++;
 
     pf__job *job = pf__job_at(jobs, id);
@@ -537,14 +579,7 @@ pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, ui
         if (dep >= id) continue;
         pf__job *d = pf__job_at(jobs, dep);
         if (d->finished) continue;
-        if (jobs->edge_count == jobs->edge_cap) {
-            uint32_t cap = jobs->edge_cap ? jobs->edge_cap * 2 : 256;
-            pf__edge *edges = cap > jobs->edge_cap ? realloc(jobs->edges, (size_t)cap * sizeof *edges) : NULL;
-            if (!edges) pf__fatal("out of memory adding a job dependency");
-            jobs->edges = edges;
-            jobs->edge_cap = cap;
-        }
-        uint32_t e = jobs->edge_count++;
+        uint32_t e = jobs->edge_count++; /* reserved above */
         jobs->edges[e].job = id;
         jobs->edges[e].next = d->first_edge;
         d->first_edge = e;

@@ -50,6 +50,13 @@ uint32_t pf_jobs_thread_count(const pf_jobs *jobs);
 pf_job_id pf_jobs_add(pf_jobs *jobs, pf_job_fn fn, void *ctx, uint32_t count, uint32_t grain,
                       const pf_job_id *deps, uint32_t dep_count);
 
+/* (pf_jobs_add never fails: when its bookkeeping cannot grow, out of
+ * memory, it runs the job at once on the calling thread after its
+ * dependencies and returns PF_JOB_NONE, which deps and the wait functions
+ * take as finished.) For tests: the next `times` growths of the
+ * bookkeeping fail as if memory were short. */
+void pf_jobs_test_fail_growth(pf_jobs *jobs, uint32_t times);
+
 /* Waits until job `id` has finished, running ready jobs meanwhile. From
  * inside a job this is safe when `id` does not depend, directly or not, on a
  * job that is already running (e.g. waiting for jobs the job just added). */

@@ -15,16 +15,9 @@ typedef struct pf_fpenv_state {
 } pf_fpenv_state;
 
 #if SIMD_X86
-#include <pmmintrin.h>
-#include <xmmintrin.h>
-static inline void pf_fpenv_set(void)
-{
-    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-    _MM_SET_ROUNDING_MODE(_MM_ROUND_NEAREST);
-}
-static inline pf_fpenv_state pf_fpenv_save(void) { return (pf_fpenv_state){_mm_getcsr()}; }
-static inline void pf_fpenv_restore(pf_fpenv_state s) { _mm_setcsr(s.csr); }
+static inline void pf_fpenv_set(void) { simd_csr_set(simd_csr_softgi(simd_csr_get())); }
+static inline pf_fpenv_state pf_fpenv_save(void) { return (pf_fpenv_state){simd_csr_get()}; }
+static inline void pf_fpenv_restore(pf_fpenv_state s) { simd_csr_set(s.csr); }
 #else
 static inline void pf_fpenv_set(void) {}
 static inline pf_fpenv_state pf_fpenv_save(void) { return (pf_fpenv_state){0}; }

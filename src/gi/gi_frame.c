@@ -247,8 +247,9 @@ void gi_frame_free(gi_frame *f)
 
 void *gi_frame_scratch(gi_frame *f, size_t count, size_t size, const char *what)
 {
-    void *p = count ? pf_arena_calloc(&f->scratch, count, size) : NULL;
-    if (!p && count && f->status == PF_OK)
+    /* count 0 gets one element: callers pass the pointer to memset/qsort */
+    void *p = pf_arena_calloc(&f->scratch, count ? count : 1, size);
+    if (!p && f->status == PF_OK)
         f->status = pf_error_set(&f->error, PF_ERR_OUT_OF_MEMORY, "out of memory for %s (%zu x %zu bytes)", what,
                                  count, size);
     return p;

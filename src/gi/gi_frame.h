@@ -289,8 +289,9 @@ pf_ray gi_camera_ray_at(const pf_camera *cam, uint32_t width, uint32_t height, u
  * memory (the frame's copies are then part-updated: make the frame again). */
 pf_result gi_frame_geometry_moved(gi_frame *f, const pf_anim_moved *moved, uint32_t count, pf_error *err);
 
-/* count * size bytes of this frame's scratch (zeroed, 64-byte aligned),
- * valid until the next frame starts; NULL when memory is short, the frame's
+/* count * size bytes of this frame's scratch (zeroed, 64-byte aligned; at
+ * least one element, so count 0 is not NULL), valid until the next frame
+ * starts; NULL when memory is short, the frame's
  * status then PF_ERR_OUT_OF_MEMORY naming `what` (the stage skips its work
  * and the frame's image is refused). Frame thread only. A stage called on
  * its own (tests) takes scratch until the next frame resets it. */

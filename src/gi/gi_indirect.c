@@ -581,7 +581,7 @@ void gi_stage_assign(gi_frame *f)
     double *load = gi_frame_scratch(f, T, sizeof(double), "the VPL assignment");
     uint32_t *cursor = gi_frame_scratch(f, T, sizeof(uint32_t), "the VPL assignment");
     ind->assign_kept = 0;
-    if ((N && !keys) || !load || !cursor) { /* no tile gets a VPL; the frame's status says why */
+    if (!keys || !load || !cursor) { /* no tile gets a VPL; the frame's status says why */
         memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
         ind->assigned_count = 0;
         return;

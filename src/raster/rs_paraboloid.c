@@ -667,8 +667,8 @@ pf_result rs_para_set_dynamic(rs_para_context *ctx, const pf_anim_moved *ranges,
         return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: levels of detail cannot follow moving geometry");
     memset(ctx->cluster_moved, 0, ctx->cluster_count);
     if (!rs__mark_clusters(ctx, ctx->cluster_moved, ranges, count))
-        return pf_error_set(err, PF_ERR_ARGUMENT, "paraboloid maps: a dynamic range lies outside the scene's %u triangles",
-                            ctx->tri_count);
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "paraboloid maps: a dynamic range lies outside the scene's %u triangles", ctx->tri_count);
     for (uint32_t c = 0; c < ctx->cluster_count; c++)
         if (ctx->cluster_moved[c] && !ctx->cluster_dynamic[c]) {
             ctx->cluster_dynamic[c] = 1;
@@ -1328,7 +1328,8 @@ static void rs__render_map(rs_para_context *ctx, rs__scratch *sc, pf_vec3 pos, p
             for (int32_t i = limit.i0; i <= limit.i1; i++)
                 if (sc->tile_class[(j / RS__TILE) * T + i / RS__TILE] == RS__ALL)
                     out[(size_t)j * R + i] = static_out[(size_t)j * R + i];
-        for (uint32_t k = 0; k < T * T; k++) sc->tile_skip[k] = sc->tile_class[k] != RS__ALL && sc->tile_class[k] != RS__MOVED_ONLY;
+        for (uint32_t k = 0; k < T * T; k++)
+            sc->tile_skip[k] = sc->tile_class[k] != RS__ALL && sc->tile_class[k] != RS__MOVED_ONLY;
         rs__pass(ctx, sc, &f, range, out, limit, ctx->cluster_dynamic, 1, 1);
         memset(sc->tile_skip, 0, (size_t)T * T);
         return;
@@ -1389,8 +1390,9 @@ static void rs__map_job(void *p, uint32_t item, uint32_t worker)
             mvp = &mv;
         }
     }
+    uint16_t *static_out = job->static_atlas ? job->static_atlas + texels * slot : NULL;
     rs__render_map(job->ctx, job->ctx->scratch[worker], job->positions[item], job->normals[item], job->range,
-                   job->atlas + texels * slot, limit, mvp, job->static_atlas ? job->static_atlas + texels * slot : NULL);
+                   job->atlas + texels * slot, limit, mvp, static_out);
 }
 
 void rs_para_render(uint16_t *atlas, rs_para_context *ctx, pf_jobs *jobs, const pf_vec3 *positions,

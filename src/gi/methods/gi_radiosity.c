@@ -33,7 +33,7 @@ float gi_radiosity_random(uint64_t seed, uint32_t a, uint32_t b, uint32_t c)
     return (float)(h >> 40) * 0x1p-24f; /* k 2^-24, k < 2^24: exactly in [0, 1) */
 }
 
-pf_vec3 gi_radiosity_bounce_dir(pf_vec3 ns, pf_vec3 ng, float u0, float u1)
+static pf_vec3 gi__bounce_dir(pf_vec3 ns, pf_vec3 ng, float u0, float u1)
 {
     float r = sqrtf(u0), phi = 2.0f * PF_PI * u1;
     pf_vec3 t, b;
@@ -43,6 +43,12 @@ pf_vec3 gi_radiosity_bounce_dir(pf_vec3 ns, pf_vec3 ng, float u0, float u1)
     /* below the geometric surface (interpolated normals): mirror, as gi_reference.c */
     float d = pf_v3_dot(w, ng);
     return d < 0.0f ? pf_v3_sub(w, pf_v3_scale(ng, 2.0f * d)) : w;
+}
+
+pf_ray gi_radiosity_bounce_ray(pf_vec3 p, pf_vec3 ns, pf_vec3 ng, float u0, float u1)
+{
+    return (pf_ray){.org = pf_rt_offset_origin(p, ng, ng), .tnear = 0.0f, .dir = gi__bounce_dir(ns, ng, u0, u1),
+                    .tfar = INFINITY};
 }
 
 #define GI__RAYS 256   /* rays per Embree call (stack arrays) */
@@ -164,11 +170,7 @@ static void gi__trace(const gi_radiosity_ctx *c, const gi__range *g, const gi_ra
                 if (!(V->flags & GI_RADIOSITY_ALIVE)) continue;
                 uint32_t s = g->s0 + k;
                 float u0 = gi_radiosity_random(seeds[e], s, j, 3), u1 = gi_radiosity_random(seeds[e], s, j, 4);
-                pf_vec3 wi = gi_radiosity_bounce_dir(V->ns, V->ng, u0, u1);
-                rays[q].org = pf_rt_offset_origin(V->p, V->ng, V->ng);
-                rays[q].dir = wi;
-                rays[q].tnear = 0.0f;
-                rays[q].tfar = INFINITY;
+                rays[q] = gi_radiosity_bounce_ray(V->p, V->ns, V->ng, u0, u1);
                 from[q] = V;
                 to[q++] = &v[e][(j + 1) * g->stride + k];
                 any = 1;
@@ -186,6 +188,19 @@ static void gi__trace(const gi_radiosity_ctx *c, const gi__range *g, const gi_ra
     }
 }
 
+/* A batch of q punctual-light shadow rays: out[who[i]] += w[i] for each
+ * unoccluded ray, in batch order. Returns 0 (the batch is empty again). */
+static uint32_t gi__shadow_flush(const gi_radiosity_ctx *c, const pf_ray *rays, const pf_vec3 *w,
+                                 const uint32_t *who, uint32_t q, pf_vec3 *out)
+{
+    if (!q) return 0;
+    uint8_t occ[GI__RAYS];
+    pf_rt_occluded(c->rt, rays, occ, q);
+    for (uint32_t i = 0; i < q; i++)
+        if (!occ[i]) out[who[i]] = pf_v3_add(out[who[i]], w[i]);
+    return 0;
+}
+
 /* Punctual lights at y of each estimate, exact and the same for every
  * sample: e0[e] = sum over the lights (scene order) of the unshadowed ones. */
 static void gi__punctual_y(const gi_radiosity_ctx *c, const gi_radiosity_site *y, uint32_t count, pf_vec3 *e0)
@@ -195,25 +210,15 @@ static void gi__punctual_y(const gi_radiosity_ctx *c, const gi_radiosity_site *y
         pf_ray rays[GI__RAYS];
         pf_vec3 w[GI__RAYS];
         uint32_t who[GI__RAYS], q = 0;
-        uint8_t occ[GI__RAYS];
         for (uint32_t e = 0; e < count; e++) {
             gi_light_sample ls;
             if (!gi_light_irradiance(&c->scene->lights[l], y[e].p, y[e].ns, &ls)) continue;
             rays[q] = gi_light_shadow_ray(&ls, y[e].p, y[e].ng);
             w[q] = ls.irradiance;
             who[q++] = e;
-            if (q == GI__RAYS) {
-                pf_rt_occluded(c->rt, rays, occ, q);
-                for (uint32_t i = 0; i < q; i++)
-                    if (!occ[i]) e0[who[i]] = pf_v3_add(e0[who[i]], w[i]);
-                q = 0;
-            }
+            if (q == GI__RAYS) q = gi__shadow_flush(c, rays, w, who, q, e0);
         }
-        if (q) {
-            pf_rt_occluded(c->rt, rays, occ, q);
-            for (uint32_t i = 0; i < q; i++)
-                if (!occ[i]) e0[who[i]] = pf_v3_add(e0[who[i]], w[i]);
-        }
+        gi__shadow_flush(c, rays, w, who, q, e0);
     }
 }
 
@@ -235,7 +240,6 @@ static void gi__gather(const gi_radiosity_ctx *c, const gi__range *g, const gi_r
             pf_ray rays[GI__RAYS];
             pf_vec3 w[GI__RAYS];
             uint32_t who[GI__RAYS], q = 0;
-            uint8_t occ[GI__RAYS];
             for (uint32_t e = 0; e < count; e++)
                 for (uint32_t k = 0; k < m; k++) {
                     const gi_radiosity_vertex *V = &v[e][j * g->stride + k];
@@ -245,18 +249,9 @@ static void gi__gather(const gi_radiosity_ctx *c, const gi__range *g, const gi_r
                     rays[q] = gi_light_shadow_ray(&ls, V->p, V->ng);
                     w[q] = pf_v3_mul(V->T, ls.irradiance);
                     who[q++] = e * m + k;
-                    if (q == GI__RAYS) {
-                        pf_rt_occluded(c->rt, rays, occ, q);
-                        for (uint32_t i = 0; i < q; i++)
-                            if (!occ[i]) E[who[i]] = pf_v3_add(E[who[i]], w[i]);
-                        q = 0;
-                    }
+                    if (q == GI__RAYS) q = gi__shadow_flush(c, rays, w, who, q, E);
                 }
-            if (q) {
-                pf_rt_occluded(c->rt, rays, occ, q);
-                for (uint32_t i = 0; i < q; i++)
-                    if (!occ[i]) E[who[i]] = pf_v3_add(E[who[i]], w[i]);
-            }
+            gi__shadow_flush(c, rays, w, who, q, E);
         }
         /* then the vertex's area-light sample */
         for (uint32_t e = 0; e < count; e++)

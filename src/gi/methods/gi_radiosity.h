@@ -45,11 +45,12 @@ typedef struct gi_radiosity_ctx {
 /* A float in [0, 1) from a 64-bit seed and three counters (SplitMix64
  * finaliser, the same construction as pf_random). */
 float gi_radiosity_random(uint64_t seed, uint32_t a, uint32_t b, uint32_t c);
-/* A cosine-weighted direction around the unit shading normal ns (Malley's
- * method, pdf cos / pi), mirrored about the geometric surface (normal ng)
- * where it points below it: every diffuse bounce of the estimates and SMC's
- * line 5 rays. */
-pf_vec3 gi_radiosity_bounce_dir(pf_vec3 ns, pf_vec3 ng, float u0, float u1);
+/* The diffuse bounce ray from surface point p: a cosine-weighted direction
+ * around the unit shading normal ns (Malley's method, pdf cos / pi),
+ * mirrored about the geometric surface (normal ng) where it points below
+ * it, from p pushed off along ng (pf_rt_offset_origin), t in [0, inf):
+ * every diffuse bounce of the estimates and SMC's line 5 rays. */
+pf_ray gi_radiosity_bounce_ray(pf_vec3 p, pf_vec3 ns, pf_vec3 ng, float u0, float u1);
 /* A well-mixed 64-bit word from two counters, for deriving seeds. */
 uint64_t gi_radiosity_hash(uint64_t a, uint64_t b);
 

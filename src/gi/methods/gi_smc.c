@@ -652,11 +652,7 @@ static void gi__smc_trace_job(void *ctx, uint32_t chunk, uint32_t worker)
         if (j >= s->x_count) j = s->x_count - 1;
         const gi__smc_point *X = &s->x[j];
         float u0 = gi__rand(c->key, 10, r, 1), u1 = gi__rand(c->key, 10, r, 2);
-        pf_vec3 w = gi_radiosity_bounce_dir(X->ns, X->ng, u0, u1);
-        rays[i].org = pf_rt_offset_origin(X->p, X->ng, X->ng);
-        rays[i].dir = w;
-        rays[i].tnear = 0.0f;
-        rays[i].tfar = INFINITY;
+        rays[i] = gi_radiosity_bounce_ray(X->p, X->ns, X->ng, u0, u1);
         from[i] = j;
     }
     pf_rt_intersect(s->in->rt, rays, hits, n);

@@ -189,6 +189,7 @@ static const struct {
     {"--dump-stages", "d", {0}},       {"--dump-format", "exr", {"--dump-stages", "d"}},
     {"--pipeline", "on", {0}},         {"--indirect-scale", "2", {0}}, {"--temporal", "4", {0}},
     {"--compensate", "on", {0}},       {"--spp", "4", {0}},              {"--reference", NULL, {0}},
+    {"--light-paths", "off", {0}},
     {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},
     {"--raytrace", NULL, {0}},         {"--hash", NULL, {0}},            {"--quiet", NULL, {0}},
     {"--frames", "1", {0}},            {"--screenshot", "s.png", {0}},   {"--scenes", "d", {0}},

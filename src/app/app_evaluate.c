@@ -79,6 +79,7 @@
 
 #include "app.h"
 #include "app_progress.h"
+#include "gi_reference.h"
 #include "gi_vpl.h"
 #include "pf_imageio.h"
 #include "pf_sequence.h"
@@ -408,7 +409,8 @@ static int ev__reference(const ev__args *a, const char *file, const char *dir, u
     /* the file by its absolute path, so a relative and an absolute name of
      * the same sequence match */
     if (realpath(file, real)) file = real;
-    snprintf(base, sizeof base, "file=%s size=%s spp=%s %s\n", file, a->size, a->spp, a->full ? "full" : "indirect");
+    snprintf(base, sizeof base, "file=%s size=%s spp=%s %s estimator=%s\n", file, a->size, a->spp,
+             a->full ? "full" : "indirect", GI_REFERENCE_ESTIMATOR);
     snprintf(want, sizeof want, "%strack-spp=%s\n", base, a->track_spp);
     int reuse = 0;
     /* a run that did not finish (its manifest says "running") is redone */

@@ -358,8 +358,9 @@ static pf_result qu__truths(qu__run *run, const qu__config *base, const char *sc
     /* the reference */
     snprintf(key, sizeof key,
              "softgi evaluate --quality: reference\nscene=%s\ncamera=%s\nlight=%s\nsize=%ux%u\nspp=%u\nbounces=%u\n"
-             "indirect-only\n",
-             scene_id, s->camera ? s->camera : "the scene's", s->light ? s->light : "the scene's", w, h, spp, bounces);
+             "indirect-only\nestimator=%s\n",
+             scene_id, s->camera ? s->camera : "the scene's", s->light ? s->light : "the scene's", w, h, spp, bounces,
+             GI_REFERENCE_ESTIMATOR);
     snprintf(pfm, sizeof pfm, "%s/reference-b%u.pfm", dir, bounces);
     snprintf(stamp, sizeof stamp, "%s/reference-b%u.stamp", dir, bounces);
     if (!a->rerun_reference && qu__stamp_matches(stamp, key, &t->noise) &&

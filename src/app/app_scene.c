@@ -215,6 +215,7 @@ void app_reference_options(const pf_options *o, gi_reference_options *ro)
     ro->direct_only = o->direct_only;
     ro->indirect_only = o->indirect_only;
     ro->clamp = o->clamp_set ? o->clamp : 0.0f; /* reference --clamp: clamped path tracing */
+    ro->no_light_paths = o->no_light_paths;
 }
 
 pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)

@@ -30,7 +30,7 @@ typedef enum pf__opt_id {
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_MOVING_OBJECT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
     PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
-    PF__OPT_TIME, PF__OPT_ANIMATION,
+    PF__OPT_TIME, PF__OPT_ANIMATION, PF__OPT_LIGHT_PATHS,
     PF__OPT_COUNT
 } pf__opt_id;
 
@@ -163,6 +163,10 @@ static const pf__opt k_options[] = {
      NULL},
     {PF__OPT_SPP, "--spp", NULL, "N", F, "samples per pixel (default 64)", NULL},
     {PF__OPT_SPP, "--spp", NULL, "N", S, "--reference: samples per pixel (default 64)", NULL},
+    {PF__OPT_LIGHT_PATHS, "--light-paths", NULL, "on|off", F | S,
+     "the reference's light vertices joined to every bounce, with\nMIS (default on; off: NEE alone, far noisier near a "
+     "point\nlight; docs/evaluation.md)",
+     NULL},
     {PF__OPT_REFERENCE, "--reference", NULL, NULL, S, "path-trace every frame (the references evaluate uses)",
      "softgi reference renders one image; --reference is an option of sequence"},
     {PF__OPT_TRACK_SPP, "--track-spp", NULL, "N", S, "--reference: the tracked pixels with N samples", NULL},
@@ -676,6 +680,11 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         k = pf__choice(val, "off|on");
         if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--compensate '%s': expected on or off", val);
         o->compensate = k == 1;
+        break;
+    case PF__OPT_LIGHT_PATHS:
+        k = pf__choice(val, "off|on");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--light-paths '%s': expected on or off", val);
+        o->no_light_paths = k == 0;
         break;
     case PF__OPT_PIPELINE:
         k = pf__choice(val, "off|on");

@@ -89,6 +89,7 @@ typedef struct pf_options {
                                 GI_INDIRECT_SCALE_AUTO) */
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
+    int no_light_paths;      /* reference --light-paths off: NEE alone */
     uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */
     uint32_t taa;            /* --taa N: temporal anti-aliasing over up to N frames (0: off) */
     int moving_light;        /* bench frame: --moving-light (the light circles, every method must update) */

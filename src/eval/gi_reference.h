@@ -33,13 +33,33 @@
  *     triangle (gi_area_sample_point), albedo/pi * Le cos cos' / (r^2
  *     pdf_area) times a shadow ray (gi_area_sample_irradiance).
  * Emission met by a bounce (x2 ..) is not added: that light path is the one
- * NEE at the previous vertex counts (NEE-only, no MIS: each light path is
- * counted by exactly one strategy, so the estimate is unbiased; punctual
- * lights could never be hit anyway). So B = 0 is "emission seen directly +
- * direct light of all lights" (what `softgi render` computes), B = 1 adds
- * one-bounce indirect light, and inside a closed sphere of uniform emission
- * Le and albedo rho the expected value is exactly Le * sum_{k=0..B+1} rho^k
- * (-> Le / (1 - rho) as B grows; the furnace test).
+ * NEE at the previous vertex counts (each light path is counted by exactly
+ * one strategy, or by two with weights that sum to one, so the estimate is
+ * unbiased; punctual lights could never be hit anyway). So B = 0 is
+ * "emission seen directly + direct light of all lights" (what `softgi
+ * render` computes), B = 1 adds one-bounce indirect light, and inside a
+ * closed sphere of uniform emission Le and albedo rho the expected value is
+ * exactly Le * sum_{k=0..B+1} rho^k (-> Le / (1 - rho) as B grows; the
+ * furnace test).
+ *
+ * Light vertices (default; no_light_paths turns them off). NEE alone has
+ * unbounded variance when a point light sits close to a surface: a bounce
+ * that lands near the Cornell box's light, 1 cm under the ceiling, finds E ~
+ * I / r^2 = 10^4 I, and the indirect light of the whole box stays noisy
+ * (a relative standard error of about 0.25 per pixel at 1024 spp). So every
+ * path vertex x_k with k <= B also gets, per point and spot light, one
+ * direction drawn from the light (uniform over the sphere, or within a
+ * spot's outer cone), whose first hit y is joined to x_k by a shadow ray:
+ * the path x_k -> y -> light of k bounces, the one the bounce from x_k and
+ * NEE at x_{k+1} also find. The two strategies are combined with the
+ * balance heuristic (Veach 1997, Ch. 9; the bidirectional path tracer's
+ * light paths of one vertex, joined to every eye vertex but x_0), weights
+ * in gi_reference.c. The connection's own G ~ 1 / r^2 is what NEE handles
+ * well, so the variance stays bounded. Directional lights and emitters
+ * keep NEE alone. Cost: one more ray and one shadow ray per light and
+ * bounce. A light lying exactly on a surface loses what its light vertices
+ * at distance ~0 would carry (they are skipped; NEE counts those paths
+ * with weight ~0): a vanishing part of the image.
  *
  * no_area_nee (tests only) replaces the area-light NEE by BSDF sampling:
  * the emission Le(xk) of every surface a path hits is added, for x1 .. and
@@ -56,9 +76,7 @@
  * No Russian roulette: paths stop after B bounces, when they leave the scene
  * or when the throughput is zero (a black surface). The estimate of the
  * truncated sum is unbiased and the work per path bounded by B + 1.
- * Nothing is clamped either (unless clamp_b: below), so a punctual light close to a surface (the
- * Cornell box's, 1 cm under the ceiling: E ~ I / r^2 = 10^4 I there) gives
- * fireflies at low spp when a bounce lands near it; they average out, slowly.
+ * Nothing is clamped either (unless clamp_b: below).
  *
  * Sampling. Cosine-weighted directions around the shading normal (Malley's
  * method: a uniform disc point lifted to the hemisphere), pdf = cos/pi, so the
@@ -94,6 +112,9 @@
 #define GI_REFERENCE_DEFAULT_SPP 64u
 #define GI_REFERENCE_DEFAULT_BOUNCES 3u
 #define GI_REFERENCE_MAX_BOUNCES 1024u
+/* What the estimator is, for the stamps of cached references (evaluate): a
+ * reference made by another estimator is rendered again. */
+#define GI_REFERENCE_ESTIMATOR "nee+light-vertices-mis"
 
 /* Progress: rows finished so far out of the image's height. Called only on the
  * thread that called gi_reference_render (the job system's waiting thread
@@ -108,6 +129,7 @@ typedef struct gi_reference_options {
     int direct_only;   /* B = 0: emission seen directly + direct light */
     int indirect_only; /* drop Le(x1) and the direct light at x1 */
     int no_area_nee;   /* emitters only by BSDF sampling (same expectation; for tests) */
+    int no_light_paths; /* NEE alone for punctual lights (same expectation, far more noise near a light) */
     /* Clamped path tracing (Hedman 2017 Fig. 8, "path tracing with simulated
      * clamping", `softgi reference --clamp C`): C > 0 bounds the geometry
      * term of the segment x1 - x2 by the frame's b = C / diagonal^2
@@ -152,7 +174,8 @@ pf_result gi_reference_render_pixels(float *out_rgb, const pf_scene *scene, cons
  * sample, path vertex, dimension). Vertex 0 is the camera (dimensions 0, 1:
  * the jitter within the pixel); vertex k >= 1 is the bounce leaving x_k
  * (dimensions 0, 1: the hemisphere sample; 2, 3, 4: the area-light sample of
- * the NEE at x_k). */
+ * the NEE at x_k; 5 + 2 l, 6 + 2 l: the direction leaving punctual light l
+ * for the light vertex joined to x_k). */
 
 /* The camera ray of pixel (x, y), sample `sample`: through the pixel at the
  * jittered position (x + u0, y + u1), dir scaled as gi_camera_ray's (t =

@@ -95,7 +95,11 @@ static const qu__scene k_scenes[] = {
 };
 #define QU_SCENES (sizeof k_scenes / sizeof k_scenes[0])
 
-static const char *const k_default_methods[] = {"ir", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
+/* ir+reseed=1: a new VPL set every frame (all maps redrawn), which
+ * --temporal turns into a converging image of a static view (in the
+ * spirit of Keller 1997's accumulation of VPL images; the paper is not in
+ * shared/papers). */
+static const char *const k_default_methods[] = {"ir", "ir+reseed=1", "iir", "smc", "mir", "invtm", "tcas", "ssvp"};
 
 /* The light bounces a method places (its --bounces default of 3 where it
  * follows --bounces; iir, invtm and tcas make one bounce as their papers,

@@ -10,7 +10,9 @@
  * - golden hash of the Cornell box G-buffer (scalar path), with its picture
  *   (tests/data/golden/raster-gbuffer-cornell.png: depth, position, normal,
  *   albedo and triangle id side by side);
- * - the AVX2 G-buffer resolve gives the scalar resolve's planes bit for bit. */
+ * - the AVX2 G-buffer resolve gives the scalar resolve's planes bit for bit;
+ * - vertex blocks: passes that transform only the visible clusters' vertex
+ *   blocks, after passes of other views, equal passes of a fresh context. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -24,6 +26,7 @@
 #include "pf_imageio.h"
 #include "pf_rt.h"
 #include "rs_raster.h"
+#include "rs_shadow.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
 #include "tu_golden.h"
@@ -437,6 +440,69 @@ static void test_paths_sibenik(void **state)
     check_paths(SIBENIK);
 }
 
+/* ------------------------------------------------------------ vertex blocks */
+
+/* The vertex stage transforms only the blocks of welded positions that the
+ * pass's visible clusters use, so a context's vertex records keep what
+ * earlier passes of other views left in the rest. A cube map's six faces
+ * (a light at the camera, each face culling most clusters) drawn one after
+ * another by one context must equal each face drawn alone by a fresh
+ * context, on the scalar and the best path. */
+static void check_vertex_blocks(const char *path)
+{
+    pf_scene s;
+    if (!tu_load_or_skip(&s, path)) return;
+    pf_camera cam = scene_camera(&s);
+    pf_light light = {.type = PF_LIGHT_POINT, .position = cam.eye, .color = {1, 1, 1}, .intensity = 1};
+    pf_scene lit = s;
+    lit.lights = &light;
+    lit.light_count = 1;
+    pf_jobs *jobs = pf_jobs_create(2);
+    pf_error err;
+    rs_shadow_desc desc = {.size = 256};
+    rs_shadow_map kept, alone;
+    assert_int_equal(rs_shadow_map_init(&kept, &lit, 0, &desc, &err), PF_OK);
+    assert_int_equal(rs_shadow_map_init(&alone, &lit, 0, &desc, &err), PF_OK);
+    const rs_simd simds[2] = {RS_SIMD_SCALAR, rs_simd_for_isa(pf_isa_detect())};
+    for (int k = 0; k < 2; k++) {
+        rs_context *ctx;
+        assert_int_equal(rs_context_create(&ctx, &lit, jobs, simds[k], &err), PF_OK);
+        rs_shadow_render(ctx, &kept, 1, NULL);
+        rs_shadow_render(ctx, &kept, 1, NULL); /* face 0 too after the others */
+        uint32_t culled_most = 0;
+        for (uint32_t f = 0; f < 6; f++) {
+            rs_context *fresh;
+            assert_int_equal(rs_context_create(&fresh, &lit, jobs, simds[k], &err), PF_OK);
+            rs_pass pass = {.view_proj = alone.view_proj[f], .cull = RS_CULL_NONE};
+            rs_target t = {.width = 256, .height = 256, .depth = rs_shadow_map_face(&alone, f)};
+            rs_stats st;
+            rs_render(fresh, &pass, &t, &st);
+            culled_most += st.clusters_culled * 2 > (s.tri_count + 255) / 256;
+            if (memcmp(rs_shadow_map_face(&kept, f), rs_shadow_map_face(&alone, f), sizeof(float) * 256 * 256))
+                fail_msg("%s, %s: cube face %u drawn after the others differs from it drawn alone", path,
+                         rs_simd_name(simds[k]), f);
+            rs_context_destroy(fresh);
+        }
+        assert_true(culled_most >= 3); /* most faces skip most clusters: the case tested */
+        rs_context_destroy(ctx);
+    }
+    rs_shadow_map_free(&kept);
+    rs_shadow_map_free(&alone);
+    pf_jobs_destroy(jobs);
+    pf_scene_free(&s);
+}
+
+static void test_vertex_blocks_sibenik(void **state)
+{
+    (void)state;
+    check_vertex_blocks(SIBENIK);
+}
+static void test_vertex_blocks_conference(void **state)
+{
+    (void)state;
+    check_vertex_blocks(CONFERENCE);
+}
+
 /* ------------------------------------------------------------ raster vs Embree */
 
 static void check_vs_embree(const char *path)
@@ -629,7 +695,8 @@ int main(void)
         cmocka_unit_test(test_paths_cornell),      cmocka_unit_test(test_paths_sibenik),
         cmocka_unit_test(test_vs_embree_cornell),  cmocka_unit_test(test_vs_embree_sibenik),
         cmocka_unit_test(test_vs_embree_conference), cmocka_unit_test(test_golden_gbuffer),
-        cmocka_unit_test(test_gbuffer_simd_resolve),
+        cmocka_unit_test(test_gbuffer_simd_resolve), cmocka_unit_test(test_vertex_blocks_sibenik),
+        cmocka_unit_test(test_vertex_blocks_conference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -404,7 +404,8 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         out[m].threads = threads;
         out[m].pipeline = modes[m];
         gi_frame_desc fd = {.scene = lit, .rt = rt, .jobs = jobs, .raster = rs, .camera = &cam, .width = BF_W,
-                            .height = BF_H, .aa_samples = o->aa, .taa_frames = o->taa};
+                            .height = BF_H, .shadow_size = o->shadow_size, .aa_samples = o->aa,
+                            .taa_frames = o->taa};
         if ((r = gi_frame_create(&f[m], &fd, err)) != PF_OK) break;
         ready++;
         /* the command line's method, --param and --visibility; --vpls and
@@ -705,7 +706,6 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
                       : o->bounces             ? "--bounces"
                       : o->clamp_set           ? "--clamp"
                       : o->filter              ? "--filter"
-                      : o->shadow_size         ? "--shadow-size"
                       : o->area_strata         ? "--area-strata"
                       : o->area_points         ? "--area-points"
                       : o->has_camera          ? "--camera"
@@ -720,7 +720,7 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
     if (bad)
         return pf_error_set(err, PF_ERR_ARGUMENT,
                             "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
-                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --aa, --taa)",
+                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --shadow-size, --aa, --taa)",
                             bad);
     /* the method and its parameters now, before minutes of scene loading */
     gi_indirect_options io;
@@ -756,15 +756,17 @@ int app_bench_frame(const pf_options *o)
     if (o->vpls) vpl_list[0] = o->vpls, nvpls = 1;
     uint32_t nmodes = o->pipeline >= 0 ? 1 : 2;
     uint32_t tn = o->tiles_n ? o->tiles_n : 4, tm = o->tiles_m ? o->tiles_m : 4;
+    const uint32_t shadow = o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE;
     uint32_t per_scene = nvpls * nthreads * nmodes;
     bf_result results[BF_SCENES * BF_MAX_CONFIGS];
     printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, indirect "
-           "light at 1/%u resolution%s,\n%s point light, pipelining %s, 1 warm-up frame then median of %u\n",
+           "light at 1/%u resolution%s,\n%s point light (shadow map %u^2 per face%s), pipelining %s, 1 warm-up "
+           "frame then median of %u\n",
            BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm,
            gi_indirect_scale_for(o->indirect_scale, BF_W, BF_H),
            o->indirect_scale == GI_INDIRECT_SCALE_AUTO ? " (--indirect-scale auto)" : "",
-           o->moving_light ? "moving" : "static", o->pipeline < 0 ? "off and on" : o->pipeline ? "on" : "off",
-           frames);
+           o->moving_light ? "moving" : "static", shadow, shadow == RS_SHADOW_DEFAULT_SIZE ? "" : ", --shadow-size",
+           o->pipeline < 0 ? "off and on" : o->pipeline ? "on" : "off", frames);
     if (aa > 1 || o->taa)
         printf("anti-aliasing: %u sample%s per pixel (a per-sample stage's row sums its %u runs), temporal "
                "anti-aliasing %s\n",
@@ -818,9 +820,10 @@ int app_bench_frame(const pf_options *o)
         const bf_result *t = target_of[k];
         if (t) {
             double want = bf__target(method, o->moving_light, visibility, t->vpl_budget, k_scenes[k].name);
-            printf("  %-11s %.2f frames/s (%.2f ms, %u VPLs, pipeline %s) against %.0f: %s\n", k_scenes[k].name,
+            printf("  %-11s %.2f frames/s (%.2f ms, %u VPLs, pipeline %s) against %.0f: %s%s\n", k_scenes[k].name,
                    t->fps, t->frame_ms, t->vpl_budget, t->pipeline ? "on" : "off", want,
-                   t->fps >= want ? "met" : "NOT met");
+                   t->fps >= want ? "met" : "NOT met",
+                   shadow == RS_SHADOW_DEFAULT_SIZE ? "" : " (not the default frame: --shadow-size)");
         } else
             printf("  %-11s no target for this case (%s, %s light, %s visibility)\n", k_scenes[k].name, method,
                    o->moving_light ? "moving" : "static", visibility);
@@ -834,10 +837,10 @@ int app_bench_frame(const pf_options *o)
         if (i) putchar(',');
         bf__json_string(o->params[i]);
     }
-    printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"tiles\":[%u,%u],\"frames\":%u,"
-           "\"aa\":%u,\"taa\":%u,\"static_ok\":%s,\"results\":[",
-           visibility, o->pipeline < 0 ? "both" : o->pipeline ? "on" : "off", o->moving_light ? "true" : "false", tn,
-           tm, frames, aa, o->taa, static_ok ? "true" : "false");
+    printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"shadow_size\":%u,\"tiles\":[%u,%u],"
+           "\"frames\":%u,\"aa\":%u,\"taa\":%u,\"static_ok\":%s,\"results\":[",
+           visibility, o->pipeline < 0 ? "both" : o->pipeline ? "on" : "off", o->moving_light ? "true" : "false",
+           shadow, tn, tm, frames, aa, o->taa, static_ok ? "true" : "false");
     for (uint32_t i = 0; i < n; i++) {
         const bf_result *r = &results[i];
         printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"pipeline\":%s,\"frame_ms\":%.3f,"

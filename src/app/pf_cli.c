@@ -95,7 +95,7 @@ static const pf__opt k_options[] = {
      "with --time: play only the animation of that name (or index, when\nit is all digits; default: every "
      "animation of the file together)",
      "sequence files play animations with their \"animation\" key (docs/formats.md)"},
-    {PF__OPT_SHADOW_SIZE, "--shadow-size", NULL, "N", FRAME, "direct-light shadow map resolution (default 1024)", NULL},
+    {PF__OPT_SHADOW_SIZE, "--shadow-size", NULL, "N", FRAME | BF, "direct-light shadow map resolution (default 1024)", NULL},
     {PF__OPT_MAX_MEMORY, "--max-memory", NULL, "SIZE", SCENE,
      "memory budget, e.g. 8G or 512M (default: half of this\nmachine's memory); larger scenes and frames are refused",
      NULL},

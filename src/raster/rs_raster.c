@@ -1,10 +1,12 @@
 /* rs_raster: the triangle rasterizer (see rs_raster.h for the pipeline,
  * the precision argument and the depth convention).
  *
- * Who calls what: rs_render (one pass over jobs) = rs__vertex_stage
- * (parallel over vertex chunks) -> rs__cull_clusters -> rs__setup_bin
- * (parallel over fixed triangle chunks) -> rs__raster_tiles (parallel over
- * 64x64 tiles). rs_render_serial runs the same steps on the caller's thread.
+ * Who calls what: rs_render (one pass over jobs) = rs__cull_clusters
+ * (parallel over clusters; a visible cluster marks the blocks of welded
+ * positions it uses) -> rs__vertex_job (parallel over vertex chunks, only
+ * the marked blocks) -> rs__setup_bin (parallel over fixed triangle chunks)
+ * -> rs__raster_tile (parallel over 64x64 tiles). rs_render_serial runs the
+ * same steps on the caller's thread.
  *
  * Fixed point and ranges. Screen positions are snapped to 1/256 pixel.
  * Vertices must lie within the guard band |x|, |y| <= 2^15 pixels of the
@@ -25,6 +27,7 @@
 #define RS_CLUSTER 256     /* triangles per culling cluster */
 #define RS_CHUNK 2048      /* triangles per setup/binning job item */
 #define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
+#define RS_VBLOCK 256      /* vertices per block the vertex stage transforms or skips */
 #define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
 
 /* ------------------------------------------------------------------ types */
@@ -84,6 +87,10 @@ struct rs_scratch {
     rs__vtx *vtx; /* vtx_cap + 1: clip position and, inside the frustum, the snapped screen position */
     uint32_t vtx_cap;
     uint8_t *cluster_visible;
+    /* per block of RS_VBLOCK welded positions: 1 when a visible cluster uses
+     * one of them (only those blocks are transformed); vblock_cap blocks */
+    uint8_t *vblock_need;
+    uint32_t vblock_cap;
     rs__chunk *chunks; /* chunk_count */
     rs__list *lists; /* per worker: a tile's triangles for the kernel, grown with the largest tile */
     uint32_t list_count;
@@ -108,6 +115,9 @@ struct rs_context {
     uint32_t *weld_seen; /* rs_context_update's scratch, per welded position (zero between calls) */
     uint32_t cluster_count, chunk_count;
     rs__cluster *clusters;
+    /* the blocks of RS_VBLOCK welded positions cluster c's triangles use:
+     * cluster_blocks[cluster_block_start[c] .. cluster_block_start[c + 1]) */
+    uint32_t *cluster_block_start, *cluster_blocks;
     rs_scratch *scratch; /* for rs_render */
     rs_resolve_tri *resolve_table; /* the G-buffer resolve's per-triangle constants */
     uint8_t *tri_masked;           /* per triangle: 1 if its material is alpha-masked (alphaMode MASK) */
@@ -216,11 +226,13 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
     s->vtx = malloc(sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
     s->vtx_cap = ctx->weld_count;
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
+    s->vblock_cap = ctx->weld_count / RS_VBLOCK + 1;
+    s->vblock_need = calloc(s->vblock_cap, 1);
     s->chunk_count = ctx->chunk_count;
     size_t chunk_bytes = sizeof(rs__chunk) * (ctx->chunk_count ? ctx->chunk_count : 1);
     s->chunks = aligned_alloc(64, (chunk_bytes + 63) / 64 * 64);
     if (s->chunks) memset(s->chunks, 0, chunk_bytes);
-    if (!s->vtx || !s->cluster_visible || !s->chunks) {
+    if (!s->vtx || !s->cluster_visible || !s->vblock_need || !s->chunks) {
         rs_scratch_destroy(s);
         return NULL;
     }
@@ -232,6 +244,7 @@ void rs_scratch_destroy(rs_scratch *s)
     if (!s) return;
     free(s->vtx);
     free(s->cluster_visible);
+    free(s->vblock_need);
     for (uint32_t w = 0; w < s->list_count; w++) free(s->lists[w].tris), free(s->lists[w].masked);
     free(s->lists);
     if (s->chunks)
@@ -302,6 +315,46 @@ static void rs__cluster_box(rs_context *ctx, uint32_t c)
     ctx->clusters[c].hi = hi;
 }
 
+/* Every cluster's list of vertex blocks (after each weld: the ids change
+ * only then), sorted. 0 when out of memory. */
+static int rs__cluster_blocks(rs_context *ctx)
+{
+    const uint32_t n = ctx->scene->tri_count, nb = ctx->weld_count / RS_VBLOCK + 1;
+    uint32_t *start = realloc(ctx->cluster_block_start, sizeof(uint32_t) * ((size_t)ctx->cluster_count + 1));
+    uint8_t *seen = calloc(nb, 1);
+    if (start) ctx->cluster_block_start = start;
+    if (!start || !seen) {
+        free(seen);
+        return 0;
+    }
+    uint32_t *list = NULL, count = 0, cap = 0;
+    start[0] = 0;
+    for (uint32_t c = 0; c < ctx->cluster_count; c++) {
+        uint32_t t1 = (c + 1) * RS_CLUSTER < n ? (c + 1) * RS_CLUSTER : n, first = count;
+        for (size_t i = (size_t)c * RS_CLUSTER * 3; i < (size_t)t1 * 3; i++) {
+            uint32_t b = ctx->weld_idx[i] / RS_VBLOCK;
+            if (seen[b]) continue;
+            seen[b] = 1;
+            if (count == cap) {
+                uint32_t nc = cap ? 2 * cap : 1024;
+                uint32_t *l = realloc(list, sizeof(uint32_t) * nc);
+                if (!l) {
+                    free(list), free(seen);
+                    return 0;
+                }
+                list = l, cap = nc;
+            }
+            list[count++] = b;
+        }
+        for (uint32_t k = first; k < count; k++) seen[list[k]] = 0;
+        start[c + 1] = count;
+    }
+    free(seen);
+    free(ctx->cluster_blocks);
+    ctx->cluster_blocks = list ? list : malloc(sizeof(uint32_t));
+    return ctx->cluster_blocks != NULL;
+}
+
 pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jobs, rs_simd simd, pf_error *err)
 {
     *out = NULL;
@@ -315,6 +368,7 @@ pf_result rs_context_create(rs_context **out, const pf_scene *scene, pf_jobs *jo
     ctx->clusters = calloc(ctx->cluster_count ? ctx->cluster_count : 1, sizeof *ctx->clusters);
     if (!ctx->clusters || !rs__weld(ctx)) goto oom;
     for (uint32_t c = 0; c < ctx->cluster_count; c++) rs__cluster_box(ctx, c);
+    if (!rs__cluster_blocks(ctx)) goto oom;
     ctx->scratch = rs_scratch_create(ctx);
     ctx->resolve_table = rs_resolve_table_create(scene);
     ctx->tri_masked = malloc(scene->tri_count ? scene->tri_count : 1);
@@ -333,6 +387,8 @@ void rs_context_destroy(rs_context *ctx)
     if (!ctx) return;
     rs_scratch_destroy(ctx->scratch);
     free(ctx->clusters);
+    free(ctx->cluster_block_start);
+    free(ctx->cluster_blocks);
     free(ctx->weld_pos);
     free(ctx->weld_idx);
     free(ctx->weld_of);
@@ -376,10 +432,18 @@ pf_result rs_context_update(rs_context *ctx, const pf_anim_moved *moved, uint32_
     if (reweld) {
         uint32_t before = ctx->weld_count;
         if (!rs__weld(ctx)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory welding moved vertices");
+        if (!rs__cluster_blocks(ctx)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory welding moved vertices");
         if (ctx->weld_count > before) { /* a vertex split off: the scratch's vertex records grow */
             rs__vtx *v = realloc(ctx->scratch->vtx, sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
             if (!v) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's vertices");
             ctx->scratch->vtx = v;
+            uint32_t blocks = ctx->weld_count / RS_VBLOCK + 1;
+            if (blocks > ctx->scratch->vblock_cap) {
+                uint8_t *b = realloc(ctx->scratch->vblock_need, blocks);
+                if (!b) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's vertices");
+                ctx->scratch->vblock_need = b;
+                ctx->scratch->vblock_cap = blocks;
+            }
         }
         ctx->scratch->vtx_cap = ctx->weld_count;
     }
@@ -472,13 +536,33 @@ static void rs__transform(const rs__pass_state *st, const pf_vec3 *pos, rs__vtx 
     }
 }
 
+/* rs__transform of the positions in [v0, v1) that lie in blocks a visible
+ * cluster uses (marked by the cluster stage; the setup reads no other
+ * vertex record), runs of needed blocks at a time. */
+static void rs__transform_needed(const rs__pass_state *st, uint32_t v0, uint32_t v1)
+{
+    const uint8_t *need = st->s->vblock_need;
+    for (uint32_t v = v0; v < v1;) {
+        uint32_t b = v / RS_VBLOCK;
+        if (!__atomic_load_n(&need[b], __ATOMIC_RELAXED)) {
+            v = (b + 1) * RS_VBLOCK;
+            continue;
+        }
+        uint32_t e = v;
+        while (e < v1 && __atomic_load_n(&need[e / RS_VBLOCK], __ATOMIC_RELAXED)) e = (e / RS_VBLOCK + 1) * RS_VBLOCK;
+        e = e < v1 ? e : v1;
+        rs__transform(st, st->ctx->weld_pos, st->s->vtx, v, e);
+        v = e;
+    }
+}
+
 static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
 {
     (void)worker;
     rs__pass_state *st = p;
     uint32_t n = st->ctx->weld_count;
     uint32_t v0 = item * RS_VCHUNK, v1 = v0 + RS_VCHUNK < n ? v0 + RS_VCHUNK : n;
-    rs__transform(st, st->ctx->weld_pos, st->s->vtx, v0, v1);
+    rs__transform_needed(st, v0, v1);
 }
 
 /* ------------------------------------------------------- 2. cluster culling */
@@ -500,6 +584,13 @@ static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
             all &= out;
         }
         st->s->cluster_visible[c] = all == 0;
+        if (all) continue;
+        /* its positions' blocks are needed (relaxed atomics: clusters on
+         * other threads may mark the same block; the set marked is fixed) */
+        for (uint32_t k = ctx->cluster_block_start[c]; k < ctx->cluster_block_start[c + 1]; k++) {
+            uint8_t *b = &st->s->vblock_need[ctx->cluster_blocks[k]];
+            if (!__atomic_load_n(b, __ATOMIC_RELAXED)) __atomic_store_n(b, 1, __ATOMIC_RELAXED);
+        }
     }
 }
 
@@ -1098,10 +1189,11 @@ static void rs__render(rs_context *ctx, rs__pass_state *st, rs_stats *stats)
         return;
     }
     uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
-    pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, st, nv, 1, NULL, 0);
+    /* clusters first: they say which vertex blocks the setup will read */
+    memset(ctx->scratch->vblock_need, 0, ctx->weld_count / RS_VBLOCK + 1);
     pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
-    pf_job_id deps[2] = {vj, cj};
-    pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, st, ctx->chunk_count, 1, deps, 2);
+    pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, st, nv, 1, &cj, 1);
+    pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, st, ctx->chunk_count, 1, &vj, 1);
     pf_job_id tj = pf_jobs_add(jobs, rs__tile_job, st, tiles, 1, &sj, 1);
     pf_jobs_wait(jobs, tj);
     rs__finish_status(st);
@@ -1138,8 +1230,13 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
         s->failed_pass++;
         return;
     }
-    rs__transform(&st, ctx->weld_pos, s->vtx, 0, ctx->weld_count);
+    if (s->vblock_cap < ctx->weld_count / RS_VBLOCK + 1) {
+        s->failed_pass++;
+        return;
+    }
+    memset(s->vblock_need, 0, ctx->weld_count / RS_VBLOCK + 1);
     rs__cull_clusters(&st, 0, ctx->cluster_count);
+    rs__transform_needed(&st, 0, ctx->weld_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
     uint32_t tiles = st.tiles_x * st.tiles_y;
     for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, rs__pass_tile(&st, k), &s->lists[0]);

@@ -28,6 +28,8 @@
 #define RS_CHUNK 2048      /* triangles per setup/binning job item */
 #define RS_VCHUNK 8192     /* vertices per vertex-stage job item */
 #define RS_VBLOCK 256      /* vertices per block the vertex stage transforms or skips */
+/* The flags a scratch keeps for n welded positions: one per block (and one spare). */
+#define RS_VBLOCKS(n) ((n) / RS_VBLOCK + 1)
 #define RS_GUARD 32768.0f  /* guard band, pixels from the image centre */
 
 /* ------------------------------------------------------------------ types */
@@ -226,7 +228,7 @@ rs_scratch *rs_scratch_create(const rs_context *ctx)
     s->vtx = malloc(sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
     s->vtx_cap = ctx->weld_count;
     s->cluster_visible = calloc(ctx->cluster_count ? ctx->cluster_count : 1, 1);
-    s->vblock_cap = ctx->weld_count / RS_VBLOCK + 1;
+    s->vblock_cap = RS_VBLOCKS(ctx->weld_count);
     s->vblock_need = calloc(s->vblock_cap, 1);
     s->chunk_count = ctx->chunk_count;
     size_t chunk_bytes = sizeof(rs__chunk) * (ctx->chunk_count ? ctx->chunk_count : 1);
@@ -315,11 +317,12 @@ static void rs__cluster_box(rs_context *ctx, uint32_t c)
     ctx->clusters[c].hi = hi;
 }
 
-/* Every cluster's list of vertex blocks (after each weld: the ids change
- * only then), sorted. 0 when out of memory. */
+/* Every cluster's list of vertex blocks, each once, in the order its
+ * triangles first use them (made after each weld: the ids change only
+ * then). 0 when out of memory. */
 static int rs__cluster_blocks(rs_context *ctx)
 {
-    const uint32_t n = ctx->scene->tri_count, nb = ctx->weld_count / RS_VBLOCK + 1;
+    const uint32_t n = ctx->scene->tri_count, nb = RS_VBLOCKS(ctx->weld_count);
     uint32_t *start = realloc(ctx->cluster_block_start, sizeof(uint32_t) * ((size_t)ctx->cluster_count + 1));
     uint8_t *seen = calloc(nb, 1);
     if (start) ctx->cluster_block_start = start;
@@ -432,12 +435,13 @@ pf_result rs_context_update(rs_context *ctx, const pf_anim_moved *moved, uint32_
     if (reweld) {
         uint32_t before = ctx->weld_count;
         if (!rs__weld(ctx)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory welding moved vertices");
-        if (!rs__cluster_blocks(ctx)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory welding moved vertices");
+        if (!rs__cluster_blocks(ctx))
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's cluster lists");
         if (ctx->weld_count > before) { /* a vertex split off: the scratch's vertex records grow */
             rs__vtx *v = realloc(ctx->scratch->vtx, sizeof(rs__vtx) * ((size_t)ctx->weld_count + 1));
             if (!v) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's vertices");
             ctx->scratch->vtx = v;
-            uint32_t blocks = ctx->weld_count / RS_VBLOCK + 1;
+            uint32_t blocks = RS_VBLOCKS(ctx->weld_count);
             if (blocks > ctx->scratch->vblock_cap) {
                 uint8_t *b = realloc(ctx->scratch->vblock_need, blocks);
                 if (!b) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the rasterizer's vertices");
@@ -1190,7 +1194,7 @@ static void rs__render(rs_context *ctx, rs__pass_state *st, rs_stats *stats)
     }
     uint32_t nv = (ctx->weld_count + RS_VCHUNK - 1) / RS_VCHUNK;
     /* clusters first: they say which vertex blocks the setup will read */
-    memset(ctx->scratch->vblock_need, 0, ctx->weld_count / RS_VBLOCK + 1);
+    memset(ctx->scratch->vblock_need, 0, RS_VBLOCKS(ctx->weld_count));
     pf_job_id cj = pf_jobs_add(jobs, rs__cull_job, st, (ctx->cluster_count + 63) / 64, 1, NULL, 0);
     pf_job_id vj = pf_jobs_add(jobs, rs__vertex_job, st, nv, 1, &cj, 1);
     pf_job_id sj = pf_jobs_add(jobs, rs__setup_job, st, ctx->chunk_count, 1, &vj, 1);
@@ -1230,11 +1234,11 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
         s->failed_pass++;
         return;
     }
-    if (s->vblock_cap < ctx->weld_count / RS_VBLOCK + 1) {
+    if (s->vblock_cap < RS_VBLOCKS(ctx->weld_count)) {
         s->failed_pass++;
         return;
     }
-    memset(s->vblock_need, 0, ctx->weld_count / RS_VBLOCK + 1);
+    memset(s->vblock_need, 0, RS_VBLOCKS(ctx->weld_count));
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     rs__transform_needed(&st, 0, ctx->weld_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);

@@ -161,7 +161,7 @@ static void test_bad_desc(void **state)
         {{.clamp = -2.0f}, SOFTGI_ERR_ARGUMENT, "clamp -2"},
         {{.clamp = INFINITY}, SOFTGI_ERR_ARGUMENT, "clamp inf"},
         {{.clamp = NAN}, SOFTGI_ERR_ARGUMENT, "clamp nan"},
-        {{.filter = "median"}, SOFTGI_ERR_ARGUMENT, "filter 'median': expected box, bilateral, gaussian or none"},
+        {{.filter = "median"}, SOFTGI_ERR_ARGUMENT, "filter 'median': expected box, bilateral, gaussian, atrous or none"},
         {{.visibility = "cones"}, SOFTGI_ERR_ARGUMENT, "visibility 'cones': expected paraboloid, ism or raytrace"},
         {{.visibility = "ism", .ism_res = 48}, SOFTGI_ERR_ARGUMENT, "ism_res 48: must be a power of two in 8..512"},
         {{.visibility = "ism", .ism_res = 1024}, SOFTGI_ERR_ARGUMENT, "ism_res 1024"},

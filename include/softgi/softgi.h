@@ -130,7 +130,7 @@ typedef struct softgi_desc {
     uint32_t tiles_n, tiles_m; /* interleaved tiles, 1..16 each, both or neither; 0: 4 x 4 (--tiles NxM) */
     float clamp;            /* bounded geometry term b = clamp / diagonal^2, > 0; 0: 400; SOFTGI_CLAMP_OFF:
                                none (--clamp C, --clamp 0) */
-    const char *filter;     /* "box", "bilateral", "gaussian", "none"; NULL: "box" (--filter) */
+    const char *filter;     /* "box", "bilateral", "gaussian", "atrous", "none"; NULL: "box" (--filter) */
     const char *visibility; /* the VPLs' shadows: "paraboloid", "ism", "raytrace"; NULL: "paraboloid"
                                (--visibility) */
     uint32_t ism_res;       /* visibility "ism" only: texels per side, a power of two 8..512; 0: 64 (--ism-res) */

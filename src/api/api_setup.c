@@ -235,6 +235,7 @@ pf_result api_indirect_options(const softgi_desc *d, gi_indirect_options *io, pf
     io->filter = !d->filter || !strcmp(d->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(d->filter, "bilateral")       ? GI_FILTER_BILATERAL
                  : !strcmp(d->filter, "gaussian")        ? GI_FILTER_GAUSSIAN
+                 : !strcmp(d->filter, "atrous")          ? GI_FILTER_ATROUS
                                                          : GI_FILTER_NONE;
     return PF_OK;
 }

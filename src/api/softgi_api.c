@@ -228,7 +228,7 @@ static softgi_result api__check_frame_fields(const softgi_desc *d, softgi_error 
     return SOFTGI_OK;
 }
 
-static const char *const api__filters[] = {"box", "bilateral", "gaussian", "none", NULL};
+static const char *const api__filters[] = {"box", "bilateral", "gaussian", "atrous", "none", NULL};
 static const char *const api__visibilities[] = {"paraboloid", "ism", "raytrace", NULL};
 
 /* The method's own checks of its parameters (its create), now rather
@@ -290,8 +290,8 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
     if (api__check_frame_fields(d, err) != SOFTGI_OK) return NULL;
     const char *filter = d->filter ? api__choice(d->filter, api__filters) : NULL;
     if (d->filter && !filter) {
-        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: filter '%.100s': expected box, bilateral, gaussian or "
-                   "none", d->filter);
+        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: filter '%.100s': expected box, bilateral, gaussian, "
+                   "atrous or none", d->filter);
         return NULL;
     }
     const char *visibility = d->visibility ? api__choice(d->visibility, api__visibilities) : NULL;

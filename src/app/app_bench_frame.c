@@ -705,7 +705,6 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
                       : o->no_interleave       ? "--no-interleave"
                       : o->bounces             ? "--bounces"
                       : o->clamp_set           ? "--clamp"
-                      : o->filter              ? "--filter"
                       : o->area_strata         ? "--area-strata"
                       : o->area_points         ? "--area-points"
                       : o->has_camera          ? "--camera"
@@ -720,7 +719,8 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
     if (bad)
         return pf_error_set(err, PF_ERR_ARGUMENT,
                             "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
-                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --shadow-size, --aa, --taa)",
+                            "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --shadow-size, --filter, "
+                            "--aa, --taa)",
                             bad);
     /* the method and its parameters now, before minutes of scene loading */
     gi_indirect_options io;
@@ -757,12 +757,14 @@ int app_bench_frame(const pf_options *o)
     uint32_t nmodes = o->pipeline >= 0 ? 1 : 2;
     uint32_t tn = o->tiles_n ? o->tiles_n : 4, tm = o->tiles_m ? o->tiles_m : 4;
     const uint32_t shadow = o->shadow_size ? o->shadow_size : RS_SHADOW_DEFAULT_SIZE;
+    const char *filter = o->filter ? o->filter : "box";
+    const int default_filter = !strcmp(filter, "box");
     uint32_t per_scene = nvpls * nthreads * nmodes;
     bf_result results[BF_SCENES * BF_MAX_CONFIGS];
-    printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, indirect "
-           "light at 1/%u resolution%s,\n%s point light (shadow map %u^2 per face%s), pipelining %s, 1 warm-up "
+    printf("softgi bench frame: %dx%d, isa %s, raster path %s, method %s, visibility %s, %ux%u tiles, %s filter, "
+           "indirect light at 1/%u resolution%s,\n%s point light (shadow map %u^2 per face%s), pipelining %s, 1 warm-up "
            "frame then median of %u\n",
-           BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm,
+           BF_W, BF_H, pf_isa_name(isa), rs_simd_name(rs_simd_for_isa(isa)), method, visibility, tn, tm, filter,
            gi_indirect_scale_for(o->indirect_scale, BF_W, BF_H),
            o->indirect_scale == GI_INDIRECT_SCALE_AUTO ? " (--indirect-scale auto)" : "",
            o->moving_light ? "moving" : "static", shadow, shadow == RS_SHADOW_DEFAULT_SIZE ? "" : ", --shadow-size",
@@ -823,7 +825,9 @@ int app_bench_frame(const pf_options *o)
             printf("  %-11s %.2f frames/s (%.2f ms, %u VPLs, pipeline %s) against %.0f: %s%s\n", k_scenes[k].name,
                    t->fps, t->frame_ms, t->vpl_budget, t->pipeline ? "on" : "off", want,
                    t->fps >= want ? "met" : "NOT met",
-                   shadow == RS_SHADOW_DEFAULT_SIZE ? "" : " (not the default frame: --shadow-size)");
+                   shadow != RS_SHADOW_DEFAULT_SIZE ? " (not the default frame: --shadow-size)"
+                   : !default_filter                ? " (not the default frame: --filter)"
+                                                    : "");
         } else
             printf("  %-11s no target for this case (%s, %s light, %s visibility)\n", k_scenes[k].name, method,
                    o->moving_light ? "moving" : "static", visibility);
@@ -837,10 +841,10 @@ int app_bench_frame(const pf_options *o)
         if (i) putchar(',');
         bf__json_string(o->params[i]);
     }
-    printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"shadow_size\":%u,\"tiles\":[%u,%u],"
-           "\"frames\":%u,\"aa\":%u,\"taa\":%u,\"static_ok\":%s,\"results\":[",
+    printf("],\"visibility\":\"%s\",\"pipeline\":\"%s\",\"moving_light\":%s,\"shadow_size\":%u,\"filter\":\"%s\","
+           "\"tiles\":[%u,%u],\"frames\":%u,\"aa\":%u,\"taa\":%u,\"static_ok\":%s,\"results\":[",
            visibility, o->pipeline < 0 ? "both" : o->pipeline ? "on" : "off", o->moving_light ? "true" : "false",
-           shadow, tn, tm, frames, aa, o->taa, static_ok ? "true" : "false");
+           shadow, filter, tn, tm, frames, aa, o->taa, static_ok ? "true" : "false");
     for (uint32_t i = 0; i < n; i++) {
         const bf_result *r = &results[i];
         printf("%s{\"scene\":\"%s\",\"vpls\":%u,\"vpl_count\":%u,\"threads\":%u,\"pipeline\":%s,\"frame_ms\":%.3f,"

@@ -74,8 +74,11 @@
 #define QU_MAX_ARGS 64
 #define QU_MAX_METHODS 64
 
-typedef enum qu__setting { QU_PAPER, QU_SOFTGI, QU_TEMPORAL, QU_SETTINGS } qu__setting;
-static const char *const k_setting_names[QU_SETTINGS] = {"paper", "softgi", "temporal"};
+/* paper: the papers' defaults; softgi: + --compensate on; temporal: softgi +
+ * --temporal 16; atrous: softgi + --filter atrous; atrous+temporal: both */
+typedef enum qu__setting { QU_PAPER, QU_SOFTGI, QU_TEMPORAL, QU_ATROUS, QU_ATROUS_TEMPORAL, QU_SETTINGS } qu__setting;
+static const char *const k_setting_names[QU_SETTINGS] = {"paper", "softgi", "temporal", "atrous", "atrous+temporal"};
+static int qu__temporal(int k) { return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL; }
 
 /* The scenes the table knows. */
 typedef struct qu__scene {
@@ -234,9 +237,13 @@ static pf_result qu__options(qu__run *run, const qu__config *c, pf_options *o, p
             qu__push(&v, "--compensate");
             qu__push(&v, "on");
         }
-        if (c->setting == QU_TEMPORAL) {
+        if (qu__temporal(c->setting)) {
             qu__push(&v, "--temporal");
             qu__push(&v, "16");
+        }
+        if (c->setting == QU_ATROUS || c->setting == QU_ATROUS_TEMPORAL) {
+            qu__push(&v, "--filter");
+            qu__push(&v, "atrous");
         }
     }
     if (v.argc >= QU_MAX_ARGS) return pf_error_set(err, PF_ERR_ARGUMENT, "evaluate --quality: too many parameters");
@@ -533,9 +540,9 @@ static int qu__scene_rows(qu__run *run, const qu__scene *s, const char *path, FI
             c.setting = (qu__setting)k;
             qu__result res = {0};
             /* paper and softgi: the first frame's image, and a second frame of the view for the steady
-             * state's time; temporal: frame 15 of 16 */
-            uint32_t frames = k == QU_TEMPORAL ? QU_TEMPORAL_FRAMES : 2;
-            r = qu__render(run, &c, &su, raster, w, h, frames, k == QU_TEMPORAL ? frames - 1 : 0, &res, &err);
+             * state's time; temporal (and atrous+temporal): frame 15 of 16 */
+            uint32_t frames = qu__temporal(k) ? QU_TEMPORAL_FRAMES : 2;
+            r = qu__render(run, &c, &su, raster, w, h, frames, qu__temporal(k) ? frames - 1 : 0, &res, &err);
             if (r != PF_OK) {
                 status = app_fail(&err);
                 break;
@@ -623,7 +630,7 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
         else snprintf(size, sizeof size, "%ux%u", scenes[s]->width, scenes[s]->height);
         for (uint32_t m = 0; m < method_count; m++) {
             qu__config c = {.scene = scenes[s], .path = paths[s][0] ? paths[s] : NULL, .size = size,
-                            .method = methods[m], .vpls = a->vpls ? a->vpls : "256", .setting = QU_TEMPORAL};
+                            .method = methods[m], .vpls = a->vpls ? a->vpls : "256", .setting = QU_ATROUS_TEMPORAL};
             pf_options o;
             pf_error err;
             pf_result r = qu__options(run, &c, &o, &err);
@@ -718,7 +725,9 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
                 a->vpls ? a->vpls : "256", spp, proxy_vpls);
         fprintf(d, "Settings: **paper**: each method's paper defaults (4x4 interleaved tiles, box filter, clamp 400, "
                    "paraboloid maps); **softgi**: the same with `--compensate on`; **temporal**: softgi's with "
-                   "`--temporal 16`, frame 15 of 16 identical frames ([frame.md](../frame.md)).\n\n");
+                   "`--temporal 16`, frame 15 of 16 identical frames; **atrous**: softgi's with `--filter atrous` "
+                   "(Laine's box, then variance-guided a-trous levels); **atrous+temporal**: both "
+                   "([frame.md](../frame.md)).\n\n");
         fprintf(d, "Columns: MRE = mean relative error per pixel of luminance (`gi_metrics_mean_relative_error`, "
                    "pixels whose ground-truth luminance exceeds 1e-4), against the reference and the proxy; energy = "
                    "sum of luminance over the ground truth's; ms = wall time of the first frame (every VPL's map "

@@ -408,8 +408,9 @@ static void view_cycle_tiles(view_app *a)
 
 static void view_cycle_filter(view_app *a)
 {
-    a->want.filter = a->want.filter == GI_FILTER_BOX ? GI_FILTER_BILATERAL
+    a->want.filter = a->want.filter == GI_FILTER_BOX         ? GI_FILTER_BILATERAL
                      : a->want.filter == GI_FILTER_BILATERAL ? GI_FILTER_NONE
+                     : a->want.filter == GI_FILTER_NONE      ? GI_FILTER_ATROUS
                                                              : GI_FILTER_BOX;
     a->indirect_dirty = 1;
 }
@@ -654,7 +655,7 @@ static const char *const view_help[][2] = {
     {"M / shift+M", "next / previous VPL method"},
     {"[ / ]", "half / double the VPLs"},
     {"I", "interleave 4x4, 8x8, off, 2x2"},
-    {"F", "filter box, bilateral, none"},
+    {"F", "filter box, bilateral, none, atrous"},
     {"O", "visibility paraboloid, ism, raytrace"},
     {"C", "clamp 400, 1600, 6400, off, 25, 100"},
     {"J", "clamp compensation on / off"},
@@ -992,8 +993,11 @@ static int view_compact(const view_app *a) { return a->disp_w < 560 || a->disp_h
 
 static const char *view_filter_name(gi_filter_kind k)
 {
-    return k == GI_FILTER_BOX ? "box" : k == GI_FILTER_BILATERAL ? "bilateral" : k == GI_FILTER_NONE ? "none"
-                                                                                                    : "gaussian";
+    return k == GI_FILTER_BOX         ? "box"
+           : k == GI_FILTER_BILATERAL ? "bilateral"
+           : k == GI_FILTER_NONE      ? "none"
+           : k == GI_FILTER_ATROUS    ? "atrous"
+                                      : "gaussian";
 }
 
 /* The first lines: frame time, state, method and settings. */

@@ -121,8 +121,9 @@ static const pf__opt k_options[] = {
      "clamped path tracing (Hedman 2017 Fig. 8): the first bounce's geometry\nterm bounded as the frame's --clamp C "
      "bounds it (default 0 = off)",
      NULL},
-    {PF__OPT_FILTER, "--filter", NULL, "box|bilateral|gaussian|none", FRAME,
-     "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian)",
+    {PF__OPT_FILTER, "--filter", NULL, "box|bilateral|gaussian|atrous|none", FRAME | BF,
+     "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian;\n"
+     "atrous: the box, then variance-guided a-trous levels,\nDammertz 2010 and SVGF 2017; docs/frame.md)",
      NULL},
     {PF__OPT_VISIBILITY, "--visibility", NULL, "paraboloid|ism|raytrace", FRAME | BF,
      "VPL visibility (default: exact paraboloid maps)", NULL},
@@ -637,8 +638,9 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         break;
     case PF__OPT_FILTER:
         o->filter = val;
-        if (pf__choice(val, "box|bilateral|gaussian|none") < 0)
-            r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian or none", val);
+        if (pf__choice(val, "box|bilateral|gaussian|atrous|none") < 0)
+            r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian, atrous or none",
+                             val);
         break;
     case PF__OPT_VISIBILITY:
         k = pf__choice(val, "paraboloid|ism|raytrace");

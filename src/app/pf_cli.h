@@ -80,7 +80,7 @@ typedef struct pf_options {
     uint32_t ism_points;     /* --ism-points N: ISM points per frame (0: default) */
     float ism_bias;          /* --ism-bias S: ISM bias scale (0: default) */
     uint32_t bounces;        /* light bounces (0: 3) */
-    const char *filter;      /* "box" (default), "bilateral", "gaussian", "none" */
+    const char *filter;      /* "box" (default), "bilateral", "gaussian", "atrous", "none" */
     const char *dump_dir;    /* --dump-stages DIR */
     uint32_t dump_format;    /* --dump-format: PF_CLI_DUMP_* bits; 0: not given (png) */
     const char *screenshot_path; /* view: --screenshot FILE (saved after --frames N) */

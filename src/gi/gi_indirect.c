@@ -86,6 +86,13 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         if (!(ind->comp = pf_arena_calloc(mem, 3 * px, sizeof(float))))
             return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the clamp compensation");
     }
+    if (o.filter == GI_FILTER_ATROUS) {
+        if (o.atrous.levels > GI_ATROUS_MAX_LEVELS)
+            return pf_error_set(err, PF_ERR_ARGUMENT, "a-trous filter with %u levels: expected 0..%u",
+                                o.atrous.levels, GI_ATROUS_MAX_LEVELS);
+        if (!(ind->atrous_scratch = pf_arena_calloc(mem, gi_atrous_scratch_floats(ind->w, ind->h), sizeof(float))))
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the a-trous filter");
+    }
     if (o.temporal) {
         size_t fpx = (size_t)f->width * f->height;
         for (int b = 0; b < 2; b++) {
@@ -988,6 +995,14 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
 void gi_stage_filter(gi_frame *f)
 {
     const gi_indirect *ind = &f->ind;
+    if (ind->opt.filter == GI_FILTER_ATROUS) {
+        gi_atrous_io a = {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m,
+                          ind->alpha * ind->alpha, ind->opt.beta, ind->opt.atrous, ind->atrous_scratch,
+                          gi__kernels(f), ind->scale > 1 ? ind->filtered_low : ind->filtered};
+        if (!(a.par.sigma_p > 0.0f)) a.par.sigma_p = 0.25f * ind->alpha;
+        gi_atrous_run(f->jobs, &a);
+        return;
+    }
     const gi__filter_io io = {
         {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta},
         ind->opt.filter,

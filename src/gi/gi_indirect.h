@@ -66,9 +66,18 @@
 #include "gi_vpl.h"
 #include "gi_ism.h"
 #include "rs_paraboloid.h"
+#include "gi_atrous.h"
 
-/* GI_FILTER_GAUSSIAN: Aranha's "edge-aware gaussian blur" (SSVP Sec. III-D). */
-typedef enum gi_filter_kind { GI_FILTER_BOX = 0, GI_FILTER_BILATERAL, GI_FILTER_NONE, GI_FILTER_GAUSSIAN } gi_filter_kind;
+/* GI_FILTER_GAUSSIAN: Aranha's "edge-aware gaussian blur" (SSVP Sec. III-D).
+ * GI_FILTER_ATROUS: Laine's box, then variance-guided edge-avoiding a-trous
+ * levels (Dammertz 2010, SVGF 2017; gi_atrous.h). */
+typedef enum gi_filter_kind {
+    GI_FILTER_BOX = 0,
+    GI_FILTER_BILATERAL,
+    GI_FILTER_NONE,
+    GI_FILTER_GAUSSIAN,
+    GI_FILTER_ATROUS
+} gi_filter_kind;
 
 typedef struct gi_indirect_options {
     const gi_vpl_method *method; /* NULL: Instant Radiosity */
@@ -83,6 +92,7 @@ typedef struct gi_indirect_options {
     gi_filter_kind filter;
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
     float beta;                  /* filter normal threshold (0: 0.8, Laine 2007) */
+    gi_atrous_params atrous;     /* GI_FILTER_ATROUS: levels, sigma_l; sigma_p 0: alpha / 4 */
     uint32_t para_res;           /* paraboloid map resolution (0: 128); with ISMs: the ISM resolution */
     gi_ism_options ism;          /* --visibility ism: resolution, points, bias (zero: gi_ism.h defaults) */
     int pipeline;                /* 1: VPL update of the next frame overlaps this frame (see above) */
@@ -168,6 +178,7 @@ typedef struct gi_indirect {
     pf_camera hist_camera;
     int hist_cur;             /* which of [2] holds last frame's */
     float *comp;              /* opt.compensate: the residual irradiance, w x h RGB */
+    float *atrous_scratch;    /* GI_FILTER_ATROUS: gi_atrous_scratch_floats(w, h) */
     /* interleaving */
     uint32_t n, m;
     uint32_t *tile_x0;        /* per tile: offset of the tile in split layout */

@@ -17,11 +17,16 @@
  * lane, as the scalar loop skips them.
  *
  * Upsampling (--indirect-scale): the joint upsampling's four samples
- * lane-wise (gi__upsample below). */
+ * lane-wise (gi__upsample below).
+ *
+ * A-trous (--filter atrous): gi_atrous.c's box pass and level, lane-wise
+ * with its operations in its order (gi_atrous_math.h's polynomial exp and
+ * squarings); a tap the reference skips (no surface) adds +0 here. */
 #include "gi_indirect_kernels.h"
 
 #include <string.h>
 
+#include "gi_atrous_math.h"
 #include "rs_para_lookup.h"
 #include "simd.h"
 
@@ -187,4 +192,127 @@ static uint32_t gi__upsample(const gi_upsample_in *in, uint32_t x, uint32_t y, f
     return simd_mask_bits(simd_mask_andnot(covered, has));
 }
 
-const gi_indirect_kernels GI_INDIRECT_KERNELS = {SIMD_NAME, SIMD_W, gi__accumulate, gi__filter_box, gi__upsample};
+
+/* ------------------------------------------------ a-trous (gi_atrous.c) */
+
+static void gi__atrous_box(const gi_filter_in *in, int x, int y, const gi_atrous_planes *o)
+{
+    const rs_gbuffer *g = in->g;
+    const int H = (int)in->h, n = (int)in->n, m = (int)in->m;
+    const size_t i0 = (size_t)y * in->w + (size_t)x;
+    const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);
+    const simd_f a2 = simd_set1_f(in->alpha2), beta = simd_set1_f(in->beta);
+    const simd_f lr = simd_set1_f(GI_ATROUS_LR), lg = simd_set1_f(GI_ATROUS_LG), lb = simd_set1_f(GI_ATROUS_LB);
+    const simd_f px = simd_loadu_f(g->pos_x + i0), py = simd_loadu_f(g->pos_y + i0), pz = simd_loadu_f(g->pos_z + i0);
+    const simd_f nx = simd_loadu_f(g->nrm_x + i0), ny = simd_loadu_f(g->nrm_y + i0), nz = simd_loadu_f(g->nrm_z + i0);
+    const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
+    simd_f ar = zero, ag = zero, ab = zero, l1 = zero, l2 = zero, ws = zero;
+    for (int dy = 0; dy < m; dy++) {
+        int ty = y + dy - m / 2;
+        if (ty < 0 || ty >= H) continue;
+        for (int dx = 0; dx < n; dx++) {
+            size_t j = (size_t)ty * in->w + (size_t)(x + dx - n / 2);
+            simd_mask valid = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + j)), empty));
+            simd_f ddx = simd_sub_f(simd_loadu_f(g->pos_x + j), px);
+            simd_f ddy = simd_sub_f(simd_loadu_f(g->pos_y + j), py);
+            simd_f ddz = simd_sub_f(simd_loadu_f(g->pos_z + j), pz);
+            simd_f d2 = gi__dot3(ddx, ddy, ddz, ddx, ddy, ddz);
+            simd_f nd = gi__dot3(nx, ny, nz, simd_loadu_f(g->nrm_x + j), simd_loadu_f(g->nrm_y + j),
+                                 simd_loadu_f(g->nrm_z + j));
+            simd_mask take = simd_mask_and(valid, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
+            simd_f er, eg, eb;
+            simd_load3_f(in->combined + 3 * j, &er, &eg, &eb);
+            simd_f l = gi__dot3(lr, lg, lb, er, eg, eb);
+            ar = simd_add_f(ar, simd_select_f(take, er, zero));
+            ag = simd_add_f(ag, simd_select_f(take, eg, zero));
+            ab = simd_add_f(ab, simd_select_f(take, eb, zero));
+            l1 = simd_add_f(l1, simd_select_f(take, l, zero));
+            l2 = simd_add_f(l2, simd_select_f(take, simd_mul_f(l, l), zero));
+            ws = simd_add_f(ws, simd_select_f(take, one, zero));
+        }
+    }
+    float r[SIMD_W], gg[SIMD_W], bb[SIMD_W], s1[SIMD_W], s2[SIMD_W], w[SIMD_W];
+    simd_storeu_f(r, ar), simd_storeu_f(gg, ag), simd_storeu_f(bb, ab);
+    simd_storeu_f(s1, l1), simd_storeu_f(s2, l2), simd_storeu_f(w, ws);
+    for (int k = 0; k < SIMD_W; k++) { /* gi__atrous_box_pixel's ending */
+        size_t i = i0 + (size_t)k;
+        const float *c = in->combined + 3 * i;
+        float R = c[0], G = c[1], B = c[2], var = 0.0f;
+        if (g->prim[i] != RS_GBUFFER_EMPTY && w[k] > 0.0f) {
+            float cnt = w[k];
+            R = r[k] / cnt, G = gg[k] / cnt, B = bb[k] / cnt;
+            float mean = s1[k] / cnt, v = s2[k] / cnt - mean * mean;
+            var = cnt > 1.0f && v > 0.0f ? v / (cnt - 1.0f) : 0.0f;
+        }
+        o->r[i] = R, o->g[i] = G, o->b[i] = B, o->lum[i] = gi_atrous_lum(R, G, B), o->var[i] = var;
+    }
+}
+
+/* gi_atrous_expneg lane-wise */
+static simd_f gi__expneg(simd_f t)
+{
+    simd_f y = simd_min_f(simd_mul_f(t, simd_set1_f(GI_ATROUS_LOG2E)), simd_set1_f(125.0f));
+    simd_f n = simd_floor_f(y), f = simd_sub_f(y, n);
+    simd_f p = simd_add_f(simd_mul_f(simd_set1_f(GI_ATROUS_C5), f), simd_set1_f(GI_ATROUS_C4));
+    p = simd_add_f(simd_mul_f(p, f), simd_set1_f(GI_ATROUS_C3));
+    p = simd_add_f(simd_mul_f(p, f), simd_set1_f(GI_ATROUS_C2));
+    p = simd_add_f(simd_mul_f(p, f), simd_set1_f(GI_ATROUS_C1));
+    p = simd_add_f(simd_mul_f(p, f), simd_set1_f(1.0f));
+    simd_i bits = simd_slli_i(simd_sub_i(simd_set1_i(127), simd_f2i_trunc(n)), 23);
+    return simd_mul_f(p, simd_asfloat_i(bits));
+}
+
+static void gi__atrous_level(const gi_atrous_in *lv, int x, int y)
+{
+    const rs_gbuffer *g = lv->g;
+    const int H = (int)lv->h, s = lv->step;
+    const size_t i0 = (size_t)y * lv->w + (size_t)x;
+    const gi_atrous_planes *src = &lv->src, *dst = &lv->dst;
+    const simd_f zero = simd_zero_f();
+    const simd_f px = simd_loadu_f(g->pos_x + i0), py = simd_loadu_f(g->pos_y + i0), pz = simd_loadu_f(g->pos_z + i0);
+    const simd_f nx = simd_loadu_f(g->nrm_x + i0), ny = simd_loadu_f(g->nrm_y + i0), nz = simd_loadu_f(g->nrm_z + i0);
+    const simd_f li = simd_loadu_f(src->lum + i0), isp = simd_set1_f(lv->inv_sigma_p);
+    const simd_f inv_sd = simd_loadu_f(lv->inv_sd + i0);
+    const simd_i empty = simd_set1_i((int32_t)RS_GBUFFER_EMPTY);
+    simd_f ar = zero, ag = zero, ab = zero, ws = zero, vs = zero;
+    for (int a = 0; a < 3; a++) {
+        int ty = y + (a - 1) * s;
+        if (ty < 0 || ty >= H) continue;
+        for (int b = 0; b < 3; b++) {
+            size_t j = (size_t)ty * lv->w + (size_t)(x + (b - 1) * s);
+            simd_mask valid = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + j)), empty));
+            simd_f dp = gi__dot3(nx, ny, nz, simd_sub_f(simd_loadu_f(g->pos_x + j), px),
+                                 simd_sub_f(simd_loadu_f(g->pos_y + j), py), simd_sub_f(simd_loadu_f(g->pos_z + j), pz));
+            simd_f c = gi__dot3(nx, ny, nz, simd_loadu_f(g->nrm_x + j), simd_loadu_f(g->nrm_y + j),
+                                simd_loadu_f(g->nrm_z + j));
+            simd_f wn = simd_max_f(c, zero);
+            for (int k = 0; k < 7; k++) wn = simd_mul_f(wn, wn);
+            simd_f inv_dl = simd_min_f(inv_sd, simd_loadu_f(lv->inv_sd + j));
+            simd_f t = simd_add_f(simd_mul_f(simd_abs_f(dp), isp),
+                                  simd_mul_f(simd_abs_f(simd_sub_f(li, simd_loadu_f(src->lum + j))), inv_dl));
+            simd_f w = simd_mul_f(simd_mul_f(simd_set1_f(gi_atrous_h[a] * gi_atrous_h[b]), wn), gi__expneg(t));
+            w = simd_select_f(valid, w, zero);
+            ar = simd_add_f(ar, simd_mul_f(w, simd_loadu_f(src->r + j)));
+            ag = simd_add_f(ag, simd_mul_f(w, simd_loadu_f(src->g + j)));
+            ab = simd_add_f(ab, simd_mul_f(w, simd_loadu_f(src->b + j)));
+            ws = simd_add_f(ws, w);
+            vs = simd_add_f(vs, simd_mul_f(simd_mul_f(w, w), simd_loadu_f(src->var + j)));
+        }
+    }
+    /* lanes with no surface or no weight keep their pixel (the reference's early exits) */
+    simd_mask keep = simd_mask_or(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + i0)), empty),
+                                  simd_mask_not(simd_gt_f(ws, zero)));
+    simd_f inv = simd_div_f(simd_set1_f(1.0f), simd_select_f(keep, simd_set1_f(1.0f), ws));
+    simd_f r = simd_mul_f(ar, inv), gg = simd_mul_f(ag, inv), b = simd_mul_f(ab, inv);
+    simd_f l = gi__dot3(simd_set1_f(GI_ATROUS_LR), simd_set1_f(GI_ATROUS_LG), simd_set1_f(GI_ATROUS_LB), r, gg, b);
+    simd_f v = simd_mul_f(simd_mul_f(vs, inv), inv);
+    simd_storeu_f(dst->r + i0, simd_select_f(keep, simd_loadu_f(src->r + i0), r));
+    simd_storeu_f(dst->g + i0, simd_select_f(keep, simd_loadu_f(src->g + i0), gg));
+    simd_storeu_f(dst->b + i0, simd_select_f(keep, simd_loadu_f(src->b + i0), b));
+    simd_storeu_f(dst->lum + i0, simd_select_f(keep, li, l));
+    simd_storeu_f(dst->var + i0, simd_select_f(keep, simd_loadu_f(src->var + i0), v));
+}
+
+const gi_indirect_kernels GI_INDIRECT_KERNELS = {SIMD_NAME,       SIMD_W,           gi__accumulate,
+                                                 gi__filter_box,  gi__upsample,     gi__atrous_box,
+                                                 gi__atrous_level};

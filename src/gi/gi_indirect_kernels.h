@@ -44,6 +44,23 @@ typedef struct gi_upsample_in {
     float a2, beta;       /* the filter's tests */
 } gi_upsample_in;
 
+/* The a-trous filter's planes (--filter atrous, gi_atrous.c): irradiance in
+ * three planes, its luminance and the variance of its luminance, w x h. */
+typedef struct gi_atrous_planes {
+    float *r, *g, *b, *lum, *var;
+} gi_atrous_planes;
+
+/* One a-trous level (gi_atrous.c, the reference): taps 3 x 3 at holes of
+ * `step` pixels over `src`, the luminance test's scales in `inv_sd`. */
+typedef struct gi_atrous_in {
+    const rs_gbuffer *g;            /* GBUFFER at the indirect resolution */
+    uint32_t w, h;
+    gi_atrous_planes src, dst;      /* this level's input and output */
+    const float *inv_sd;            /* 1 / (sigma_l sqrt(g3x3(src.var)) + eps) */
+    int step;
+    float inv_sigma_p, sigma_l;
+} gi_atrous_in;
+
 typedef struct gi_indirect_kernels {
     const char *isa;  /* SIMD_NAME of the vocabulary it was compiled with */
     uint32_t width;   /* SIMD_W: pixels per run */
@@ -65,6 +82,12 @@ typedef struct gi_indirect_kernels {
      * lanes (bit i: pixel x + i) with a surface that no sample passes: the
      * caller gives them the 3 x 3 fallback. */
     uint32_t (*upsample)(const gi_upsample_in *in, uint32_t x, uint32_t y, float *out);
+    /* --filter atrous: the box pass (the box filter's mean, in planes, with
+     * its luminance and the variance of that mean) and one a-trous level,
+     * for `width` pixels x.. of row y whose windows lie on screen
+     * horizontally (the caller checks; gi_atrous.c is the reference). */
+    void (*atrous_box)(const gi_filter_in *in, int x, int y, const gi_atrous_planes *out);
+    void (*atrous_level)(const gi_atrous_in *in, int x, int y);
 } gi_indirect_kernels;
 
 extern const gi_indirect_kernels gi_indirect_kernels_scalar;

@@ -164,7 +164,8 @@ static void fuzz_cli_check_options(const pf_options *o, int argc, char **argv)
     FUZZ_CLI_CHECK(o->isa >= PF_ISA_AUTO && o->isa <= PF_ISA_AVX512, "--isa %d", (int)o->isa);
     FUZZ_CLI_CHECK(o->pipeline >= -1 && o->pipeline <= 1, "--pipeline %d", o->pipeline);
     FUZZ_CLI_CHECK(!o->filter || !strcmp(o->filter, "box") || !strcmp(o->filter, "bilateral") ||
-                       !strcmp(o->filter, "gaussian") || !strcmp(o->filter, "none"),
+                       !strcmp(o->filter, "gaussian") || !strcmp(o->filter, "atrous") ||
+                       !strcmp(o->filter, "none"),
                    "--filter '%s'", o->filter);
     FUZZ_CLI_CHECK(o->param_count <= 32, "%u parameters", o->param_count);
     for (uint32_t i = 0; i < o->param_count; i++)

@@ -456,8 +456,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.io.tiles_n = 1 + tiles % 4;
     c.io.tiles_m = 1 + (tiles / 4) % 4;
     uint8_t filt = fz_u8(&in);
-    const gi_filter_kind filters[] = {GI_FILTER_BOX, GI_FILTER_BILATERAL, GI_FILTER_NONE, GI_FILTER_GAUSSIAN};
-    c.io.filter = filters[filt % 4];
+    const gi_filter_kind filters[] = {GI_FILTER_BOX, GI_FILTER_BILATERAL, GI_FILTER_NONE, GI_FILTER_GAUSSIAN,
+                                      GI_FILTER_ATROUS};
+    c.io.filter = filters[filt % 5];
     c.io.clamp = (filt / 4) % 2 ? 1.0f + 999.0f * (float)(filt / 8) / 31.0f : -1.0f; /* default 400 or 1..1000 */
     c.io.bounces = 1 + fz_u8(&in) % 4;
     c.shadow_size = 16u << (fz_u8(&in) % 4);

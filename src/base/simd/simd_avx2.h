@@ -99,6 +99,7 @@ static inline simd_mask simd_eq_i(simd_i a, simd_i b) { return _mm256_castsi256_
 static inline simd_mask simd_gt_i(simd_i a, simd_i b) { return _mm256_castsi256_ps(_mm256_cmpgt_epi32(a, b)); }
 static inline simd_mask simd_negative_i(simd_i a) { return _mm256_castsi256_ps(a); } /* the sign bits themselves */
 static inline simd_f simd_i2f(simd_i a) { return _mm256_cvtepi32_ps(a); }
+static inline simd_f simd_asfloat_i(simd_i a) { return _mm256_castsi256_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm256_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm256_load_si256((const __m256i *)p); }
 static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)

@@ -94,6 +94,7 @@ static inline simd_mask simd_eq_i(simd_i a, simd_i b) { return _mm512_cmpeq_epi3
 static inline simd_mask simd_gt_i(simd_i a, simd_i b) { return _mm512_cmpgt_epi32_mask(a, b); }
 static inline simd_mask simd_negative_i(simd_i a) { return _mm512_movepi32_mask(a); }
 static inline simd_f simd_i2f(simd_i a) { return _mm512_cvtepi32_ps(a); }
+static inline simd_f simd_asfloat_i(simd_i a) { return _mm512_castsi512_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm512_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm512_load_si512(p); }
 static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)

@@ -14,6 +14,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #define SIMD_NAME "scalar"
 #define SIMD_W 8  /* 32-bit lanes */
@@ -266,6 +267,13 @@ static inline simd_mask simd_negative_i(simd_i a)
     simd_mask m = 0;
     for (int l = 0; l < SIMD_W; l++) m |= (simd_mask)(a.v[l] < 0) << l;
     return m;
+}
+/* the int32 lanes' bits as floats (data movement only) */
+static inline simd_f simd_asfloat_i(simd_i a)
+{
+    simd_f r;
+    memcpy(r.v, a.v, sizeof r.v);
+    return r;
 }
 static inline simd_f simd_i2f(simd_i a) /* int32 -> float, rounded to nearest */
 {

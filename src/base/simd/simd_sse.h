@@ -127,6 +127,7 @@ static inline simd_mask simd_eq_i(simd_i a, simd_i b) { return _mm_castsi128_ps(
 static inline simd_mask simd_gt_i(simd_i a, simd_i b) { return _mm_castsi128_ps(_mm_cmpgt_epi32(a, b)); }
 static inline simd_mask simd_negative_i(simd_i a) { return _mm_castsi128_ps(_mm_srai_epi32(a, 31)); }
 static inline simd_f simd_i2f(simd_i a) { return _mm_cvtepi32_ps(a); }
+static inline simd_f simd_asfloat_i(simd_i a) { return _mm_castsi128_ps(a); }
 static inline simd_i simd_f2i_trunc(simd_f a) { return _mm_cvttps_epi32(a); }
 static inline simd_i simd_load_i(const int32_t *p) { return _mm_load_si128((const __m128i *)p); }
 static inline simd_i simd_maskz_loadu_i(const int32_t *p, simd_mask m)

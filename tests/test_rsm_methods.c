@@ -52,6 +52,8 @@
 #include "gi_vpl.h"
 #include "pf_gltf.h"
 #include "pf_imageio.h"
+#include "pf_isa.h"
+#include "rs_raster.h"
 #include "test_frame_fixture.h"
 #include "test_util.h"
 #include "tu_golden.h"
@@ -568,6 +570,10 @@ static void fx_end(fx *x) { tu_fx_end(x); }
  * frame except 20-24 (static), the light moves on frames 10-14. Returns a
  * hash of all VPL sets; *static_moved counts moved VPLs on frames 21-24. */
 static uint32_t g_pan_moved; /* moved VPLs on frames 1-9 of the last method_frames (camera turning, light static) */
+/* The SIMD path the methods' kernels take in method_frames (an rs_simd;
+ * the importance map's, gi_importance_kernels.h). */
+static uint32_t g_simd = RS_SIMD_SCALAR;
+
 static uint64_t method_frames(const gi_vpl_method *method, const char *param, uint32_t threads,
                               uint32_t *static_moved, tu_golden_picture *pic)
 /* (small RSMs and few camera points keep the 4 x 30 frames fast; the code
@@ -605,7 +611,8 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
         if (frame >= 10 && frame < 15) x.scene.lights[0].position.x += 0.02f * (float)(frame - 9);
         gi_stage_gbuffer_raster(&x.f);
         gi_stage_gbuffer_resolve(&x.f);
-        gi_vpl_inputs in = {&x.scene, x.rt, x.jobs, &x.f.camera, frame, 128, 1, &x.f.gbuf, 64, 48, &x.f.area, NULL};
+        gi_vpl_inputs in = {&x.scene, x.rt,        x.jobs,    &x.f.camera, frame, 128, 1, &x.f.gbuf, 64, 48,
+                            &x.f.area, NULL, g_simd};
         assert_int_equal(method->update(st, &in, &set, &err), PF_OK);
         assert_int_equal(set.count, 128);
         for (uint32_t i = 0; i < set.count; i++) {
@@ -638,6 +645,17 @@ static void check_deterministic(const gi_vpl_method *m, const char *param, const
     uint64_t h1 = method_frames(m, param, 1, &moved1, &pic), h2 = method_frames(m, param, 2, &moved2, NULL);
     print_message("%s %s: moved on static frames %u\n", m->name, param ? param : "", moved2);
     assert_true(h1 == h2);
+    /* the importance map's SIMD kernels give the scalar path's VPLs */
+    pf_isa isa = pf_isa_detect();
+    for (uint32_t simd = RS_SIMD_AVX2; simd <= RS_SIMD_AVX512; simd++) {
+        if (isa < (simd == RS_SIMD_AVX2 ? PF_ISA_AVX2 : PF_ISA_AVX512)) continue;
+        uint32_t moved3;
+        g_simd = simd;
+        uint64_t h3 = method_frames(m, param, 2, &moved3, NULL);
+        g_simd = RS_SIMD_SCALAR;
+        if (h3 != h1) fail_msg("%s %s: the %s path's VPLs differ from the scalar path's", m->name, param ? param : "",
+                               rs_simd_name((rs_simd)simd));
+    }
     tu_golden_check(name, h1, golden, &pic);
     tu_golden_picture_free(&pic);
     assert_int_equal(moved1, 0);
@@ -885,7 +903,7 @@ static uint64_t area_frames(const gi_vpl_method *m, uint32_t threads, uint32_t *
         assert_int_equal(pf_camera_look_at(&x.f.camera, cam0.eye, target, cam0.yfov, &err), PF_OK);
         gi_stage_gbuffer_raster(&x.f);
         gi_stage_gbuffer_resolve(&x.f);
-        gi_vpl_inputs in = {&x.scene, x.rt, x.jobs, &x.f.camera, frame, 128, 2, &x.f.gbuf, 48, 36, &x.f.area, NULL};
+        gi_vpl_inputs in = {&x.scene, x.rt, x.jobs, &x.f.camera, frame, 128, 2, &x.f.gbuf, 48, 36, &x.f.area, NULL, 0};
         assert_int_equal(m->update(st, &in, &set, &err), PF_OK);
         assert_true(set.count > 0);
         double total = 0.0;
@@ -958,7 +976,7 @@ static void test_bad_params(void **state)
         assert_int_equal(ms[k]->create(&st, NULL, &err), PF_OK);
         gi_vpl_set set = {0};
         gi_area_lights area = {0};
-        gi_vpl_inputs in = {&s, NULL, NULL, &s.cameras[0], 0, 16, 1, NULL, 0, 0, &area, NULL};
+        gi_vpl_inputs in = {&s, NULL, NULL, &s.cameras[0], 0, 16, 1, NULL, 0, 0, &area, NULL, 0};
         assert_int_equal(ms[k]->update(st, &in, &set, &err), PF_ERR_ARGUMENT);
         assert_non_null(strstr(err.message, "G-buffer"));
         ms[k]->destroy(st);

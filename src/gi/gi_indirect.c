@@ -211,6 +211,9 @@ static void gi__vpl_check(gi_indirect *ind, gi_vpl_set *out)
     }
 }
 
+/* The frame's SIMD path (its rasterizer's), for the methods' kernels. */
+static uint32_t gi__simd(const gi_frame *f) { return f->raster ? (uint32_t)rs_context_simd(f->raster) : 0u; }
+
 static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vpl_set *out)
 {
     pf_error err;
@@ -235,7 +238,7 @@ void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     gi_vpl_inputs in = {f->scene,        f->rt,          f->jobs,   &f->camera, ind->frame, ind->opt.vpls,
-                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area, &f->motion};
+                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area, &f->motion, gi__simd(f)};
     gi__vpl_update_into(ind, &in, &ind->vpls);
     gi__motion_seen(&f->motion);
     ind->frame++;
@@ -282,7 +285,8 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
                         ind->frame,      ind->opt.vpls,
                         ind->opt.bounces, gbuffer_ready ? &f->gbuf : NULL,
                         f->width,        f->height,
-                        &f->area,        &f->motion};
+                        &f->area,        &f->motion,
+                        gi__simd(f)};
     ind->pipe_in = in;
     ind->frame++;
     ind->pipe_ms = 0.0;

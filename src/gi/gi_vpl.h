@@ -72,6 +72,9 @@ typedef struct gi_vpl_inputs {
     /* What geometry moved since this method's last update (gi_motion.h);
      * NULL: nothing did. Each method says in its file how it reacts. */
     const gi_motion *motion;
+    /* The SIMD kernels a method may use (the frame's rasterizer's path, an
+     * rs_simd: 0 scalar, 1 AVX2, 2 AVX-512); every path gives the same bits. */
+    uint32_t simd;
 } gi_vpl_inputs;
 
 /* Method parameters from `--param KEY=VALUE` (repeatable). A method reads

@@ -7,7 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_importance_kernels.h"
 #include "pf_rt.h"
+#include "rs_raster.h"
+#include "simd_arch.h"
 
 void gi_importance_init(gi_importance *im, uint32_t P)
 {
@@ -65,6 +68,7 @@ typedef struct gi__imp_ctx {
     const gi_rsm_set *rsm;
     float g_max;
     uint32_t row_len;
+    const gi_importance_kernels *kt; /* the SIMD path's kernel, NULL on the scalar path */
 } gi__imp_ctx;
 
 /* Camera point k's term of Eq. 2 for a texel at p with normal v:
@@ -96,7 +100,21 @@ static void gi__importance_row(void *p, uint32_t row, uint32_t worker)
     const gi_rsm_set *s = c->rsm;
     const uint32_t K = im->count;
     const float g_max = c->g_max;
+    const gi_importance_kernels *kt = c->kt;
+    const gi_importance_in in = {im->x, im->y, im->z, im->nx, im->ny, im->nz, im->alb, K, g_max};
     for (uint32_t t = row * c->row_len, e = t + c->row_len; t < e; t++) {
+        if (kt && t + kt->width <= e) {
+            /* SIMD: the sums of width texels (texels with no light get one
+             * too, and are then given 0 as below) */
+            float sum[16];
+            kt->texels(&in, s->pos_x + t, s->pos_y + t, s->pos_z + t, s->nrm_x + t, s->nrm_y + t, s->nrm_z + t, sum);
+            for (uint32_t l = 0; l < kt->width; l++) {
+                float I = pf_luminance(pf_v3(s->flux_r[t + l], s->flux_g[t + l], s->flux_b[t + l]));
+                im->f[t + l] = s->valid[t + l] && I > 0.0f ? I * sum[l] : 0.0f;
+            }
+            t += kt->width - 1;
+            continue;
+        }
         float I = pf_luminance(pf_v3(s->flux_r[t], s->flux_g[t], s->flux_b[t]));
         if (!s->valid[t] || !(I > 0.0f)) {
             im->f[t] = 0.0f;
@@ -128,8 +146,19 @@ static pf_result gi__grow(void **p, uint32_t *cap, uint32_t need, size_t elem, p
     return PF_OK;
 }
 
+/* The kernel of SIMD path simd (an rs_simd); NULL: the scalar loop. */
+static const gi_importance_kernels *gi__importance_kernels(uint32_t simd)
+{
+#if SIMD_X86
+    if (simd == RS_SIMD_AVX512) return &gi_importance_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) return &gi_importance_kernels_avx2;
+#endif
+    (void)simd;
+    return NULL;
+}
+
 pf_result gi_importance_update(gi_importance *im, const gi_rsm_set *rsm, const rs_gbuffer *g, float diagonal,
-                               pf_jobs *jobs, pf_error *err)
+                               uint32_t simd, pf_jobs *jobs, pf_error *err)
 {
     pf_result r;
     if (!im->x) {
@@ -155,7 +184,7 @@ pf_result gi_importance_update(gi_importance *im, const gi_rsm_set *rsm, const r
     im->domain = (gi_sample_domain){rsm->count, im->first, im->rows, im->cols, rsm->texel_count};
     gi__importance_camera_points(im, g);
     if (rsm->texel_count == 0) return PF_OK;
-    gi__imp_ctx c = {im, rsm, 400.0f / (diagonal * diagonal), rsm->size};
+    gi__imp_ctx c = {im, rsm, 400.0f / (diagonal * diagonal), rsm->size, gi__importance_kernels(simd)};
     pf_jobs_parallel_for(jobs, gi__importance_row, &c, rsm->texel_count / rsm->size, 0);
     return PF_OK;
 }

@@ -79,9 +79,11 @@ void gi_importance_init(gi_importance *im, uint32_t P);
 void gi_importance_free(gi_importance *im);
 /* Camera points from g, then f(v) for every texel of rsm (parallel over
  * texel rows, deterministic), and the sampling domain of rsm's maps.
- * G is bounded by 400 / diagonal^2 (diagonal: the scene's bounding box). */
+ * G is bounded by 400 / diagonal^2 (diagonal: the scene's bounding box).
+ * simd (an rs_simd, gi_vpl_inputs.simd): the SIMD kernel of that path
+ * (gi_importance_kernels.h), with the scalar loop's bits; 0: the loop. */
 pf_result gi_importance_update(gi_importance *im, const gi_rsm_set *rsm, const rs_gbuffer *g, float diagonal,
-                               pf_jobs *jobs, pf_error *err);
+                               uint32_t simd, pf_jobs *jobs, pf_error *err);
 
 /* -------------------------------------------------------------- samplers */
 

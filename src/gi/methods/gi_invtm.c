@@ -227,7 +227,7 @@ static pf_result gi__invtm_update(void *state, const gi_vpl_inputs *in, gi_vpl_s
     if (r == PF_OK) r = gi_rsm_set_geometry_moved(&s->rsm, in->motion, err); /* moved geometry: drawn again */
     if (r == PF_OK) r = gi_rsm_set_update(&s->rsm, in->scene, in->area, in->rt, in->jobs, err);
     float diag = pf_v3_length(pf_v3_sub(in->scene->bounds_max, in->scene->bounds_min));
-    if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->jobs, err);
+    if (r == PF_OK) r = gi_importance_update(&s->imp, &s->rsm, in->gbuf, diag, in->simd, in->jobs, err);
     if (r == PF_OK) r = gi_invtm_build(&s->cdf, &s->imp.domain, s->imp.f, in->jobs, err);
     if (r != PF_OK) return r;
     if (s->rsm.texel_count > 0 && s->cdf.total > 0.0) gi__invtm_sample_vpls(s, in->budget, out);

@@ -11,6 +11,9 @@
  *   paraboloid maps' agreement;
  * - the same ISM frame is byte-identical for 1 and 2 threads, and with the
  *   scalar and the SIMD accumulation;
+ * - the binned splat (records sorted by map, plain mins per map) gives the
+ *   atomic splat's maps byte for byte, on the Cornell box and on Sibenik
+ *   (several batches of records), with 1 and 2 threads;
  * - bad option values are errors (API and CLI).
  * Timing is not a test's job: `softgi bench frame --visibility ism` times
  * the ISM frame stage by stage (docs/perf.md). */
@@ -320,6 +323,52 @@ static void test_threads_deterministic(void **state)
     assert_memory_equal(img[1], img[2], sizeof img[1]); /* SIMD accumulation (if the CPU has AVX2) = scalar */
 }
 
+/* The binned splat against the atomic one: the maps of one frame, byte for
+ * byte (min is order-free, so the two must agree exactly), with the
+ * threads given; Sibenik's million points fill more than one batch. */
+static void splat_paths_agree(pf_scene *scene, const pf_camera *cam, uint32_t threads, const char *name)
+{
+    enum { W = 96, H = 72 };
+    uint16_t *maps[2] = {NULL, NULL};
+    size_t bytes = 0;
+    for (int atomic = 0; atomic < 2; atomic++) {
+        fx x;
+        x.scene = *scene;
+        gi_indirect_options io = ism_options();
+        io.ism.atomic_splat = atomic;
+        tu_fx_desc d = {.threads = threads, .w = W, .h = H, .cam = cam, .io = &io, .indirect_only = 1};
+        tu_fx_begin_with(&x, &d);
+        gi_frame_render_raster(&x.f);
+        bytes = rs_para_atlas_bytes(64, x.f.ind.vpls.count);
+        maps[atomic] = malloc(bytes);
+        assert_non_null(maps[atomic]);
+        memcpy(maps[atomic], x.f.ind.atlas, bytes);
+        tu_fx_end_frame(&x); /* the scene is the caller's */
+    }
+    size_t differ = 0;
+    for (size_t i = 0; i < bytes / 2; i++) differ += maps[0][i] != maps[1][i];
+    print_message("%s, %u threads: %zu of %zu texels differ between the binned and the atomic splat\n", name,
+                  threads, differ, bytes / 2);
+    assert_true(differ == 0);
+    free(maps[0]), free(maps[1]);
+}
+
+static void test_binned_splat(void **state)
+{
+    (void)state;
+    pf_scene s;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&s, CORNELL, NULL, &err), PF_OK);
+    pf_camera cam = s.cameras[0];
+    splat_paths_agree(&s, &cam, 1, "Cornell box");
+    splat_paths_agree(&s, &cam, 2, "Cornell box");
+    pf_scene_free(&s);
+    if (!tu_load_or_skip(&s, SIBENIK)) return;
+    sibenik_setup(&s, &cam);
+    splat_paths_agree(&s, &cam, 2, "Sibenik");
+    pf_scene_free(&s);
+}
+
 /* ------------------------------------------------------------------ options */
 
 static void test_bad_options(void **state)
@@ -330,8 +379,8 @@ static void test_bad_options(void **state)
     tu_load(&x.scene, CORNELL);
     const pf_scene *s = &x.scene;
     const gi_ism_options bad[] = {
-        {48, 0, 0},      {4, 0, 0},          {1024, 0, 0},       {0, 10, 0},     {0, 200000000, 0},
-        {0, 0, 0.5f},    {0, 0, 100.0f},     {0, 0, NAN},        {0, 0, -2.0f},
+        {48, 0, 0, 0},   {4, 0, 0, 0},       {1024, 0, 0, 0},    {0, 10, 0, 0},  {0, 200000000, 0, 0},
+        {0, 0, 0.5f, 0}, {0, 0, 100.0f, 0},  {0, 0, NAN, 0},     {0, 0, -2.0f, 0},
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         gi_ism *m = (gi_ism *)&err; /* must be set to NULL */
@@ -383,7 +432,7 @@ int main(void)
         cmocka_unit_test(test_pull_push_constant), cmocka_unit_test(test_pull_push_plane),
         cmocka_unit_test(test_point_budget),       cmocka_unit_test(test_agreement_cornell),
         cmocka_unit_test(test_agreement_sibenik),  cmocka_unit_test(test_threads_deterministic),
-        cmocka_unit_test(test_bad_options),
+        cmocka_unit_test(test_binned_splat),       cmocka_unit_test(test_bad_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

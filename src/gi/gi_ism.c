@@ -10,8 +10,12 @@
  * triangles, and a triangle with more points is split into runs of its
  * points, so a scene of few large triangles spreads over the workers too. */
 #define GI__ISM_ITEM_POINTS 4096.0f
-/* Maps per clear / pull-push job item. */
+/* Maps per clear / pull-push / binned-splat job item. */
 #define GI__ISM_MAP_GRAIN 4u
+/* The binned splat (gi_ism_stage_splat): splat records per batch, and the
+ * batch's bucket offsets, items x (maps + 1). */
+#define GI__ISM_REC_CAP (1u << 19)
+#define GI__ISM_OFF_CAP (1u << 18)
 
 typedef struct gi__ism_tri {
     float v0[3], e1[3], e2[3];
@@ -22,6 +26,14 @@ typedef struct gi__ism_item {
     uint32_t t0, t1, k0, k1;
 } gi__ism_item;
 
+/* One point's splat: its map, the texel it falls in, the disc (centre x, y
+ * and radius rt in texels; rt <= 0.5: that texel only) and its code. */
+typedef struct gi__ism_rec {
+    float x, y, rt;
+    uint32_t texel, vi;
+    uint16_t code, pad;
+} gi__ism_rec;
+
 struct gi_ism {
     gi_ism_options opt;
     uint32_t tri_count;
@@ -30,6 +42,17 @@ struct gi_ism {
     float *density;     /* expected points per frame of each triangle: P A_i / A */
     gi__ism_item *items;
     uint32_t item_count;
+    /* the binned splat: each item's most points, their records sorted by
+     * map per batch of items, per-worker generation buffers, the batch's
+     * bucket offsets and each item's first record; binned 0: every splat
+     * is an atomic min straight from the points (options.atomic_splat, or
+     * an item too large for the bins) */
+    uint32_t *item_cap, *item_base;
+    uint32_t max_item_cap;
+    gi__ism_rec *sorted, **gen;
+    uint32_t *bucket;
+    uint32_t gen_cap;
+    int binned;
     uint16_t *template_map; /* R x R: EMPTY inside the disc, OUTSIDE out of it */
     uint32_t inside_texels;
     int *row_lo, *row_hi; /* per map row: the inside texels' columns (lo > hi: none) */
@@ -81,8 +104,11 @@ static pf_result gi__ism_make_items(gi_ism *m)
         if (m->tri_count > start) GI__ISM_ITEM(start, m->tri_count, 0, UINT32_MAX);
 #undef GI__ISM_ITEM
         if (!pass) {
+            free(m->item_cap), free(m->item_base);
             m->items = malloc(sizeof(gi__ism_item) * (n ? n : 1));
-            if (!m->items) return PF_ERR_OUT_OF_MEMORY;
+            m->item_cap = malloc(sizeof(uint32_t) * (n ? n : 1));
+            m->item_base = malloc(sizeof(uint32_t) * (n ? n : 1));
+            if (!m->items || !m->item_cap || !m->item_base) return PF_ERR_OUT_OF_MEMORY;
         }
         m->item_count = n;
     }
@@ -104,6 +130,34 @@ static void gi__ism_triangles(gi_ism *m, const pf_scene *scene, uint32_t t0, uin
     }
 }
 
+/* The binned splat's sizes: each item's most points (a triangle of density
+ * d makes floor(d) or floor(d) + 1), the largest, and the generation
+ * buffers for it; an item beyond GI__ISM_REC_CAP leaves the splat atomic. */
+static pf_result gi__ism_bins(gi_ism *m, pf_error *err)
+{
+    uint64_t most = 0;
+    for (uint32_t i = 0; i < m->item_count; i++) {
+        const gi__ism_item *it = &m->items[i];
+        uint64_t cap = 0;
+        for (uint32_t t = it->t0; t < it->t1; t++) {
+            uint64_t n = (uint64_t)floorf(m->density[t]) + 1;
+            cap += (n < it->k1 ? n : it->k1) - (n < it->k0 ? n : it->k0);
+        }
+        m->item_cap[i] = cap < UINT32_MAX ? (uint32_t)cap : UINT32_MAX;
+        if (cap > most) most = cap;
+    }
+    m->max_item_cap = most < UINT32_MAX ? (uint32_t)most : UINT32_MAX;
+    m->binned = !m->opt.atomic_splat && most <= GI__ISM_REC_CAP;
+    if (!m->binned || most <= m->gen_cap) return PF_OK;
+    for (uint32_t w = 0; w < m->workers; w++) {
+        gi__ism_rec *g = realloc(m->gen[w], sizeof(gi__ism_rec) * (size_t)most);
+        if (!g) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs' splat bins");
+        m->gen[w] = g;
+    }
+    m->gen_cap = (uint32_t)most;
+    return PF_OK;
+}
+
 /* The densities, each triangle's share of the P points (Barak 2013 Sec.
  * 5.2: "calculate the triangle surface area, set the number of points to be
  * generated"), and the splat job items, from the areas. The total is summed
@@ -120,7 +174,7 @@ static pf_result gi__ism_densities(gi_ism *m, pf_error *err)
     m->items = NULL;
     m->item_count = 0; /* nothing splats until the items are made */
     if (gi__ism_make_items(m) != PF_OK) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs");
-    return PF_OK;
+    return gi__ism_bins(m, err);
 }
 
 pf_result gi_ism_update(gi_ism *m, const pf_scene *scene, const pf_anim_moved *moved, uint32_t count, pf_error *err)
@@ -175,7 +229,13 @@ pf_result gi_ism_create(gi_ism **out, const pf_scene *scene, const gi_ism_option
     m->scratch = calloc(threads, sizeof(float *));
     m->row_lo = malloc(sizeof(int) * R);
     m->row_hi = malloc(sizeof(int) * R);
-    int ok = m->tris && m->density && m->tri_area && m->template_map && m->scratch && m->row_lo && m->row_hi;
+    m->gen = calloc(threads, sizeof(gi__ism_rec *));
+    if (!o.atomic_splat) {
+        m->sorted = malloc(sizeof(gi__ism_rec) * GI__ISM_REC_CAP);
+        m->bucket = malloc(sizeof(uint32_t) * GI__ISM_OFF_CAP);
+    }
+    int ok = m->tris && m->density && m->tri_area && m->template_map && m->scratch && m->row_lo && m->row_hi &&
+             m->gen && (o.atomic_splat || (m->sorted && m->bucket));
     for (uint32_t w = 0; ok && w < threads; w++) {
         m->scratch[w] = calloc(gi_ism_pull_push_scratch_floats(R), sizeof(float));
         ok = m->scratch[w] != NULL;
@@ -210,6 +270,9 @@ void gi_ism_destroy(gi_ism *m)
     if (m->scratch)
         for (uint32_t w = 0; w < m->workers; w++) free(m->scratch[w]);
     free(m->scratch);
+    if (m->gen)
+        for (uint32_t w = 0; w < m->workers; w++) free(m->gen[w]);
+    free(m->gen), free(m->sorted), free(m->bucket), free(m->item_cap), free(m->item_base);
     free(m->items);
     free(m->tris), free(m->density), free(m->tri_area), free(m->template_map), free(m->row_lo), free(m->row_hi);
     free(m);
@@ -256,15 +319,71 @@ static inline void gi__atomic_min_u16(uint16_t *p, uint16_t v)
     }
 }
 
-static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
+/* The splat of record r into its map mp: the texel the point falls in,
+ * plus (geometry shader: "calculate the size of the splat") every inside
+ * texel whose centre is within the splat's radius. atomic: by atomic mins
+ * (maps shared between threads), else plain mins (the map is this
+ * thread's); the same texels and codes either way. */
+/* floorf and ceilf of v as int, exactly, for |v| < 2^31 (rt <= 4 and the
+ * splat's centre is in the map, so every argument below is): the plain
+ * x86-64 build has no rounding instruction, and libm's took a quarter of
+ * the splat. */
+static inline int gi__floor_int(float v)
 {
-    (void)worker;
-    gi_ism *m = p;
+    int t = (int)v;
+    return t - (v < (float)t);
+}
+static inline int gi__ceil_int(float v)
+{
+    int t = (int)v;
+    return t + (v > (float)t);
+}
+
+static inline void gi__ism_splat_rec(const gi_ism *m, uint16_t *mp, const gi__ism_rec *r, int atomic)
+{
+    const uint32_t R = m->opt.resolution;
+    const uint16_t code = r->code;
+    if (atomic) gi__atomic_min_u16(mp + r->texel, code);
+    else if (code < mp[r->texel]) mp[r->texel] = code;
+    const float rt = r->rt, x = r->x, y = r->y;
+    if (!(rt > 0.5f)) return;
+    int i0 = gi__floor_int(x - rt), i1 = gi__floor_int(x + rt);
+    int j0 = gi__floor_int(y - rt), j1 = gi__floor_int(y + rt);
+    if (i0 < 0) i0 = 0;
+    if (j0 < 0) j0 = 0;
+    if (i1 > (int)R - 1) i1 = (int)R - 1;
+    if (j1 > (int)R - 1) j1 = (int)R - 1;
+    for (int j = j0; j <= j1; j++) {
+        /* the row's texels whose centres are in the splat's circle,
+         * (i + 0.5 - x)^2 <= rt^2 - cy^2, and in the disc */
+        float cy = (float)j + 0.5f - y, h2 = rt * rt - cy * cy;
+        if (!(h2 >= 0.0f)) continue;
+        float hw = sqrtf(h2);
+        int ia = gi__ceil_int(x - hw - 0.5f), ib = gi__floor_int(x + hw - 0.5f);
+        if (ia < i0) ia = i0;
+        if (ib > i1) ib = i1;
+        if (ia < m->row_lo[j]) ia = m->row_lo[j];
+        if (ib > m->row_hi[j]) ib = m->row_hi[j];
+        uint16_t *row = mp + (size_t)j * R;
+        if (atomic)
+            for (int k = ia; k <= ib; k++) gi__atomic_min_u16(row + k, code);
+        else
+            for (int k = ia; k <= ib; k++) row[k] = code < row[k] ? code : row[k];
+    }
+}
+
+/* The points of splat job item `item` (the tessellation and geometry
+ * shaders): with out, each point in front of its VPL becomes a record in
+ * out (returns how many); without, each is splatted at once by atomic
+ * mins. The points, their VPLs and their records are the same either way. */
+static uint32_t gi__ism_item_points(gi_ism *m, uint32_t item, gi__ism_rec *out)
+{
     const uint32_t R = m->opt.resolution, N = m->count;
     const size_t map = (size_t)R * R;
     const float scale = m->scale;
     const gi__ism_item *it = &m->items[item];
-    uint64_t generated = 0, splatted = 0;
+    uint64_t generated = 0;
+    uint32_t splatted = 0;
     for (uint32_t t = it->t0; t < it->t1; t++) {
         /* tessellation control shader: this triangle's point count,
          * floor(P A_i / A) plus one with probability of the fraction */
@@ -294,47 +413,79 @@ static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
             if (!(d.z > 0.0f)) continue; /* behind the VPL's tangent plane */
             float dist = pf_v3_length(d);
             float c = dist * scale; /* rs_paraboloid's quantisation: floor(t S), clamped */
-            uint16_t code = c < (float)RS_PARA_MAX_CODE ? (uint16_t)c : (uint16_t)RS_PARA_MAX_CODE;
-            /* the splat: the texel the point falls in, plus (geometry
-             * shader: "calculate the size of the splat") every inside texel
-             * whose centre is within the splat's radius, the point's disc
-             * of area A count / P (its VPL's share of the points) seen
-             * from the VPL: angle r / dist, in texels
-             * r / dist (1 + u^2 + v^2) R / 4 (dtheta = 2 drho / (1 + rho^2),
-             * R / 2 texels per unit of u), capped */
-            uint16_t *mp = m->atlas + vi * map;
-            gi__atomic_min_u16(mp + rs_para_texel_of(R, d), code);
+            gi__ism_rec r;
+            r.code = c < (float)RS_PARA_MAX_CODE ? (uint16_t)c : (uint16_t)RS_PARA_MAX_CODE;
+            r.pad = 0;
+            r.vi = vi;
+            r.texel = rs_para_texel_of(R, d);
+            /* the splat's size: the point's disc of area A count / P (its
+             * VPL's share of the points) seen from the VPL: angle r / dist,
+             * in texels r / dist (1 + u^2 + v^2) R / 4 (dtheta = 2 drho /
+             * (1 + rho^2), R / 2 texels per unit of u), capped */
             float den = dist + d.z, u = d.x / den, v = d.y / den;
             float rt = m->point_radius / dist * (1.0f + (u * u + v * v)) * (float)R * 0.25f;
-            if (rt > 0.5f) {
-                if (rt > GI_ISM_MAX_SPLAT) rt = GI_ISM_MAX_SPLAT;
-                float x = (u + 1.0f) * (float)R * 0.5f, y = (v + 1.0f) * (float)R * 0.5f;
-                int i0 = (int)floorf(x - rt), i1 = (int)floorf(x + rt);
-                int j0 = (int)floorf(y - rt), j1 = (int)floorf(y + rt);
-                if (i0 < 0) i0 = 0;
-                if (j0 < 0) j0 = 0;
-                if (i1 > (int)R - 1) i1 = (int)R - 1;
-                if (j1 > (int)R - 1) j1 = (int)R - 1;
-                for (int j = j0; j <= j1; j++) {
-                    /* the row's texels whose centres are in the splat's
-                     * circle, (i + 0.5 - x)^2 <= rt^2 - cy^2, and in the disc */
-                    float cy = (float)j + 0.5f - y, h2 = rt * rt - cy * cy;
-                    if (!(h2 >= 0.0f)) continue;
-                    float hw = sqrtf(h2);
-                    int ia = (int)ceilf(x - hw - 0.5f), ib = (int)floorf(x + hw - 0.5f);
-                    if (ia < i0) ia = i0;
-                    if (ib > i1) ib = i1;
-                    if (ia < m->row_lo[j]) ia = m->row_lo[j];
-                    if (ib > m->row_hi[j]) ib = m->row_hi[j];
-                    for (int i = ia; i <= ib; i++) gi__atomic_min_u16(mp + (size_t)j * R + (size_t)i, code);
-                }
-            }
+            r.rt = rt > GI_ISM_MAX_SPLAT ? GI_ISM_MAX_SPLAT : rt;
+            r.x = (u + 1.0f) * (float)R * 0.5f, r.y = (v + 1.0f) * (float)R * 0.5f;
+            if (out) out[splatted] = r;
+            else gi__ism_splat_rec(m, m->atlas + vi * map, &r, 1);
             splatted++;
         }
         generated += k1 - k0;
     }
     __atomic_fetch_add(&m->generated, generated, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&m->splatted, splatted, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&m->splatted, (uint64_t)splatted, __ATOMIC_RELAXED);
+    return splatted;
+}
+
+/* The atomic splat: one job item's points straight into the shared maps. */
+static void gi__ism_splat_chunk(void *p, uint32_t item, uint32_t worker)
+{
+    (void)worker;
+    gi__ism_item_points(p, item, NULL);
+}
+
+/* The binned splat, a batch of items b0.. at a time: each item's records
+ * (made in the worker's buffer) are sorted by map into the item's run of
+ * `sorted` (a counting sort that keeps their order), its bucket offsets in
+ * bucket + q (N + 1); then each map is splatted by one thread from every
+ * item's bucket for it, with plain mins on a map that fits the L1 cache. */
+typedef struct gi__ism_batch {
+    gi_ism *m;
+    uint32_t b0, items;
+} gi__ism_batch;
+
+static void gi__ism_bin_item(void *p, uint32_t q, uint32_t worker)
+{
+    const gi__ism_batch *b = p;
+    gi_ism *m = b->m;
+    const uint32_t N = m->count;
+    gi__ism_rec *gen = m->gen[worker];
+    uint32_t n = gi__ism_item_points(m, b->b0 + q, gen);
+    uint32_t *off = m->bucket + (size_t)q * (N + 1);
+    memset(off, 0, sizeof(uint32_t) * (N + 1));
+    for (uint32_t k = 0; k < n; k++) off[gen[k].vi + 1]++;
+    for (uint32_t v = 0; v < N; v++) off[v + 1] += off[v];
+    /* off[v]: bucket v's start; after the scatter, its end (bucket v + 1's start) */
+    gi__ism_rec *dst = m->sorted + m->item_base[q];
+    for (uint32_t k = 0; k < n; k++) dst[off[gen[k].vi]++] = gen[k];
+}
+
+static void gi__ism_splat_maps(void *p, uint32_t g, uint32_t worker)
+{
+    (void)worker;
+    const gi__ism_batch *b = p;
+    const gi_ism *m = b->m;
+    const uint32_t R = m->opt.resolution, N = m->count;
+    const size_t map = (size_t)R * R;
+    uint32_t v1 = (g + 1) * GI__ISM_MAP_GRAIN < N ? (g + 1) * GI__ISM_MAP_GRAIN : N;
+    for (uint32_t v = g * GI__ISM_MAP_GRAIN; v < v1; v++) {
+        uint16_t *mp = m->atlas + v * map;
+        for (uint32_t q = 0; q < b->items; q++) {
+            const uint32_t *off = m->bucket + (size_t)q * (N + 1);
+            const gi__ism_rec *run = m->sorted + m->item_base[q];
+            for (uint32_t k = v ? off[v - 1] : 0; k < off[v]; k++) gi__ism_splat_rec(m, mp, &run[k], 0);
+        }
+    }
 }
 
 void gi_ism_stage_splat(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, const rs_para_frame *frames, uint32_t count,
@@ -349,7 +500,24 @@ void gi_ism_stage_splat(gi_ism *m, uint16_t *atlas, pf_jobs *jobs, const rs_para
     m->point_radius = (float)sqrt(m->area * (double)count / ((double)m->opt.points * 3.14159265358979));
     m->generated = m->splatted = 0;
     if (count == 0) return;
-    gi__ism_for(jobs, gi__ism_splat_chunk, m, m->item_count, 1);
+    if (!m->binned || (uint64_t)count + 1 > GI__ISM_OFF_CAP) {
+        gi__ism_for(jobs, gi__ism_splat_chunk, m, m->item_count, 1);
+    } else {
+        const uint32_t most_items = GI__ISM_OFF_CAP / (count + 1);
+        for (uint32_t b0 = 0; b0 < m->item_count;) {
+            /* the batch: as many items as the records and offsets hold */
+            uint32_t q = 0, used = 0;
+            while (b0 + q < m->item_count && q < most_items && m->item_cap[b0 + q] <= GI__ISM_REC_CAP - used) {
+                m->item_base[q] = used;
+                used += m->item_cap[b0 + q];
+                q++;
+            }
+            gi__ism_batch b = {m, b0, q};
+            gi__ism_for(jobs, gi__ism_bin_item, &b, q, 1);
+            gi__ism_for(jobs, gi__ism_splat_maps, &b, (count + GI__ISM_MAP_GRAIN - 1) / GI__ISM_MAP_GRAIN, 1);
+            b0 += q;
+        }
+    }
     if (stats) stats->points += m->generated, stats->splatted += m->splatted;
 }
 

@@ -65,13 +65,19 @@
  *
  * Parallelism and determinism: the splat's job items are runs of
  * consecutive triangles of about 4096 expected points (a larger triangle is
- * split into runs of its points); every splat is an atomic min on the 16-bit
- * code of a texel, which is order-free, so the maps do not depend on which
- * thread splats which point; clear and pull-push run one map per job item.
+ * split into runs of its points). The splat keeps the nearer 16-bit code of
+ * a texel, which is order-free, so the maps do not depend on which thread
+ * splats which point: by default binned (a batch of items makes splat
+ * records, sorted by map per item; then one job item splats a few maps with
+ * plain mins from every item's bucket for them), else (atomic_splat, or an
+ * item larger than a batch) every point at once by an atomic min; the same
+ * maps either way (tested). Clear and pull-push run one map per job item.
  * Same bytes for any thread count (tested).
  *
  * Memory: everything at create (triangles, per-triangle point densities,
- * per-worker pull-push pyramids); gi_ism_render allocates nothing. */
+ * per-worker pull-push pyramids, the splat's bins: about 14 MB); the bins'
+ * generation buffers grow in gi_ism_update when the densities change;
+ * gi_ism_render allocates nothing. */
 #ifndef GI_ISM_H
 #define GI_ISM_H
 
@@ -120,6 +126,8 @@ typedef struct gi_ism_options {
     uint32_t resolution; /* texels per side, a power of two in GI_ISM_MIN_RES..GI_ISM_MAX_RES (0: 64) */
     uint32_t points;     /* points per frame over the whole scene (0: 10^6) */
     float bias_scale;    /* bias = this x the exact maps' bias (0: GI_ISM_DEFAULT_BIAS) */
+    int atomic_splat;    /* 1: splat every point with atomic mins as it is made (the binned splat's
+                            fallback; the same maps, tests compare the two) */
 } gi_ism_options;
 
 /* What a render did (integers: order-free sums). */

@@ -151,7 +151,10 @@ static pf_result gi__ism_bins(gi_ism *m, pf_error *err)
     if (!m->binned || most <= m->gen_cap) return PF_OK;
     for (uint32_t w = 0; w < m->workers; w++) {
         gi__ism_rec *g = realloc(m->gen[w], sizeof(gi__ism_rec) * (size_t)most);
-        if (!g) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs' splat bins");
+        if (!g) {
+            m->binned = 0; /* the buffers are too small for these items: the atomic splat */
+            return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the ISMs' splat bins");
+        }
         m->gen[w] = g;
     }
     m->gen_cap = (uint32_t)most;
@@ -417,12 +420,13 @@ static uint32_t gi__ism_item_points(gi_ism *m, uint32_t item, gi__ism_rec *out)
             r.code = c < (float)RS_PARA_MAX_CODE ? (uint16_t)c : (uint16_t)RS_PARA_MAX_CODE;
             r.pad = 0;
             r.vi = vi;
-            r.texel = rs_para_texel_of(R, d);
-            /* the splat's size: the point's disc of area A count / P (its
+            /* the texel it falls in (rs_para_texel_of's u, v for z > 0) and
+             * the splat's size: the point's disc of area A count / P (its
              * VPL's share of the points) seen from the VPL: angle r / dist,
              * in texels r / dist (1 + u^2 + v^2) R / 4 (dtheta = 2 drho /
              * (1 + rho^2), R / 2 texels per unit of u), capped */
             float den = dist + d.z, u = d.x / den, v = d.y / den;
+            r.texel = rs_para_texel_of_uv(R, u, v);
             float rt = m->point_radius / dist * (1.0f + (u * u + v * v)) * (float)R * 0.25f;
             r.rt = rt > GI_ISM_MAX_SPLAT ? GI_ISM_MAX_SPLAT : rt;
             r.x = (u + 1.0f) * (float)R * 0.5f, r.y = (v + 1.0f) * (float)R * 0.5f;

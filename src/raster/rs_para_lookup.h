@@ -9,7 +9,7 @@
  * Lane by lane it makes the operations of rs_para_visible_scaled
  * (rs_paraboloid.c, the scalar reference) in the same order: the local
  * direction d, the texel of its (u, v) moved inside the disc when its centre
- * is not (rs__texel_of_uv, two passes), the stored code, and
+ * is not (rs_para_texel_of_uv, two passes), the stored code, and
  *   visible = d.z > 0 && (code empty || |d| <= decode(code) + bias_scale (w (1 + tan) + 2 steps))
  * with w = |d| (4 / R) / (1 + u^2 + v^2) and tan = min(tan(theta), RS_PARA_TAN_MAX) from
  * cos_receiver. sqrt and division are correctly rounded, floor, min/max
@@ -25,7 +25,7 @@
 
 #define RS_PARA_LOOKUP_SLACK 2
 
-/* The texel index of (u, v) for every lane: rs__texel_of_uv. */
+/* The texel index of (u, v) for every lane: rs_para_texel_of_uv. */
 static inline simd_i rs_para_texel_lanes(uint32_t R, simd_f u, simd_f v)
 {
     const simd_f zero = simd_zero_f(), one = simd_set1_f(1.0f);

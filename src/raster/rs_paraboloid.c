@@ -161,8 +161,6 @@ int rs_para_texel_inside(uint32_t resolution, uint32_t i, uint32_t j)
     return a * a + b * b <= (int64_t)resolution * resolution;
 }
 
-/* The texel holding (u, v), moved inside the disc when its centre is not. */
-static uint32_t rs__texel_of_uv(uint32_t resolution, float u, float v);
 
 uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d)
 {
@@ -178,21 +176,28 @@ uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d)
         u = rr > 0.0f ? d.x / rr : 1.0f;
         v = rr > 0.0f ? d.y / rr : 0.0f;
     }
-    return rs__texel_of_uv(resolution, u, v);
+    return rs_para_texel_of_uv(resolution, u, v);
 }
 
-static uint32_t rs__texel_of_uv(uint32_t resolution, float u, float v)
+/* floor(a) clamped to [0, R - 1], a NaN to 0, without libm's floorf (a
+ * call in the plain x86-64 build, which has no rounding instruction): for
+ * 0 <= a the truncation of min(a, R) is the floor, clamped the same. */
+static inline uint32_t rs__texel_index(float a, uint32_t resolution)
+{
+    if (!(a >= 0.0f)) return 0; /* negative or NaN (0/0 on the axis behind the VPL): converting a NaN to an
+                                   integer is undefined, and the SIMD paths gather with this index before masking */
+    float r = (float)resolution;
+    uint32_t i = (uint32_t)(a < r ? a : r);
+    return i < resolution - 1 ? i : resolution - 1;
+}
+
+uint32_t rs_para_texel_of_uv(uint32_t resolution, float u, float v)
 {
     float h = 0.5f * (float)resolution;
     for (int pass = 0; pass < 2; pass++) {
-        float fi = floorf((u + 1.0f) * h), fj = floorf((v + 1.0f) * h);
-        /* clamped to [0, R-1], a NaN (0/0 on the axis behind the VPL) to 0:
-         * converting a NaN to an integer is undefined, and the SIMD paths
-         * gather with this index before masking */
-        fi = fi >= 0.0f ? fi : 0.0f;
-        fj = fj >= 0.0f ? fj : 0.0f;
-        uint32_t i = (uint32_t)pf_clampf(fi, 0.0f, (float)resolution - 1.0f);
-        uint32_t j = (uint32_t)pf_clampf(fj, 0.0f, (float)resolution - 1.0f);
+        /* floor((u + 1) h), clamped to [0, R-1] */
+        uint32_t i = rs__texel_index((u + 1.0f) * h, resolution);
+        uint32_t j = rs__texel_index((v + 1.0f) * h, resolution);
         if (rs_para_texel_inside(resolution, i, j) || pass == 1) return j * resolution + i;
         /* The texel holding (u, v) has its centre outside the disc: move
          * (u, v) in to radius 1 - 1.5/R. The texel holding a point at that
@@ -258,7 +263,7 @@ int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range
     float w = dist * (4.0f / (float)resolution) / (1.0f + (u * u + v * v));
     float c = fabsf(cos_receiver), s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
     float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
-    uint16_t code = map[rs__texel_of_uv(resolution, u, v)];
+    uint16_t code = map[rs_para_texel_of_uv(resolution, u, v)];
     if (code > RS_PARA_MAX_CODE) return 1;
     return dist <= rs_para_decode(code, range) + bias_scale * (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
 }

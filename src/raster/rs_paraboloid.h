@@ -276,6 +276,10 @@ int rs_para_texel_inside(uint32_t resolution, uint32_t i, uint32_t j);
  * clamped to the horizon) is looked up in: its (u, v)'s texel, or the nearest
  * inside texel on the same radius. */
 uint32_t rs_para_texel_of(uint32_t resolution, pf_vec3 d_local);
+/* The texel (u, v) (the stereographic coordinates rs_para_texel_of computes
+ * for z > 0) is looked up in: its own, or the nearest inside texel on the
+ * same radius. */
+uint32_t rs_para_texel_of_uv(uint32_t resolution, float u, float v);
 
 /* The code stored for local direction d (any length > 0). */
 uint16_t rs_para_fetch(const uint16_t *map, uint32_t resolution, pf_vec3 d_local);

@@ -87,44 +87,50 @@ static void gi__atrous_box_row(void *p, uint32_t y, uint32_t worker)
 
 /* The luminance test's scale of each pixel, 1 / (sigma_l sqrt(g3x3(var)) +
  * eps), into inv_sd: g3x3 the (1 2 1)^2 / 16 Gaussian of src.var (SVGF Sec.
- * 4.4), off-screen taps left out. */
+ * 4.4), off-screen taps left out (the weights renormalised). */
+static float gi__atrous_blur_pixel(const gi_atrous_in *lv, int x, int y)
+{
+    const int W = (int)lv->w, H = (int)lv->h;
+    const float *v = lv->src.var, *h = gi_atrous_h;
+    float s = 0.0f, ws = 0.0f;
+    for (int a = 0; a < 3; a++) {
+        int ty = y + a - 1;
+        if (ty < 0 || ty >= H) continue;
+        for (int b = 0; b < 3; b++) {
+            int tx = x + b - 1;
+            if (tx < 0 || tx >= W) continue;
+            float w = h[a] * h[b];
+            s += w * v[(size_t)ty * lv->w + (size_t)tx];
+            ws += w;
+        }
+    }
+    return 1.0f / (lv->sigma_l * sqrtf(s / ws) + GI_ATROUS_EPS);
+}
+
 static void gi__atrous_blur_row(void *p, uint32_t y, uint32_t worker)
 {
     (void)worker;
     const gi_atrous_in *lv = &((const gi__atrous_pass *)p)->lv;
     const int W = (int)lv->w, H = (int)lv->h, yy = (int)y;
-    const float *v = lv->src.var, *h = gi_atrous_h;
     float *out = (float *)lv->inv_sd + (size_t)y * lv->w;
-    const float sl = lv->sigma_l;
-    int x = 0;
-    if (yy >= 1 && yy + 1 < H && W >= 3) {
-        /* every tap on screen: the weights sum to 1 exactly (they are
-         * dyadic), so this is the general loop's value without its tests */
-        const float *r0 = v + (size_t)(yy - 1) * lv->w, *r1 = r0 + lv->w, *r2 = r1 + lv->w;
-        for (x = 1; x < W - 1; x++) {
-            float s = 0.0f;
-            s += h[0] * h[0] * r0[x - 1], s += h[0] * h[1] * r0[x], s += h[0] * h[2] * r0[x + 1];
-            s += h[1] * h[0] * r1[x - 1], s += h[1] * h[1] * r1[x], s += h[1] * h[2] * r1[x + 1];
-            s += h[2] * h[0] * r2[x - 1], s += h[2] * h[1] * r2[x], s += h[2] * h[2] * r2[x + 1];
-            out[x] = 1.0f / (sl * sqrtf(s) + GI_ATROUS_EPS);
-        }
+    if (yy < 1 || yy + 1 >= H || W < 3) { /* every pixel has off-screen taps */
+        for (int x = 0; x < W; x++) out[x] = gi__atrous_blur_pixel(lv, x, yy);
+        return;
     }
-    for (int xx = 0; xx < W; xx++) {
-        if (xx == 1 && x > 1) xx = W - 1; /* the interior is done */
-        float s = 0.0f, ws = 0.0f;
-        for (int a = 0; a < 3; a++) {
-            int ty = yy + a - 1;
-            if (ty < 0 || ty >= H) continue;
-            for (int b = 0; b < 3; b++) {
-                int tx = xx + b - 1;
-                if (tx < 0 || tx >= W) continue;
-                float w = h[a] * h[b];
-                s += w * v[(size_t)ty * lv->w + (size_t)tx];
-                ws += w;
-            }
-        }
-        out[xx] = 1.0f / (sl * sqrtf(s / ws) + GI_ATROUS_EPS);
+    /* inside the row every tap is on screen: the weights sum to 1 exactly
+     * (they are dyadic), so this is gi__atrous_blur_pixel's value without
+     * its tests, in its order */
+    const float *h = gi_atrous_h, sl = lv->sigma_l;
+    const float *r0 = lv->src.var + (size_t)(yy - 1) * lv->w, *r1 = r0 + lv->w, *r2 = r1 + lv->w;
+    out[0] = gi__atrous_blur_pixel(lv, 0, yy);
+    for (int x = 1; x < W - 1; x++) {
+        float s = 0.0f;
+        s += h[0] * h[0] * r0[x - 1], s += h[0] * h[1] * r0[x], s += h[0] * h[2] * r0[x + 1];
+        s += h[1] * h[0] * r1[x - 1], s += h[1] * h[1] * r1[x], s += h[1] * h[2] * r1[x + 1];
+        s += h[2] * h[0] * r2[x - 1], s += h[2] * h[1] * r2[x], s += h[2] * h[2] * r2[x + 1];
+        out[x] = 1.0f / (sl * sqrtf(s) + GI_ATROUS_EPS);
     }
+    out[W - 1] = gi__atrous_blur_pixel(lv, W - 1, yy);
 }
 
 /* ------------------------------------------------------ a-trous levels */

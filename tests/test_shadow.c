@@ -650,6 +650,97 @@ static void test_simd_matches_scalar(void **state)
     simd_check_scene(SIBENIK_PATH, sibenik, &nave, 0);
 }
 
+/* The PCF window at a face's left and right edges: the SIMD lookup
+ * (rs_shadow_lookup.h) clamps each tap's column lane by lane, and any
+ * shortcut that reads a row's four taps as consecutive texels must fall
+ * back there. Groups of 8 points that all look up within 5 texels of a
+ * face's left or right edge, or straddle both, must give the scalar
+ * lookup's bits (a trial shortcut that took windows starting up to 9
+ * texels left of the edge failed only here, not in
+ * test_simd_matches_scalar's camera points). The points are the
+ * surfaces seen through texel columns 0..4 and size-5..size-1 of every face
+ * (ray cast), moved 2% towards or away from the light, so that both lit and
+ * shadowed taps are compared. */
+static void test_simd_face_borders(void **state)
+{
+    (void)state;
+    if (!isa_has(PF_ISA_AVX2)) {
+        print_message("SKIP: no AVX2\n");
+        return;
+    }
+    world w;
+    assert_int_equal(load(&w, CORNELL_PATH), 1);
+    const pf_light lights[3] = {
+        make_spot(pf_v3(0.45f, 0.5f, 0.1f), pf_v3(0.25f, 0.0f, 0.35f), 30.0f, 40.0f),
+        make_point(pf_v3(0.278f, 0.5388f, 0.2795f)),
+        make_directional(pf_v3(-0.3f, -0.6f, 1.0f)),
+    };
+    world_lights(&w, lights, 3);
+    world_build(&w, 64, 1);
+    uint64_t rng = 777;
+    for (uint32_t l = 0; l < 3; l++) {
+        const rs_shadow_map *m = &w.set.maps[l];
+        uint32_t groups = 0, mismatches = 0, lit = 0, dark = 0;
+        for (uint32_t f = 0; f < m->face_count; f++)
+            for (uint32_t g = 0; g < 96; g++) {
+                float pos[3][8], ng[3][8];
+                const int side = g % 3; /* 0: left edge, 1: right edge, 2: both in one group */
+                const uint32_t y = (uint32_t)(rng_next(&rng) % m->size);
+                for (uint32_t k = 0; k < 8; k++) {
+                    uint32_t c = (uint32_t)(rng_next(&rng) % 5);
+                    int right = side == 1 || (side == 2 && (k & 1));
+                    float x = right ? (float)(m->size - 1 - c) : (float)c;
+                    x += (float)rng_unit(&rng);
+                    float nx = 2.0f * x / (float)m->size - 1.0f;
+                    float ny = 1.0f - 2.0f * ((float)y + 0.5f) / (float)m->size;
+                    pf_ray r;
+                    if (m->kind == RS_SHADOW_ORTHO) {
+                        r.org = pf_v3_add(m->eye, pf_v3_add(pf_v3_scale(m->right[0], nx * m->half_w),
+                                                            pf_v3_scale(m->up[0], ny * m->half_h)));
+                        r.dir = m->forward[0];
+                        r.tnear = m->znear;
+                        r.tfar = m->zfar;
+                    } else {
+                        pf_vec3 side_v = pf_v3_add(pf_v3_scale(m->right[f], nx * m->tan_half),
+                                                   pf_v3_scale(m->up[f], ny * m->tan_half));
+                        r.org = m->eye;
+                        r.dir = pf_v3_add(m->forward[f], side_v);
+                        r.tnear = m->znear;
+                        r.tfar = INFINITY;
+                    }
+                    pf_hit h = pf_rt_intersect1(w.rt, r);
+                    float t = h.prim != PF_RT_MISS ? h.t : 1.0f;
+                    t *= (k >> 1) & 1 ? 1.02f : 0.98f;
+                    pf_vec3 p = pf_v3_add(r.org, pf_v3_scale(r.dir, t));
+                    pos[0][k] = p.x, pos[1][k] = p.y, pos[2][k] = p.z;
+                    for (int a = 0; a < 3; a++) ng[a][k] = (float)(2.0 * rng_unit(&rng) - 1.0);
+                }
+                const unsigned mask = g % 4 == 3 ? (unsigned)(rng_next(&rng) & 0xffu) | 1u : 0xffu;
+                float simd[8];
+                rs_shadow_visibility8(m, RS_SIMD_AVX2, pos[0], pos[1], pos[2], ng[0], ng[1], ng[2], mask, simd);
+                for (uint32_t k = 0; k < 8; k++) {
+                    float ref = (mask >> k) & 1u ? rs_shadow_visibility(m, pf_v3(pos[0][k], pos[1][k], pos[2][k]),
+                                                                         pf_v3(ng[0][k], ng[1][k], ng[2][k]))
+                                                 : 0.0f;
+                    if (memcmp(&ref, &simd[k], sizeof ref) != 0) {
+                        if (mismatches < 5)
+                            print_error("map %u face %u group %u lane %u: scalar %a simd %a\n", l, f, g, k,
+                                        (double)ref, (double)simd[k]);
+                        mismatches++;
+                    }
+                    lit += (mask >> k & 1u) && ref == 1.0f;
+                    dark += (mask >> k & 1u) && ref < 1.0f;
+                }
+                groups++;
+            }
+        print_message("cornell map %u: %u border groups, %u lit, %u partly or fully shadowed, %u mismatches\n", l,
+                      groups, lit, dark, mismatches);
+        assert_int_equal(mismatches, 0);
+        assert_true(lit > groups && dark > groups / 4); /* both outcomes were compared */
+    }
+    world_free(&w);
+}
+
 static void test_map_matches_rays(void **state)
 {
     (void)state;
@@ -881,6 +972,7 @@ int main(void)
         cmocka_unit_test(test_outside),           cmocka_unit_test(test_no_acne),
         cmocka_unit_test(test_pcf_edge),          cmocka_unit_test(test_map_matches_rays),
         cmocka_unit_test(test_deterministic),     cmocka_unit_test(test_simd_matches_scalar),
+        cmocka_unit_test(test_simd_face_borders),
         cmocka_unit_test(test_agreement_cornell), cmocka_unit_test(test_agreement_maze),
         cmocka_unit_test(test_agreement_sibenik),
     };

@@ -107,20 +107,23 @@ static void rs__front(const rs_para_context *ctx, rs__scratch *sc, const rs_para
         sc->stats.triangles_between_texels += (uint64_t)simd_mask_count(simd_mask_andnot(all, drawn));
         simd_mask keep = simd_mask_or(drawn, crossing);
         if (!simd_mask_any(keep)) continue;
+        /* left-packed into the batch (each array has room for SIMD_W
+         * elements past the cluster's triangles: rs__scratch_create) */
         uint32_t n = b->n;
-        simd_compress_storeu_i((int32_t *)b->tri + n, keep, simd_add_i(simd_set1_i((int32_t)base), lane));
+        const simd_pack pk = simd_pack_make(keep);
+        simd_pack_storeu_i((int32_t *)b->tri + n, pk, simd_add_i(simd_set1_i((int32_t)base), lane));
         for (int v = 0; v < 3; v++) {
-            for (int c = 0; c < 3; c++) simd_compress_storeu_f(b->l[3 * v + c] + n, keep, l[v][c]);
-            simd_compress_storeu_f(b->len[v] + n, keep, len[v]);
-            simd_compress_storeu_f(b->pu[v] + n, keep, pu[v]);
-            simd_compress_storeu_f(b->pv[v] + n, keep, pv[v]);
+            for (int c = 0; c < 3; c++) simd_pack_storeu_f(b->l[3 * v + c] + n, pk, l[v][c]);
+            simd_pack_storeu_f(b->len[v] + n, pk, len[v]);
+            simd_pack_storeu_f(b->pu[v] + n, pk, pu[v]);
+            simd_pack_storeu_f(b->pv[v] + n, pk, pv[v]);
         }
-        simd_compress_storeu_f(b->c2max + n, keep, c2max);
-        simd_compress_storeu_i(b->rect[0] + n, keep, i0);
-        simd_compress_storeu_i(b->rect[1] + n, keep, i1);
-        simd_compress_storeu_i(b->rect[2] + n, keep, j0);
-        simd_compress_storeu_i(b->rect[3] + n, keep, j1);
-        simd_compress_storeu_i(b->crossing + n, keep, simd_select_i(crossing, simd_set1_i(1), simd_set1_i(0)));
+        simd_pack_storeu_f(b->c2max + n, pk, c2max);
+        simd_pack_storeu_i(b->rect[0] + n, pk, i0);
+        simd_pack_storeu_i(b->rect[1] + n, pk, i1);
+        simd_pack_storeu_i(b->rect[2] + n, pk, j0);
+        simd_pack_storeu_i(b->rect[3] + n, pk, j1);
+        simd_pack_storeu_i(b->crossing + n, pk, simd_select_i(crossing, simd_set1_i(1), simd_set1_i(0)));
         b->n = n + (uint32_t)simd_mask_count(keep);
     }
 }
@@ -157,7 +160,9 @@ static uint64_t rs__scan(const rs_para_context *ctx, rs__scratch *sc, rs__setup 
             int32_t cnt = hi - i + 1;
             simd_mask valid = simd_mask_from_bits(cnt >= SIMD_W ? SIMD_FULL : (1u << cnt) - 1u);
             tested += (uint64_t)simd_mask_count(valid);
-            simd_f dx = simd_maskz_loadu_f(ctx->d2 + i, valid), dz = simd_maskz_loadu_f(dzr + i, valid);
+            /* whole vectors: the tables are padded, the lanes past hi are
+             * never in nor unsure (valid masks them) */
+            simd_f dx = simd_loadu_f(ctx->d2 + i), dz = simd_loadu_f(dzr + i);
             simd_f g[3];
             simd_mask in = valid, out = simd_mask_from_bits(0);
             for (int k = 0; k < 3; k++) {

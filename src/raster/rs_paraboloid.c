@@ -126,6 +126,7 @@
 #include "rs_para_lod.h"
 #include "simd.h" /* SIMD_X86 */
 
+
 /* ------------------------------------------------------------------ mapping */
 
 rs_para_frame rs_para_frame_make(pf_vec3 position, pf_vec3 normal)
@@ -333,8 +334,11 @@ static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
     s->order = malloc(cl * sizeof(uint32_t));
     s->order_tmp = malloc(cl * sizeof(uint32_t));
     /* 26 arrays of cluster_size 4-byte words: tri, 9 l, 3 len, 3 pu, 3 pv,
-     * c2max, 4 rect, crossing */
-    s->batch_block = malloc(26 * cs * 4);
+     * c2max, 4 rect, crossing; each with RS__LANES words of room after
+     * them, which the front end's whole-vector left-packing may write
+     * (simd_pack_storeu_f: up to SIMD_W <= RS__LANES past the last kept) */
+    const size_t stride = cs + RS__LANES;
+    s->batch_block = malloc(26 * stride * 4);
     if (!s->depth || !s->tile_max || !s->tile_dirty || !s->tile_skip || !s->tile_class || !s->crect || !s->cnear || !s->key || !s->order ||
         !s->order_tmp || !s->batch_block) {
         rs__scratch_free(s);
@@ -343,14 +347,14 @@ static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
     uint32_t *w = s->batch_block;
     rs__batch *b = &s->batch;
     b->tri = w;
-    w += cs;
-    for (int k = 0; k < 9; k++, w += cs) b->l[k] = (float *)w;
-    for (int k = 0; k < 3; k++, w += cs) b->len[k] = (float *)w;
-    for (int k = 0; k < 3; k++, w += cs) b->pu[k] = (float *)w;
-    for (int k = 0; k < 3; k++, w += cs) b->pv[k] = (float *)w;
+    w += stride;
+    for (int k = 0; k < 9; k++, w += stride) b->l[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += stride) b->len[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += stride) b->pu[k] = (float *)w;
+    for (int k = 0; k < 3; k++, w += stride) b->pv[k] = (float *)w;
     b->c2max = (float *)w;
-    w += cs;
-    for (int k = 0; k < 4; k++, w += cs) b->rect[k] = (int32_t *)w;
+    w += stride;
+    for (int k = 0; k < 4; k++, w += stride) b->rect[k] = (int32_t *)w;
     b->crossing = (int32_t *)w;
     return 1;
 }
@@ -522,8 +526,10 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->lane_count = ctx->tri_padded / RS__LANES;
     ctx->lanes = calloc(ctx->lane_count ? ctx->lane_count : 1, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
-    ctx->d2 = malloc(R * sizeof(float));
-    ctx->dz = malloc((size_t)R * R * sizeof(float));
+    /* d2 and dz padded by a batch of lanes (zeros): the scan reads whole
+     * vectors of them past a row's last texel and masks those lanes */
+    ctx->d2 = calloc((size_t)R + RS__LANES, sizeof(float));
+    ctx->dz = calloc((size_t)R * R + RS__LANES, sizeof(float));
     ctx->w = malloc((size_t)R * R * sizeof(float));
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
@@ -1068,6 +1074,17 @@ static void rs__sort_clusters(rs__scratch *sc, uint32_t n)
     }
 }
 
+/* Prefetch hint: every 64-byte line of a cluster's range in the nine
+ * position arrays (what rs__front reads). */
+static void rs__prefetch_positions(const rs_para_context *ctx, const rs__cluster *cl)
+{
+    for (int a = 0; a < 9; a++) {
+        const char *p = (const char *)(ctx->soa[a] + cl->first);
+        const char *e = (const char *)(ctx->soa[a] + cl->first + cl->count);
+        for (; p < e; p += 64) __builtin_prefetch(p);
+    }
+}
+
 /* Draws one cluster: front end, then setup and scan of every survivor.
  * Returns the texel rectangle written to (for the tile maxima). */
 static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f,
@@ -1097,6 +1114,13 @@ static rs__rect rs__draw_cluster(const rs_para_context *ctx, rs__scratch *sc, co
             kern->front(ctx, sc, f, ln);
         }
     }
+    /* the setup reads each survivor's normal and longest edge from the
+     * scene-order arrays, which the front end did not touch and which the
+     * hardware prefetcher does not follow (a cluster's survivors are a few
+     * scattered triangles): ask for all of them first (a hint, no result
+     * changes; docs/perf.md, 2026-12-02 evening) */
+    for (uint32_t k = 0; k < b->n; k++)
+        for (int a = 9; a < 13; a++) __builtin_prefetch(ctx->soa[a] + b->tri[k]);
     for (uint32_t k = 0; k < b->n; k++) {
         rs__setup s;
         rs__rect rect;
@@ -1226,6 +1250,11 @@ static void rs__pass(rs_para_context *ctx, rs__scratch *sc, const rs_para_frame 
     /* 3. draw, skipping clusters behind what is drawn already */
     for (uint32_t k = 0; k < n; k++) {
         uint32_t c = sc->order[k];
+        /* the clusters come in depth order, so the front end reads the
+         * triangle arrays in jumps the hardware prefetcher does not follow:
+         * ask for the next cluster's positions (a hint, no result changes;
+         * docs/perf.md, 2026-12-02 evening) */
+        if (k + 1 < n) rs__prefetch_positions(ctx, &ctx->clusters[sc->order[k + 1]]);
         if (rs__occluded(ctx, sc, sc->crect[c], sc->cnear[c])) {
             sc->stats.clusters_occluded++;
             continue;

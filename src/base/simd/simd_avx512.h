@@ -132,6 +132,10 @@ static inline int simd_compress_storeu_i(int32_t *p, simd_mask m, simd_i a)
     _mm512_mask_storeu_epi32(p, (__mmask16)((1u << n) - 1u), _mm512_maskz_compress_epi32(m, a));
     return n;
 }
+typedef simd_mask simd_pack; /* simd_pack_make: see simd_scalar.h; the compress above */
+static inline simd_pack simd_pack_make(simd_mask m) { return m; }
+static inline void simd_pack_storeu_f(float *p, simd_pack k, simd_f a) { (void)simd_compress_storeu_f(p, k, a); }
+static inline void simd_pack_storeu_i(int32_t *p, simd_pack k, simd_i a) { (void)simd_compress_storeu_i(p, k, a); }
 static inline simd_i simd_gather_u16(const uint16_t *base, simd_i idx)
 {
     return _mm512_and_si512(_mm512_i32gather_epi32(idx, (const void *)base, 2), _mm512_set1_epi32(0xffff));

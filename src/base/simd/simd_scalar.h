@@ -350,6 +350,16 @@ static inline int simd_compress_storeu_i(int32_t *p, simd_mask m, simd_i a)
         if (m >> l & 1) p[n++] = a.v[l];
     return n;
 }
+/* Left-packing of several vectors under one mask: k = simd_pack_make(m)
+ * once, then simd_pack_storeu_f/_i(p, k, a) stores a's lanes of m at p in
+ * lane order, as simd_compress_storeu does, but may also write anything to
+ * the elements after them up to p[SIMD_W - 1]: the destination needs room
+ * for SIMD_W elements. (AVX2 has no compress instruction: one permutation
+ * and one whole-vector store there, instead of a store per lane.) */
+typedef simd_mask simd_pack;
+static inline simd_pack simd_pack_make(simd_mask m) { return m; }
+static inline void simd_pack_storeu_f(float *p, simd_pack k, simd_f a) { (void)simd_compress_storeu_f(p, k, a); }
+static inline void simd_pack_storeu_i(int32_t *p, simd_pack k, simd_i a) { (void)simd_compress_storeu_i(p, k, a); }
 /* base[idx] of a table of 16-bit values, every lane (indices must be in
  * the table whether or not the lane is used later); the SIMD headers read
  * 32 bits at 2 idx and keep the low half, so the table needs two bytes of

@@ -178,6 +178,10 @@ static inline int simd_compress_storeu_i(int32_t *p, simd_mask m, simd_i a)
     for (unsigned b = (unsigned)_mm_movemask_ps(m); b; b &= b - 1) p[n++] = v[__builtin_ctz(b)];
     return n;
 }
+typedef simd_mask simd_pack; /* simd_pack_make: see simd_scalar.h */
+static inline simd_pack simd_pack_make(simd_mask m) { return m; }
+static inline void simd_pack_storeu_f(float *p, simd_pack k, simd_f a) { (void)simd_compress_storeu_f(p, k, a); }
+static inline void simd_pack_storeu_i(int32_t *p, simd_pack k, simd_i a) { (void)simd_compress_storeu_i(p, k, a); }
 static inline simd_i simd_gather_u16(const uint16_t *base, simd_i idx)
 {
     int32_t i[4], r[4];

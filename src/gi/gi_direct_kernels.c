@@ -66,6 +66,14 @@ static simd_mask gi__light_irradiance_w(const pf_light *L, simd_f px, simd_f py,
     return ok;
 }
 
+/* A G-buffer plane's SIMD_W values, zeros in the lanes without a surface:
+ * a plain load when every lane has one (`whole`), the same values without
+ * the masked load (slower on AMD Zen 3, docs/perf.md 2026-12-02 evening) */
+static inline simd_f gi__load_live(const float *p, int whole, simd_mask live)
+{
+    return whole ? simd_loadu_f(p) : simd_maskz_loadu_f(p, live);
+}
+
 /* One row of the direct light (stage 2b): io->direct = irradiance x PCF
  * visibility x albedo / pi, emission added later by compose. */
 static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
@@ -88,17 +96,21 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
         float in[6][SIMD_W], ngv[3][SIMD_W], ev[3][SIMD_W];
         const uint32_t n = width - x0 < SIMD_W ? width - x0 : SIMD_W;
         const simd_mask in_row = simd_mask_from_bits(n == SIMD_W ? SIMD_FULL : (1u << n) - 1u);
-        const simd_i prims = simd_maskz_loadu_i((const int32_t *)g->prim + row + x0, in_row);
+        /* masked loads only where a group is partial: a whole group of
+         * surfaces (most of them) takes plain loads, the same values */
+        const simd_i prims = n == SIMD_W ? simd_loadu_i((const int32_t *)g->prim + row + x0)
+                                         : simd_maskz_loadu_i((const int32_t *)g->prim + row + x0, in_row);
         const simd_mask live_lanes =
             simd_mask_and(in_row, simd_mask_not(simd_eq_i(prims, simd_set1_i((int32_t)RS_GBUFFER_EMPTY))));
         const uint32_t live = simd_mask_bits(live_lanes);
         if (!live) continue;
-        const simd_f px = simd_maskz_loadu_f(g->pos_x + row + x0, live_lanes);
-        const simd_f py = simd_maskz_loadu_f(g->pos_y + row + x0, live_lanes);
-        const simd_f pz = simd_maskz_loadu_f(g->pos_z + row + x0, live_lanes);
-        const simd_f nx = simd_maskz_loadu_f(g->nrm_x + row + x0, live_lanes);
-        const simd_f ny = simd_maskz_loadu_f(g->nrm_y + row + x0, live_lanes);
-        const simd_f nz = simd_maskz_loadu_f(g->nrm_z + row + x0, live_lanes);
+        const int whole = live == SIMD_FULL;
+        const simd_f px = gi__load_live(g->pos_x + row + x0, whole, live_lanes);
+        const simd_f py = gi__load_live(g->pos_y + row + x0, whole, live_lanes);
+        const simd_f pz = gi__load_live(g->pos_z + row + x0, whole, live_lanes);
+        const simd_f nx = gi__load_live(g->nrm_x + row + x0, whole, live_lanes);
+        const simd_f ny = gi__load_live(g->nrm_y + row + x0, whole, live_lanes);
+        const simd_f nz = gi__load_live(g->nrm_z + row + x0, whole, live_lanes);
         simd_f gx, gy, gz;
         if (io->tri_table) {
             const float *t0 = &io->tri_table[0].ng.x;
@@ -150,7 +162,7 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
              * code rounds it; the lanes without a surface hold 0 x 0 */
             const float *alb[3] = {g->alb_r, g->alb_g, g->alb_b};
             for (int c = 0; c < 3; c++)
-                simd_storeu_f(ev[c], simd_mul_f(simd_mul_f(e[c], simd_maskz_loadu_f(alb[c] + row + x0, live_lanes)),
+                simd_storeu_f(ev[c], simd_mul_f(simd_mul_f(e[c], gi__load_live(alb[c] + row + x0, whole, live_lanes)),
                                                 simd_set1_f(PF_INV_PI)));
             for (uint32_t i = 0; i < n; i++) o[3 * i] = ev[0][i], o[3 * i + 1] = ev[1][i], o[3 * i + 2] = ev[2][i];
             continue;

@@ -186,12 +186,17 @@ static uint64_t rs__scan(const rs_para_context *ctx, rs__scratch *sc, rs__setup 
                 in = simd_mask_or(in, simd_mask_from_bits(resolved));
             }
             if (!simd_mask_any(in)) continue;
-            simd_f w = simd_maskz_loadu_f(wr + i, in);
+            /* whole-vector loads and a whole-vector store of the kept or
+             * new depths (the tables and the depth plane are padded; the
+             * lanes outside `in` write back what they read): AMD Zen 3 runs
+             * masked loads and stores far slower (docs/perf.md, 2026-12-02
+             * evening); the same values */
+            simd_f w = simd_loadu_f(wr + i);
             simd_f dn = simd_add_f(simd_add_f(simd_mul_f(dx, nx), ny), simd_mul_f(dz, nz));
             simd_f t = simd_div_f(simd_mul_f(det, w), dn);
-            simd_f old = simd_maskz_loadu_f(depth + i, in);
+            simd_f old = simd_loadu_f(depth + i);
             simd_mask upd = simd_mask_and(in, simd_mask_and(simd_gt_f(t, zero), simd_lt_f(t, old)));
-            simd_mask_storeu_f(depth + i, upd, t);
+            simd_storeu_f(depth + i, simd_select_f(upd, t, old));
         }
     }
     return tested;

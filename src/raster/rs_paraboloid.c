@@ -323,7 +323,7 @@ static int rs__scratch_init(rs__scratch *s, const rs_para_context *ctx)
 {
     memset(s, 0, sizeof *s);
     size_t texels = (size_t)ctx->res * ctx->res, cl = ctx->cluster_count, cs = ctx->cluster_size;
-    s->depth = malloc(texels * sizeof(float));
+    s->depth = calloc(texels + RS__LANES, sizeof(float)); /* padded: rs__scan's whole-vector loads and stores */
     s->tile_max = malloc((size_t)ctx->tiles * ctx->tiles * sizeof(float));
     s->tile_dirty = malloc((size_t)ctx->tiles * ctx->tiles);
     s->tile_skip = calloc((size_t)ctx->tiles * ctx->tiles, 1);
@@ -526,11 +526,11 @@ pf_result rs_para_context_create(rs_para_context **out, const pf_scene *scene, c
     ctx->lane_count = ctx->tri_padded / RS__LANES;
     ctx->lanes = calloc(ctx->lane_count ? ctx->lane_count : 1, sizeof(rs__cluster));
     ctx->u = malloc(R * sizeof(float));
-    /* d2 and dz padded by a batch of lanes (zeros): the scan reads whole
+    /* d2, dz and w padded by a batch of lanes (zeros): the scan reads whole
      * vectors of them past a row's last texel and masks those lanes */
     ctx->d2 = calloc((size_t)R + RS__LANES, sizeof(float));
     ctx->dz = calloc((size_t)R * R + RS__LANES, sizeof(float));
-    ctx->w = malloc((size_t)R * R * sizeof(float));
+    ctx->w = calloc((size_t)R * R + RS__LANES, sizeof(float));
     ctx->row_lo = malloc(R * sizeof(int32_t));
     ctx->row_hi = malloc(R * sizeof(int32_t));
     if (ctx->cluster_static) memset(ctx->cluster_static, 1, ctx->cluster_count ? ctx->cluster_count : 1);

@@ -126,7 +126,6 @@
 #include "rs_para_lod.h"
 #include "simd.h" /* SIMD_X86 */
 
-
 /* ------------------------------------------------------------------ mapping */
 
 rs_para_frame rs_para_frame_make(pf_vec3 position, pf_vec3 normal)

@@ -650,6 +650,28 @@ static void test_simd_matches_scalar(void **state)
     simd_check_scene(SIBENIK_PATH, sibenik, &nave, 0);
 }
 
+/* The ray through NDC point (nx, ny) of face f of map m: parallel rays over
+ * the box for a directional light (t = depth), else from the eye with
+ * |dir . forward| = 1 (t = depth along the face axis). */
+static pf_ray texel_ray(const rs_shadow_map *m, uint32_t f, float nx, float ny)
+{
+    pf_ray r;
+    if (m->kind == RS_SHADOW_ORTHO) {
+        r.org = pf_v3_add(m->eye,
+                          pf_v3_add(pf_v3_scale(m->right[0], nx * m->half_w), pf_v3_scale(m->up[0], ny * m->half_h)));
+        r.dir = m->forward[0];
+        r.tnear = m->znear;
+        r.tfar = m->zfar;
+    } else {
+        pf_vec3 side = pf_v3_add(pf_v3_scale(m->right[f], nx * m->tan_half), pf_v3_scale(m->up[f], ny * m->tan_half));
+        r.org = m->eye;
+        r.dir = pf_v3_add(m->forward[f], side);
+        r.tnear = m->znear;
+        r.tfar = INFINITY;
+    }
+    return r;
+}
+
 /* The PCF window at a face's left and right edges: the SIMD lookup
  * (rs_shadow_lookup.h) clamps each tap's column lane by lane, and any
  * shortcut that reads a row's four taps as consecutive texels must fall
@@ -693,21 +715,7 @@ static void test_simd_face_borders(void **state)
                     x += (float)rng_unit(&rng);
                     float nx = 2.0f * x / (float)m->size - 1.0f;
                     float ny = 1.0f - 2.0f * ((float)y + 0.5f) / (float)m->size;
-                    pf_ray r;
-                    if (m->kind == RS_SHADOW_ORTHO) {
-                        r.org = pf_v3_add(m->eye, pf_v3_add(pf_v3_scale(m->right[0], nx * m->half_w),
-                                                            pf_v3_scale(m->up[0], ny * m->half_h)));
-                        r.dir = m->forward[0];
-                        r.tnear = m->znear;
-                        r.tfar = m->zfar;
-                    } else {
-                        pf_vec3 side_v = pf_v3_add(pf_v3_scale(m->right[f], nx * m->tan_half),
-                                                   pf_v3_scale(m->up[f], ny * m->tan_half));
-                        r.org = m->eye;
-                        r.dir = pf_v3_add(m->forward[f], side_v);
-                        r.tnear = m->znear;
-                        r.tfar = INFINITY;
-                    }
+                    pf_ray r = texel_ray(m, f, nx, ny);
                     pf_hit h = pf_rt_intersect1(w.rt, r);
                     float t = h.prim != PF_RT_MISS ? h.t : 1.0f;
                     t *= (k >> 1) & 1 ? 1.02f : 0.98f;
@@ -762,21 +770,7 @@ static void test_map_matches_rays(void **state)
                 for (uint32_t x = 0; x < m->size; x++) {
                     float nx = 2.0f * ((float)x + 0.5f) / (float)m->size - 1.0f;
                     float ny = 1.0f - 2.0f * ((float)y + 0.5f) / (float)m->size;
-                    pf_ray r;
-                    if (m->kind == RS_SHADOW_ORTHO) { /* parallel rays over the box, t = depth */
-                        r.org = pf_v3_add(m->eye, pf_v3_add(pf_v3_scale(m->right[0], nx * m->half_w),
-                                                            pf_v3_scale(m->up[0], ny * m->half_h)));
-                        r.dir = m->forward[0];
-                        r.tnear = m->znear;
-                        r.tfar = m->zfar;
-                    } else { /* |dir . forward| = 1, so t = depth along the face axis */
-                        pf_vec3 side = pf_v3_add(pf_v3_scale(m->right[f], nx * m->tan_half),
-                                                 pf_v3_scale(m->up[f], ny * m->tan_half));
-                        r.org = m->eye;
-                        r.dir = pf_v3_add(m->forward[f], side);
-                        r.tnear = m->znear;
-                        r.tfar = INFINITY;
-                    }
+                    pf_ray r = texel_ray(m, f, nx, ny);
                     pf_hit h = pf_rt_intersect1(w.rt, r);
                     float zs = plane[(size_t)y * m->size + x];
                     texels++;

@@ -108,7 +108,7 @@ static void rs__front(const rs_para_context *ctx, rs__scratch *sc, const rs_para
         simd_mask keep = simd_mask_or(drawn, crossing);
         if (!simd_mask_any(keep)) continue;
         /* left-packed into the batch (each array has room for SIMD_W
-         * elements past the cluster's triangles: rs__scratch_create) */
+         * elements past the cluster's triangles: rs__scratch_init) */
         uint32_t n = b->n;
         const simd_pack pk = simd_pack_make(keep);
         simd_pack_storeu_i((int32_t *)b->tri + n, pk, simd_add_i(simd_set1_i((int32_t)base), lane));

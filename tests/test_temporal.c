@@ -6,6 +6,9 @@
  *   every VPL) up to float rounding;
  * - a small camera move keeps most pixels' history (reprojection), a turn
  *   to look the other way restarts it everywhere;
+ * - the same at half resolution (--indirect-scale 2: the stage runs on the
+ *   reduced image before the upsampling): converged to every-VPL shading,
+ *   and a small step keeps most reduced pixels' history;
  * - the same bytes with 1 and 2 threads over a moving camera;
  * - a history of 1 frame is refused with a clear message. */
 #include <setjmp.h>
@@ -27,7 +30,7 @@
 #define W 96
 #define H 72
 
-static void begin(tu_fx *x, uint32_t threads, uint32_t temporal, int no_interleave)
+static void begin_scaled(tu_fx *x, uint32_t threads, uint32_t temporal, int no_interleave, uint32_t scale)
 {
     tu_load(&x->scene, CORNELL);
     gi_indirect_options io;
@@ -36,16 +39,22 @@ static void begin(tu_fx *x, uint32_t threads, uint32_t temporal, int no_interlea
     io.filter = GI_FILTER_NONE;
     io.temporal = temporal;
     io.no_interleave = no_interleave;
+    io.scale = scale;
     tu_fx_begin(x, threads, RS_SIMD_SCALAR, W, H, &x->scene.cameras[0], &io, 1);
 }
 
-static void test_converges_to_every_vpl(void **state)
+static void begin(tu_fx *x, uint32_t threads, uint32_t temporal, int no_interleave)
 {
-    (void)state;
+    begin_scaled(x, threads, temporal, no_interleave, 1);
+}
+
+static void converges(uint32_t scale)
+{
     tu_fx all, t;
-    begin(&all, 2, 0, 1);
+    begin_scaled(&all, 2, 0, 1, scale);
     gi_frame_render_raster(&all.f);
-    begin(&t, 2, 16, 0);
+    begin_scaled(&t, 2, 16, 0, scale);
+    assert_int_equal(t.f.ind.scale, scale);
     double first = 0.0;
     for (int k = 0; k < 16; k++) {
         gi_frame_render_raster(&t.f);
@@ -57,7 +66,8 @@ static void test_converges_to_every_vpl(void **state)
                 if (a > 1e-6) rel += fabs(b - a) / a, n++;
             }
             rel /= n;
-            print_message("after %d frame(s): mean relative difference to every-VPL shading %.6f\n", k + 1, rel);
+            print_message("scale %u, after %d frame(s): mean relative difference to every-VPL shading %.6f\n", scale,
+                          k + 1, rel);
             if (k == 0) first = rel;
             else {
                 assert_true(rel < 1e-4);
@@ -69,23 +79,30 @@ static void test_converges_to_every_vpl(void **state)
     tu_fx_end(&t);
 }
 
-/* Pixels whose history survived the last frame. */
+static void test_converges_to_every_vpl(void **state)
+{
+    (void)state;
+    converges(1);
+    converges(2); /* the upsampling is linear in the irradiance: it keeps the equality */
+}
+
+/* Pixels (of the indirect image) whose history survived the last frame. */
 static uint32_t kept(const gi_frame *f)
 {
     const uint16_t *n = f->ind.hist_n[f->ind.hist_cur];
     uint32_t c = 0;
-    for (size_t i = 0; i < (size_t)W * H; i++) c += n[i] > 1;
+    for (size_t i = 0; i < (size_t)f->ind.w * f->ind.h; i++) c += n[i] > 1;
     return c;
 }
 
-static void test_reprojection(void **state)
+static void reprojection(uint32_t scale)
 {
-    (void)state;
     tu_fx t;
-    begin(&t, 2, 8, 0);
+    begin_scaled(&t, 2, 8, 0, scale);
     gi_frame_render_raster(&t.f);
+    const rs_gbuffer *g = scale > 1 ? &t.f.ind.low : &t.f.gbuf;
     uint32_t surfaces = 0;
-    for (size_t i = 0; i < (size_t)W * H; i++) surfaces += t.f.gbuf.prim[i] != RS_GBUFFER_EMPTY;
+    for (size_t i = 0; i < (size_t)t.f.ind.w * t.f.ind.h; i++) surfaces += g->prim[i] != RS_GBUFFER_EMPTY;
     /* a small sideways step */
     t.f.camera.eye = pf_v3_add(t.f.camera.eye, pf_v3_scale(t.f.camera.right, 0.02f));
     gi_frame_render_raster(&t.f);
@@ -98,6 +115,13 @@ static void test_reprojection(void **state)
     print_message("after turning around: %u pixels keep their history\n", kept(&t.f));
     assert_true(kept(&t.f) < surfaces / 50);
     tu_fx_end(&t);
+}
+
+static void test_reprojection(void **state)
+{
+    (void)state;
+    reprojection(1);
+    reprojection(2);
 }
 
 static void test_threads(void **state)

@@ -139,6 +139,8 @@ typedef struct softgi_desc {
     uint32_t indirect_scale; /* the indirect stages at 1/N resolution, 1..4; 0: automatic, 2 from 1024x768
                                 up, else 1 (--indirect-scale) */
     uint32_t temporal;      /* temporal accumulation over up to N frames, 2..256; 0: off (--temporal) */
+    uint32_t vpl_cycle;     /* with temporal: C x vpls VPLs kept, one slice of vpls shaded a frame in turn,
+                               2..64; 0: off (--vpl-cycle) */
     /* anti-aliasing */
     uint32_t aa;            /* jittered samples a pixel, averaged, 1..256; 0: 1, the pixel centres (--aa) */
     uint32_t taa;           /* temporal anti-aliasing over up to N frames, 2..256; 0: off (--taa, softgi

@@ -182,6 +182,7 @@ pf_result api_budget_check(const softgi_desc *d, const pf_scene *scene, int fram
     const int ism = d->visibility && !strcmp(d->visibility, "ism");
     const int rays = d->visibility && !strcmp(d->visibility, "raytrace");
     uint32_t vpls = indirect && !(d->flags & SOFTGI_DIRECT_ONLY) ? (d->vpls ? d->vpls : 256) : 0;
+    if (d->vpl_cycle > 1 && vpls <= GI_INDIRECT_MAX_SET / d->vpl_cycle) vpls *= d->vpl_cycle; /* the whole set */
     uint32_t res = rays ? 1 : ism ? (d->ism_res ? d->ism_res : GI_ISM_DEFAULT_RES) : 0;
     uint32_t area = api_scene_has_emitters(scene) ? (d->area_points ? d->area_points : GI_AREA_DEFAULT_POINTS) : 0;
     char what[160];
@@ -231,6 +232,7 @@ pf_result api_indirect_options(const softgi_desc *d, gi_indirect_options *io, pf
     io->pipeline = (d->flags & SOFTGI_PIPELINE) != 0;
     io->scale = d->indirect_scale;
     io->temporal = d->temporal;
+    io->cycle = d->vpl_cycle;
     io->compensate = (d->flags & SOFTGI_COMPENSATE) != 0;
     io->filter = !d->filter || !strcmp(d->filter, "box") ? GI_FILTER_BOX
                  : !strcmp(d->filter, "bilateral")       ? GI_FILTER_BILATERAL

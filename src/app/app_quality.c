@@ -75,10 +75,20 @@
 #define QU_MAX_METHODS 64
 
 /* paper: the papers' defaults; softgi: + --compensate on; temporal: softgi +
- * --temporal 16; atrous: softgi + --filter atrous; atrous+temporal: both */
-typedef enum qu__setting { QU_PAPER, QU_SOFTGI, QU_TEMPORAL, QU_ATROUS, QU_ATROUS_TEMPORAL, QU_SETTINGS } qu__setting;
-static const char *const k_setting_names[QU_SETTINGS] = {"paper", "softgi", "temporal", "atrous", "atrous+temporal"};
-static int qu__temporal(int k) { return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL; }
+ * --temporal 16; atrous: softgi + --filter atrous; atrous+temporal: both;
+ * cycle: temporal + --vpl-cycle 16 (16 slices of --vpls, one a frame) */
+typedef enum qu__setting {
+    QU_PAPER,
+    QU_SOFTGI,
+    QU_TEMPORAL,
+    QU_ATROUS,
+    QU_ATROUS_TEMPORAL,
+    QU_CYCLE,
+    QU_SETTINGS
+} qu__setting;
+static const char *const k_setting_names[QU_SETTINGS] = {"paper",  "softgi",          "temporal",
+                                                         "atrous", "atrous+temporal", "cycle"};
+static int qu__temporal(int k) { return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL || k == QU_CYCLE; }
 
 /* The scenes the table knows. */
 typedef struct qu__scene {
@@ -244,6 +254,10 @@ static pf_result qu__options(qu__run *run, const qu__config *c, pf_options *o, p
         if (c->setting == QU_ATROUS || c->setting == QU_ATROUS_TEMPORAL) {
             qu__push(&v, "--filter");
             qu__push(&v, "atrous");
+        }
+        if (c->setting == QU_CYCLE) {
+            qu__push(&v, "--vpl-cycle");
+            qu__push(&v, "16");
         }
     }
     if (v.argc >= QU_MAX_ARGS) return pf_error_set(err, PF_ERR_ARGUMENT, "evaluate --quality: too many parameters");
@@ -726,8 +740,10 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
         fprintf(d, "Settings: **paper**: each method's paper defaults (4x4 interleaved tiles, box filter, clamp 400, "
                    "paraboloid maps); **softgi**: the same with `--compensate on`; **temporal**: softgi's with "
                    "`--temporal 16`, frame 15 of 16 identical frames; **atrous**: softgi's with `--filter atrous` "
-                   "(Laine's box, then variance-guided a-trous levels); **atrous+temporal**: both "
-                   "([frame.md](../frame.md)).\n\n");
+                   "(Laine's box, then variance-guided a-trous levels); **atrous+temporal**: both; **cycle**: "
+                   "temporal's with `--vpl-cycle 16`, a set of 16 x --vpls VPLs, each frame shading one slice of "
+                   "--vpls in turn, so frame 15 has averaged them all (the first 16 frames draw each slice's maps, "
+                   "a static view draws none after) ([frame.md](../frame.md)).\n\n");
         fprintf(d, "Columns: MRE = mean relative error per pixel of luminance (`gi_metrics_mean_relative_error`, "
                    "pixels whose ground-truth luminance exceeds 1e-4), against the reference and the proxy; energy = "
                    "sum of luminance over the ground truth's; ms = wall time of the first frame (every VPL's map "

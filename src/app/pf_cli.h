@@ -88,6 +88,7 @@ typedef struct pf_options {
     uint32_t indirect_scale; /* --indirect-scale N|auto: indirect light at 1/N resolution (0: auto,
                                 GI_INDIRECT_SCALE_AUTO) */
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
+    uint32_t vpl_cycle;      /* --vpl-cycle C: C slices of VPLs shaded in turn (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
     int no_light_paths;      /* reference --light-paths off: NEE alone */
     uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */

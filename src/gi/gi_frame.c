@@ -385,8 +385,8 @@ static void gi__indirect_stages(gi_frame *f, int first, int last)
     gi__run(f, GI_STAGE_COMBINE);
     if (f->ind.opt.compensate) gi__run(f, GI_STAGE_COMPENSATE);
     gi__run(f, GI_STAGE_FILTER);
+    if (f->ind.opt.temporal) gi__run(f, GI_STAGE_TEMPORAL); /* at the reduced size, before the upsampling */
     if (f->ind.scale > 1) gi__run(f, GI_STAGE_UPSAMPLE);
-    if (f->ind.opt.temporal) gi__run(f, GI_STAGE_TEMPORAL);
 }
 
 /* The samples of the frame (gi_aa.h): k-th of N renders sample (k + 1)

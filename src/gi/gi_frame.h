@@ -21,10 +21,10 @@
  *                          gi_stage_compensate         (--compensate only: screen-space estimate of the
  *                                                       clamped-away light, survey Sec. 5.2)
  *   9. filter              gi_stage_filter             (Laine 2007 Fig. 5 box, bilateral or gaussian)
+ *                          gi_stage_temporal           (--temporal N only: reprojected history, rotated
+ *                                                       VPL groups; at the indirect stages' resolution)
  *                          gi_stage_upsample           (--indirect-scale > 1 only: steps 5-9 ran at
  *                                                       reduced resolution; geometry-aware upsampling)
- *                          gi_stage_temporal           (--temporal N only: reprojected history, rotated
- *                                                       VPL groups)
  *  10. compose             gi_stage_compose            (emission + direct + albedo / pi x indirect)
  *                          gi_stage_aa_resolve         (--aa N > 1 only: the samples' average)
  *                          gi_stage_taa                (--taa N only: temporal anti-aliasing)

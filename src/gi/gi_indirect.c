@@ -48,6 +48,24 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if (o.scale > GI_INDIRECT_MAX_SCALE)
         return pf_error_set(err, PF_ERR_ARGUMENT, "indirect-light scale %u: expected 1..%u", o.scale,
                             GI_INDIRECT_MAX_SCALE);
+    if (!o.cycle) o.cycle = 1;
+    if (o.cycle > GI_INDIRECT_MAX_CYCLE)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "VPL cycling over %u slices: expected 0 or 1 (off) or 2..%u",
+                            o.cycle, GI_INDIRECT_MAX_CYCLE);
+    if (o.cycle > 1 && !o.temporal)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "VPL cycling (--vpl-cycle %u) needs --temporal N: without the history each frame "
+                            "would show one slice of the VPLs",
+                            o.cycle);
+    if (o.cycle > 1 && o.visibility_ism)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "VPL cycling (--vpl-cycle) keeps every VPL's map; imperfect shadow maps are remade "
+                            "every frame: use --visibility paraboloid or raytrace");
+    if ((uint64_t)o.vpls * o.cycle > GI_INDIRECT_MAX_SET)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%u VPLs a frame cycled over %u slices: a set of more than %u VPLs",
+                            o.vpls, o.cycle, GI_INDIRECT_MAX_SET);
+    ind->cycle = o.cycle;
+    o.vpls *= o.cycle; /* from here on the whole set */
     ind->opt = o;
     ind->bias_scale = 1.0f;
     const pf_scene *s = f->scene;
@@ -58,7 +76,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->m = o.tiles_m;
     pf_result r = o.method->create(&ind->method_state, &o.params, err);
     if (r != PF_OK) return r;
-    uint32_t T = ind->n * ind->m;
+    uint32_t T = ind->n * ind->m, G = T * o.cycle; /* tiles; groups of VPLs */
     ind->scale = o.scale;
     ind->w = (f->width + o.scale - 1) / o.scale;
     ind->h = (f->height + o.scale - 1) / o.scale;
@@ -67,7 +85,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     ind->tile_x0 = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
     ind->tile_w = pf_arena_calloc(mem, T, sizeof(uint32_t));
     ind->tile_h = pf_arena_calloc(mem, T, sizeof(uint32_t));
-    ind->assign_start = pf_arena_calloc(mem, T + 1, sizeof(uint32_t));
+    ind->assign_start = pf_arena_calloc(mem, G + 1, sizeof(uint32_t));
+    ind->map_ok = pf_arena_calloc(mem, o.vpls, 1);
     ind->assign = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
     ind->tile_of = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
     ind->assigned_id = pf_arena_calloc(mem, o.vpls, sizeof(uint32_t));
@@ -93,8 +112,8 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
         if (!(ind->atrous_scratch = pf_arena_calloc(mem, gi_atrous_scratch_floats(ind->w, ind->h), sizeof(float))))
             return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for the a-trous filter");
     }
-    if (o.temporal) {
-        size_t fpx = (size_t)f->width * f->height;
+    if (o.temporal) { /* at the indirect stages' size (gi_stage_temporal) */
+        size_t fpx = px;
         for (int b = 0; b < 2; b++) {
             ind->hist[b] = pf_arena_calloc(mem, 3 * fpx, sizeof(float));
             ind->hist_n[b] = pf_arena_calloc(mem, fpx, sizeof(uint16_t));
@@ -116,7 +135,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     }
     int ok = ind->tile_x0 && ind->tile_w && ind->tile_h && ind->assign_start && ind->assign && ind->split_valid &&
              ind->split_e && ind->combined && ind->filtered && (o.scale == 1 || ind->filtered_low) && ind->tile_of &&
-             ind->assigned_id;
+             ind->assigned_id && ind->map_ok;
     for (size_t k = 0; k < 6; k++) ok = ok && *planes[k];
     if (ok && !o.visibility_raytrace && rs_para_atlas_bytes(o.para_res, o.vpls) > GI__MAX_MAP_BYTES)
         return pf_error_set(err, PF_ERR_ARGUMENT,
@@ -224,6 +243,16 @@ static void gi__vpl_update_into(gi_indirect *ind, const gi_vpl_inputs *in, gi_vp
     gi__vpl_check(ind, out);
 }
 
+/* `vpls` became a new set: the maps of its new and moved VPLs, and of
+ * the slots past its end, no longer hold their VPLs. */
+static void gi__set_changed(gi_indirect *ind)
+{
+    const uint32_t N = ind->vpls.count;
+    for (uint32_t i = 0; i < N; i++)
+        if (ind->vpls.v[i].moved) ind->map_ok[i] = 0;
+    memset(ind->map_ok + N, 0, ind->opt.vpls - N);
+}
+
 /* The method has seen the moves (gi_vpl_inputs.motion): the record starts
  * afresh. */
 static void gi__motion_seen(gi_motion *m)
@@ -243,7 +272,7 @@ void gi_stage_vpl_update(gi_frame *f)
     gi__motion_seen(&f->motion);
     ind->frame++;
     ind->have_set = 1;
-    ind->maps_current = 0;
+    gi__set_changed(ind);
 }
 
 
@@ -271,7 +300,7 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
         ind->vpls = ind->vpls_next;
         ind->vpls_next = t;
         ind->next_ready = 0;
-        ind->maps_current = 0;
+        gi__set_changed(ind);
     } else if (!gbuffer_ready && !ind->pending) {
         /* the first pipelined frame after frame 0 shades with frame 0's set
          * again: nothing in it moved since the last frame */
@@ -305,6 +334,14 @@ void gi_stage_vpl_update_end(gi_frame *f)
 }
 
 /* ---------------------------------------------------------- 4. VPL shadow maps */
+
+/* VPL cycling: the slice frame k shades, k mod C, k counted as the
+ * temporal history counts frames (every anti-aliasing sample of a frame
+ * shades the same slice); 0 without cycling. */
+static uint32_t gi__slice(const gi_indirect *ind)
+{
+    return ind->cycle > 1 ? ind->temporal_frames % ind->cycle : 0u;
+}
 
 void gi_stage_vpl_shadow_maps(gi_frame *f)
 {
@@ -340,7 +377,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
     uint16_t *sa = ind->static_atlas;
     if (mb->pending || (sa && ind->static_stale)) {
         for (uint32_t i = 0; i < N && i < ind->atlas_slots; i++) {
-            if (ind->vpls.v[i].moved && !ind->maps_current) continue; /* drawn whole below */
+            if (!ind->map_ok[i]) continue; /* drawn whole below */
             map_pos[todo] = ind->vpls.v[i].pos; /* what its map was drawn for (not moved) */
             map_nrm[todo] = ind->vpls.v[i].nrm;
             map_slot[todo++] = i;
@@ -361,15 +398,17 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         todo = 0;
     }
     ind->static_stale = 0;
-    /* pipelined frame 1 shades with frame 0's set again: its maps are there */
-    if (ind->maps_current) return;
-    ind->maps_current = 1;
-    /* The slots whose VPL is new or moved are listed (map_pos, map_nrm,
-     * map_slot: the k-th map to render and its slot) and rendered straight
-     * into their slots by one call, which spreads them over the workers
-     * however scattered the slots are; unmoved VPLs keep last frame's maps. */
-    for (uint32_t i = 0; i < N; i++) {
-        if (!ind->vpls.v[i].moved && i < ind->atlas_slots) continue;
+    /* The slots whose map does not hold their VPL (new or moved since it
+     * was drawn; with VPL cycling, of this frame's slice only) are listed
+     * (map_pos, map_nrm, map_slot: the k-th map to render and its slot) and
+     * rendered straight into their slots by one call, which spreads them
+     * over the workers however scattered the slots are; the others keep
+     * their maps (pipelined frame 1 shades with frame 0's set again: all
+     * of its maps are there). */
+    const uint32_t C = ind->cycle;
+    for (uint32_t i = gi__slice(ind); i < N; i += C) {
+        if (ind->map_ok[i]) continue;
+        ind->map_ok[i] = 1;
         map_pos[todo] = ind->vpls.v[i].pos;
         map_nrm[todo] = ind->vpls.v[i].nrm;
         map_slot[todo++] = i;
@@ -507,6 +546,8 @@ static int gi__by_lum(const void *a, const void *b)
 typedef struct gi__assign_io {
     const gi_vpl *v;              /* VPLS */
     uint32_t N, T;                /* VPL slots; tiles */
+    uint32_t first, step, g0;     /* the slice: slots first, first + step, ... < N, dealt to groups g0 .. g0 + T - 1
+                                     (VPL cycling; 0, 1, 0 without) */
     uint32_t *tile_of;            /* state: each slot's tile (UINT32_MAX: none) */
     uint32_t *assigned_id;        /* state: the id each slot had when assigned */
     uint32_t *assigned_count;     /* state: slots assigned last time */
@@ -521,18 +562,18 @@ static void gi__assign_deal(const gi__assign_io *io)
 {
     const uint32_t T = io->T, N = io->N;
     gi__lumkey *keys = io->keys;
-    uint32_t live = 0;
-    for (uint32_t i = 0; i < N; i++) {
+    uint32_t live = 0, M = 0;
+    for (uint32_t i = io->first; i < N; i += io->step) {
         pf_vec3 c = io->v[i].intensity;
         int emits = c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
-        keys[i] = (gi__lumkey){emits ? pf_luminance(c) : -1.0f, i};
+        keys[M++] = (gi__lumkey){emits ? pf_luminance(c) : -1.0f, i};
         io->tile_of[i] = UINT32_MAX;
         live += (uint32_t)emits;
     }
-    qsort(keys, N, sizeof *keys, gi__by_lum);
+    qsort(keys, M, sizeof *keys, gi__by_lum);
     for (uint32_t r = 0; r < live; r++) {
         uint32_t round = r / T, pos = r % T;
-        io->tile_of[keys[r].index] = (round & 1) ? T - 1 - pos : pos;
+        io->tile_of[keys[r].index] = io->g0 + ((round & 1) ? T - 1 - pos : pos);
     }
 }
 
@@ -548,14 +589,14 @@ static int gi__assign_keep(const gi__assign_io *io)
     double *load = io->load;
     uint32_t *count = io->cursor, *tile_of = io->tile_of, fresh = 0, kept = 0;
     for (uint32_t t = 0; t < T; t++) load[t] = 0.0, count[t] = 0;
-    for (uint32_t i = 0; i < N; i++) {
+    for (uint32_t i = io->first; i < N; i += io->step) {
         const gi_vpl *v = &io->v[i];
         int emits = v->intensity.x > 0.0f || v->intensity.y > 0.0f || v->intensity.z > 0.0f;
         int survives = emits && !v->moved && i < *io->assigned_count && io->assigned_id[i] == v->id &&
                        tile_of[i] != UINT32_MAX;
         if (survives) {
-            load[tile_of[i]] += pf_luminance(v->intensity);
-            count[tile_of[i]]++;
+            load[tile_of[i] - io->g0] += pf_luminance(v->intensity);
+            count[tile_of[i] - io->g0]++;
             kept++;
         } else {
             tile_of[i] = UINT32_MAX;
@@ -568,11 +609,11 @@ static int gi__assign_keep(const gi__assign_io *io)
         uint32_t best = 0;
         for (uint32_t t = 1; t < T; t++)
             if (load[t] < load[best] || (load[t] == load[best] && count[t] < count[best])) best = t;
-        tile_of[keys[r].index] = best;
+        tile_of[keys[r].index] = io->g0 + best;
         load[best] += keys[r].lum;
         count[best]++;
     }
-    *io->kept = kept;
+    *io->kept += kept;
     return 1;
 }
 
@@ -587,28 +628,33 @@ static int gi__assign_keep(const gi__assign_io *io)
 void gi_stage_assign(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    const uint32_t T = ind->n * ind->m, N = ind->vpls.count;
+    const uint32_t T = ind->n * ind->m, N = ind->vpls.count, C = ind->cycle, G = T * C;
     gi__lumkey *keys = gi_frame_scratch(f, N, sizeof(gi__lumkey), "the VPL assignment");
     double *load = gi_frame_scratch(f, T, sizeof(double), "the VPL assignment");
-    uint32_t *cursor = gi_frame_scratch(f, T, sizeof(uint32_t), "the VPL assignment");
+    uint32_t *cursor = gi_frame_scratch(f, G, sizeof(uint32_t), "the VPL assignment");
     ind->assign_kept = 0;
     if (!keys || !load || !cursor) { /* no tile gets a VPL; the frame's status says why */
-        memset(ind->assign_start, 0, sizeof(uint32_t) * (T + 1));
+        memset(ind->assign_start, 0, sizeof(uint32_t) * (G + 1));
         ind->assigned_count = 0;
         return;
     }
-    const gi__assign_io io = {ind->vpls.v,      N,      T,           ind->tile_of,
-                              ind->assigned_id, &ind->assigned_count, keys, load,
-                              cursor,           ind->assign,       ind->assign_start, &ind->assign_kept};
-    if (!gi__assign_keep(&io)) gi__assign_deal(&io);
+    /* each slice on its own (one slice, every slot, without cycling): its
+     * slots dealt to its T groups */
+    gi__assign_io io = {ind->vpls.v,      N,      T,           0, 1, 0, ind->tile_of,
+                        ind->assigned_id, &ind->assigned_count, keys, load,
+                        cursor,           ind->assign,       ind->assign_start, &ind->assign_kept};
+    for (uint32_t c = 0; c < C; c++) {
+        io.first = c, io.step = C, io.g0 = c * T;
+        if (!gi__assign_keep(&io)) gi__assign_deal(&io);
+    }
     const uint32_t *tile_of = io.tile_of;
     for (uint32_t i = 0; i < N; i++) io.assigned_id[i] = io.v[i].id;
     *io.assigned_count = N;
-    memset(io.assign_start, 0, sizeof(uint32_t) * (T + 1));
+    memset(io.assign_start, 0, sizeof(uint32_t) * (G + 1));
     for (uint32_t i = 0; i < N; i++)
         if (tile_of[i] != UINT32_MAX) io.assign_start[tile_of[i] + 1]++;
-    for (uint32_t t = 0; t < T; t++) io.assign_start[t + 1] += io.assign_start[t];
-    memcpy(io.cursor, io.assign_start, sizeof(uint32_t) * T);
+    for (uint32_t t = 0; t < G; t++) io.assign_start[t + 1] += io.assign_start[t];
+    memcpy(io.cursor, io.assign_start, sizeof(uint32_t) * G);
     for (uint32_t i = 0; i < N; i++) /* VPL order within a tile */
         if (tile_of[i] != UINT32_MAX) io.assign[io.cursor[tile_of[i]]++] = i;
 }
@@ -645,6 +691,8 @@ typedef struct gi__accumulate_io {
     const uint32_t *tile_x0, *tile_w, *tile_h; /* the tile layout */
     const uint32_t *assign_start;     /* ASSIGNMENT: group g's VPLs at assign[assign_start[g]..[g + 1]) */
     uint32_t shift;                   /* the tiles' group rotation (gi_indirect_tile_group) */
+    uint32_t g0;                      /* the slice's first group (VPL cycling; 0 without) */
+    float weight;                     /* gi_indirect_tile_weight */
     const float *px, *py, *pz, *nx, *ny, *nz; /* SPLIT */
     const uint32_t *valid;            /* SPLIT */
     float *split_e;                   /* ACCUMULATED */
@@ -658,8 +706,8 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     uint32_t T = io->T, rows = io->rows;
     uint32_t t = item / rows, row = item % rows;
     if (t >= T || row >= io->tile_h[t]) return;
-    const float weight = (float)T; /* each tile sees 1/T of the VPLs */
-    const uint32_t grp = gi_tile_group(t, io->shift, T);
+    const float weight = io->weight; /* each tile sees 1/T of the VPLs (of its slice's, 1/C of them) */
+    const uint32_t grp = io->g0 + gi_tile_group(t, io->shift, T);
     uint32_t a0 = io->assign_start[grp], a1 = io->assign_start[grp + 1];
     const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;
@@ -723,7 +771,14 @@ void gi_stage_accumulate(gi_frame *f)
      * accumulation by the sample's pattern index (the TAA's frame included),
      * so each sample sees other groups; 0 for one sample of a plain frame */
     uint64_t rot = ind->opt.temporal ? (uint64_t)ind->temporal_frames * f->aa.samples + f->aa.sample : f->aa.index;
+    /* with VPL cycling, frame k = a C + b shades slice b rotated by a + b,
+     * so the frames that shade one slice rotate through all its groups */
+    if (ind->cycle > 1) {
+        uint64_t k = ind->temporal_frames, C = ind->cycle;
+        rot = (k / C + k % C) * f->aa.samples + f->aa.sample;
+    }
     ind->shift = (uint32_t)(rot % T);
+    ind->slice = gi__slice(ind);
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
     const gi__accumulate_io io = {
         {ind->vpls.v, ind->assign, ind->atlas, ind->frames, ind->opt.para_res, ind->range, ind->bias_scale, ind->b},
@@ -736,6 +791,8 @@ void gi_stage_accumulate(gi_frame *f)
         ind->tile_h,
         ind->assign_start,
         ind->shift,
+        ind->slice * T,
+        gi_indirect_tile_weight(ind),
         ind->split_px,
         ind->split_py,
         ind->split_pz,
@@ -1176,7 +1233,12 @@ void gi_stage_upsample(gi_frame *f)
  * the knob). Nearest-pixel reprojection, no clamping of the history.
  * Anti-aliasing samples (--aa N, gi_aa.h): every sample blends with last
  * frame's history; only the last one rendered, the centre sample, writes
- * this frame's history and advances the frame count. */
+ * this frame's history and advances the frame count.
+ * With --indirect-scale s > 1 the stage runs on the reduced image (the
+ * filter's output and the reduced G-buffer `low`, before the upsampling):
+ * s^2 fewer pixels, and low pixel (X, Y) is the frame's sample (s X, s Y),
+ * so a surface projected to frame position p takes the history of the
+ * nearest sample, X = floor((p_x - 1/2) / s + 1/2). */
 /* The temporal stage's inputs and outputs, explicitly (the stage table's
  * reads and writes: GBUFFER and FILTERED in, FILTERED out, and the
  * history, read from one buffer pair and written to the other). */
@@ -1184,7 +1246,9 @@ typedef struct gi__temporal_ctx {
     const rs_gbuffer *gbuf;  /* GBUFFER */
     float *filtered;         /* FILTERED, blended in place */
     const pf_camera *pc;     /* last frame's camera */
-    uint32_t W, H, N;        /* frame size; opt.temporal */
+    uint32_t W, H, N;        /* the image's size (the indirect stages'); opt.temporal */
+    uint32_t s;              /* the indirect scale: the frame is s W x s H (about) */
+    float fw, fh;            /* the frame's size */
     float a2, beta;          /* the filter's tests */
     const float *hp[3], *hn[3], *h;
     const uint32_t *hprim;
@@ -1222,7 +1286,11 @@ static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
             float z = pf_v3_dot(d, pc->forward);
             if (z > 0.0f) {
                 float sx = pf_v3_dot(d, pc->right) / z, sy = pf_v3_dot(d, pc->up) / z;
-                float px = (sx / c->ta + 1.0f) * 0.5f * (float)W, py = (1.0f - sy / c->th) * 0.5f * (float)H;
+                float px = (sx / c->ta + 1.0f) * 0.5f * c->fw, py = (1.0f - sy / c->th) * 0.5f * c->fh;
+                if (c->s > 1) { /* the nearest reduced sample */
+                    float inv = 1.0f / (float)c->s;
+                    px = (px - 0.5f) * inv + 0.5f, py = (py - 0.5f) * inv + 0.5f;
+                }
                 if (px >= 0.0f && py >= 0.0f && px < (float)W && py < (float)H) {
                     size_t k = (size_t)(uint32_t)py * W + (uint32_t)px;
                     float dx = c->hp[0][k] - g->pos_x[i], dy = c->hp[1][k] - g->pos_y[i], dz = c->hp[2][k] - g->pos_z[i];
@@ -1251,10 +1319,12 @@ void gi_stage_temporal(gi_frame *f)
     const int prev = ind->hist_cur, next = 1 - prev;
     gi__temporal_ctx c;
     memset(&c, 0, sizeof c);
-    c.gbuf = &f->gbuf;
-    c.filtered = ind->filtered;
+    const int low = ind->scale > 1;
+    c.gbuf = low ? &ind->low : &f->gbuf;
+    c.filtered = low ? ind->filtered_low : ind->filtered;
     c.pc = &ind->hist_camera;
-    c.W = f->width, c.H = f->height, c.N = ind->opt.temporal;
+    c.W = ind->w, c.H = ind->h, c.N = ind->opt.temporal;
+    c.s = ind->scale, c.fw = (float)f->width, c.fh = (float)f->height;
     c.a2 = ind->alpha * ind->alpha, c.beta = ind->opt.beta;
     for (int k = 0; k < 3; k++) {
         c.hp[k] = ind->hist_p[prev][k], c.hn[k] = ind->hist_nrm[prev][k];
@@ -1266,7 +1336,7 @@ void gi_stage_temporal(gi_frame *f)
     c.write = f->aa.sample == 0;
     c.th = tanf(0.5f * ind->hist_camera.yfov);
     c.ta = c.th * (float)f->width / (float)f->height;
-    pf_jobs_parallel_for(f->jobs, gi__temporal_row, &c, f->height, 8);
+    pf_jobs_parallel_for(f->jobs, gi__temporal_row, &c, c.H, 8);
     if (!c.write) return;
     ind->hist_cur = next;
     ind->hist_camera = f->camera;

@@ -34,6 +34,17 @@
  *                              cross-bilateral filter, an edge-aware
  *                              Gaussian (Aranha Sec. III-D), or none (Sec. 5.2)
  *
+ * VPL cycling (opt.cycle = C >= 2; beyond the papers, with --temporal):
+ * the method keeps C times the budget of VPLs (its update sees a budget of
+ * C x vpls), every slot s in slice s mod C, and frame k shades slice k mod
+ * C only, its vpls VPLs dealt to the n x m tiles as above, weighted C T.
+ * So a frame costs the accumulation of `vpls` VPLs, and the temporal
+ * history of C frames (C dividing --temporal N) averages the whole set of
+ * C x vpls, the interleaving of Keller and Heidrich 2001 stretched over
+ * time. A slot's map is drawn the first time its slice is shaded after the
+ * VPL was made or moved (map_ok), so a static scene draws every map once,
+ * vpls of them a frame during the first C frames, and none after.
+ *
  * The receiving surface's albedo is applied at compose: radiance = albedo /
  * pi * E (Sec. 5.1: "the color of the receiving surface is not taken into
  * account at this point").
@@ -106,7 +117,13 @@ typedef struct gi_indirect_options {
                                     (width / scale) x (height / scale), upsampled geometry-aware
                                     (gi_stage_upsample; beyond the papers); 0 (GI_INDIRECT_SCALE_AUTO):
                                     2 for frames of at least GI_INDIRECT_AUTO_PIXELS, else 1 */
+    uint32_t cycle;              /* 0 or 1: off; C in 2..GI_INDIRECT_MAX_CYCLE: VPL cycling (see above), the
+                                    set C x vpls, one slice of vpls shaded a frame; needs temporal and
+                                    paraboloid maps or ray-traced visibility */
 } gi_indirect_options;
+
+#define GI_INDIRECT_MAX_CYCLE 64u
+#define GI_INDIRECT_MAX_SET (1u << 20) /* VPLs in a set (with cycling: C x vpls) */
 
 #define GI_INDIRECT_MAX_SCALE 4u
 /* The automatic indirect scale: the indirect stages at half resolution from
@@ -130,7 +147,6 @@ typedef struct gi_indirect {
     void *method_state;
     gi_vpl_set vpls;          /* the set this frame shades with */
     uint32_t frame;           /* frame number the next update gets */
-    int maps_current;         /* the atlas already holds the maps of `vpls` */
     /* pipelining: the set being made for the next frame, and its job */
     gi_vpl_set vpls_next;
     int have_set;             /* an update has run (frame 0 done) */
@@ -156,6 +172,12 @@ typedef struct gi_indirect {
     rs_para_frame *frames;
     float range;
     uint32_t maps_rendered;   /* this frame */
+    /* VPL cycling (opt.cycle): C slices (1: off; opt.vpls is then the whole
+     * set, C x the per-frame budget), this frame's slice, and per slot
+     * whether its map holds its VPL as it is (cleared when the VPL is new
+     * or moved, set when the map is drawn) */
+    uint32_t cycle, slice;
+    uint8_t *map_ok;
     /* kept between frames: each slot's tile and the id it had when assigned
      * (a survivor keeps its tile) */
     uint32_t *tile_of, *assigned_id;
@@ -222,11 +244,19 @@ void gi_stage_temporal(struct gi_frame *f);
 
 /* The group of VPLs (an index into assign_start) tile t of T shades with
  * this frame: t itself, or rotated by `shift` (ind->shift: the frame with
- * temporal accumulation, the anti-aliasing sample). */
+ * temporal accumulation, the anti-aliasing sample); with VPL cycling, of
+ * this frame's slice, whose groups are slice T .. slice T + T - 1. */
 static inline uint32_t gi_tile_group(uint32_t t, uint32_t shift, uint32_t T) { return (t + shift) % T; }
 static inline uint32_t gi_indirect_tile_group(const gi_indirect *ind, uint32_t t)
 {
-    return gi_tile_group(t, ind->shift, ind->n * ind->m);
+    uint32_t T = ind->n * ind->m;
+    return ind->slice * T + gi_tile_group(t, ind->shift, T);
+}
+/* The weight of a tile pixel's sum: the tiles T times the slices C (each
+ * pixel sees 1 / (T C) of the set). */
+static inline float gi_indirect_tile_weight(const gi_indirect *ind)
+{
+    return (float)(ind->n * ind->m) * (float)(ind->cycle ? ind->cycle : 1u);
 }
 
 /* Irradiance at (p, n) from one VPL with the bounded geometry term, no

@@ -104,7 +104,7 @@ static void gi__probe_indirect(gi_probe *p, const gi_frame *f, size_t i)
     p->split = gi_split_index(ind, ind->w, xi, yi);
     p->mosaic_x = p->tile_i * ind->tile_w[0] + xi / ind->n; /* gi_view.c's mosaic */
     p->mosaic_y = p->tile_j * ind->tile_h[0] + yi / ind->m;
-    p->weight = (float)(ind->n * ind->m);
+    p->weight = gi_indirect_tile_weight(ind);
     const uint32_t grp = gi_indirect_tile_group(ind, p->tile);
     p->tile_vpls = ind->assign_start[grp + 1] - ind->assign_start[grp];
     p->tile_e = gi__rgb(ind->split_e, p->split);

@@ -23,7 +23,16 @@
  * below shift by 2), a VPL at every hit, Russian roulette by albedo, up
  * to `bounces` VPLs per path. Paths are started until the VPL budget is
  * filled, and every intensity is divided by the number of paths started
- * (survey Sec. 4.1, last step). VPL ids are path * bounces + k. */
+ * (survey Sec. 4.1, last step). VPL ids are path * bounces + k.
+ *
+ * Without reseed, when nothing the paths depend on changed since the last
+ * update (the scene and its Embree scene, the lights field for field, no
+ * geometry moved: gi_motion's epoch, budget and bounces) the update returns
+ * the last set with every moved flag cleared instead of tracing it again:
+ * the same bytes the paths would give (they are a function of exactly
+ * those inputs), for the cost of a copy. It matters with VPL cycling
+ * (gi_indirect.h), whose set is 16 times the per-frame budget: 2-3 ms of
+ * paths a frame at 4,096 VPLs on Sibenik. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -38,7 +47,46 @@
 typedef struct gi__ir_state {
     gi_vpl_set prev; /* last frame's set, for the moved flags */
     uint32_t reseed; /* --param reseed=1: a new stretch of the sequence every frame */
+    /* what `prev` was traced from (have_key: once a set was traced) */
+    int have_key;
+    const pf_scene *scene;
+    const pf_rt *rt;
+    uint32_t budget, bounces, epoch, light_count;
+    pf_light *lights; /* light_count copies */
 } gi__ir_state;
+
+/* 1 when this update's paths would be the last update's: same inputs, no
+ * geometry moved since (the set is then prev, unmoved). */
+static int gi__ir_same_inputs(const gi__ir_state *st, const gi_vpl_inputs *in)
+{
+    const pf_scene *s = in->scene;
+    const gi_motion *m = in->motion;
+    return st->have_key && !st->reseed && st->scene == s && st->rt == in->rt && st->budget == in->budget &&
+           st->bounces == in->bounces && st->epoch == (m ? m->epoch : 0u) && !(m && (m->moved || m->emitters)) &&
+           st->light_count == s->light_count &&
+           (s->light_count == 0 || !memcmp(st->lights, s->lights, sizeof(pf_light) * s->light_count));
+}
+
+/* Records what this update traced from (a failed allocation only means
+ * the next update traces again). */
+static void gi__ir_keep_inputs(gi__ir_state *st, const gi_vpl_inputs *in)
+{
+    const pf_scene *s = in->scene;
+    st->have_key = 0;
+    if (st->light_count != s->light_count) {
+        free(st->lights);
+        st->lights = s->light_count ? malloc(sizeof(pf_light) * s->light_count) : NULL;
+        st->light_count = s->light_count;
+        if (s->light_count && !st->lights) {
+            st->light_count = 0;
+            return;
+        }
+    }
+    if (s->light_count) memcpy(st->lights, s->lights, sizeof(pf_light) * s->light_count);
+    st->scene = s, st->rt = in->rt, st->budget = in->budget, st->bounces = in->bounces;
+    st->epoch = in->motion ? in->motion->epoch : 0u;
+    st->have_key = 1;
+}
 
 static pf_result gi__ir_create(void **state, const gi_params *params, pf_error *err)
 {
@@ -59,6 +107,7 @@ static void gi__ir_destroy(void *state)
     gi__ir_state *s = state;
     if (!s) return;
     gi_vpl_set_free(&s->prev);
+    free(s->lights);
     free(s);
 }
 
@@ -70,6 +119,12 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     uint32_t budget = in->budget, B = in->bounces ? in->bounces : 3;
     pf_result r = gi_vpl_set_reserve(out, budget, err);
     if (r != PF_OK) return r;
+    if (gi__ir_same_inputs(st, in)) { /* the paths would trace the last set again */
+        memcpy(out->v, st->prev.v, sizeof(gi_vpl) * st->prev.count);
+        out->count = st->prev.count;
+        for (uint32_t i = 0; i < out->count; i++) out->v[i].moved = 0;
+        return PF_OK;
+    }
     gi_lightpath_lights c;
     gi_lightpath_lights_init(&c, s, in->area);
     if (c.nl == 0 || !(c.total > 0.0)) return PF_OK; /* nothing emits: no VPLs */
@@ -102,6 +157,7 @@ static pf_result gi__ir_update(void *state, const gi_vpl_inputs *in, gi_vpl_set 
     if (r != PF_OK) return r;
     memcpy(st->prev.v, out->v, sizeof(gi_vpl) * out->count);
     st->prev.count = out->count;
+    gi__ir_keep_inputs(st, in);
     return PF_OK;
 }
 

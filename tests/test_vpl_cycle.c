@@ -1,0 +1,173 @@
+/* test_vpl_cycle: VPL cycling (gi_indirect_options.cycle, gi_indirect.h):
+ * a set of C x vpls VPLs, one slice of vpls shaded a frame, averaged by the
+ * temporal history.
+ * - static camera and light, no filter: after T C frames (T = n m tiles,
+ *   the history as long) every pixel has seen every group of every slice
+ *   once, so the irradiance equals the one of the whole set without
+ *   interleaving (every pixel every one of the C x vpls VPLs) up to float
+ *   rounding; one cycled frame is far from it;
+ * - every map is drawn once: vpls a frame in the first C frames, none
+ *   after (a static scene);
+ * - the same bytes with 1 and 2 threads, and on the SIMD path as on the
+ *   scalar one, over frames with a moving light (moved VPLs' maps drawn
+ *   when their slice comes);
+ * - cycling without --temporal, with imperfect shadow maps, or over too
+ *   many slices is refused with a clear message. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_frame.h"
+#include "pf_gltf.h"
+#include "pf_isa.h"
+#include "test_frame_fixture.h"
+#include "test_util.h"
+
+#define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+#define W 96
+#define H 72
+#define VPLS 32u
+#define CYCLE 4u
+
+static void begin(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
+                  int no_interleave)
+{
+    tu_load(&x->scene, CORNELL);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.vpls = vpls;
+    io.filter = GI_FILTER_NONE;
+    io.temporal = temporal;
+    io.cycle = cycle;
+    io.no_interleave = no_interleave;
+    tu_fx_begin(x, threads, simd, W, H, &x->scene.cameras[0], &io, 1);
+}
+
+static double mean_rel(const float *a, const float *b)
+{
+    double rel = 0.0;
+    uint32_t n = 0;
+    for (size_t i = 0; i < (size_t)W * H; i++)
+        if (a[3 * i + 1] > 1e-6f) rel += fabs((double)b[3 * i + 1] - a[3 * i + 1]) / a[3 * i + 1], n++;
+    return n ? rel / n : 1.0;
+}
+
+static void test_converges_to_the_whole_set(void **state)
+{
+    (void)state;
+    tu_fx all, t;
+    begin(&all, 2, RS_SIMD_SCALAR, VPLS * CYCLE, 0, 0, 1); /* the whole set, every VPL at every pixel */
+    gi_frame_render_raster(&all.f);
+    const uint32_t frames = 16u * CYCLE; /* 4 x 4 tiles */
+    begin(&t, 2, RS_SIMD_SCALAR, VPLS, CYCLE, frames, 0);
+    uint32_t maps = 0;
+    for (uint32_t k = 0; k < frames; k++) {
+        gi_frame_render_raster(&t.f);
+        assert_int_equal(t.f.ind.vpls.count, all.f.ind.vpls.count); /* the method made the whole set */
+        uint32_t drawn = t.f.ind.maps_rendered;
+        maps += drawn;
+        if (k < CYCLE) assert_int_equal(drawn, (t.f.ind.vpls.count - k + CYCLE - 1) / CYCLE); /* slice k's */
+        else assert_int_equal(drawn, 0);
+        if (k == 0 || k == frames - 1) {
+            double rel = mean_rel(all.f.ind.filtered, t.f.ind.filtered);
+            print_message("after %u frame(s): mean relative difference to the whole set at every pixel %.6f\n",
+                          k + 1, rel);
+            if (k == 0) assert_true(rel > 0.05); /* one slice of one group is far from it */
+            else assert_true(rel < 2e-4);
+        }
+    }
+    assert_int_equal(maps, all.f.ind.vpls.count); /* each map drawn once */
+    tu_fx_end(&all);
+    tu_fx_end(&t);
+}
+
+/* Without cycling the history of T frames converges to the per-frame set,
+ * not to the whole one: the cycled frames' extra VPLs are what brings it
+ * there (the test above could otherwise pass with the cycling ignored). */
+static void test_without_cycling_it_stays_apart(void **state)
+{
+    (void)state;
+    tu_fx all, t;
+    begin(&all, 2, RS_SIMD_SCALAR, VPLS * CYCLE, 0, 0, 1);
+    gi_frame_render_raster(&all.f);
+    begin(&t, 2, RS_SIMD_SCALAR, VPLS, 0, 16, 0);
+    for (int k = 0; k < 16; k++) gi_frame_render_raster(&t.f);
+    double rel = mean_rel(all.f.ind.filtered, t.f.ind.filtered);
+    print_message("%u VPLs over 16 frames against %u at every pixel: %.4f\n", VPLS, VPLS * CYCLE, rel);
+    assert_true(rel > 0.02);
+    tu_fx_end(&all);
+    tu_fx_end(&t);
+}
+
+/* The light moves every frame: every VPL moves, and each slice's maps are
+ * drawn when its turn comes; 1 and 2 threads, scalar and SIMD, same bytes. */
+static void test_threads_and_simd(void **state)
+{
+    (void)state;
+    tu_fx a, b, c;
+    begin(&a, 1, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0);
+    begin(&b, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0);
+    pf_isa isa = pf_isa_detect();
+    rs_simd best = isa >= PF_ISA_AVX512 ? RS_SIMD_AVX512 : isa >= PF_ISA_AVX2 ? RS_SIMD_AVX2 : RS_SIMD_SCALAR;
+    begin(&c, 2, best, VPLS, CYCLE, 8, 0);
+    for (int k = 0; k < 6; k++) {
+        tu_fx *x[3] = {&a, &b, &c};
+        for (int j = 0; j < 3; j++) {
+            if (k >= 3) x[j]->scene.lights[0].position.x += 0.02f; /* moves from frame 3 on */
+            gi_frame_render_raster(&x[j]->f);
+        }
+        assert_memory_equal(a.f.final, b.f.final, (size_t)W * H * 3 * sizeof(float));
+        assert_memory_equal(a.f.final, c.f.final, (size_t)W * H * 3 * sizeof(float));
+        if (k >= 3) assert_true(a.f.ind.maps_rendered > 0); /* the moved slice's maps */
+    }
+    tu_fx_end(&a);
+    tu_fx_end(&b);
+    tu_fx_end(&c);
+}
+
+static void refused(const gi_indirect_options *io, const char *says)
+{
+    tu_fx x;
+    tu_load(&x.scene, CORNELL);
+    tu_fx_begin(&x, 1, RS_SIMD_SCALAR, 32, 24, &x.scene.cameras[0], NULL, 0);
+    pf_error err;
+    assert_int_equal(gi_frame_enable_indirect(&x.f, io, 0, &err), PF_ERR_ARGUMENT);
+    print_message("refused: %s\n", err.message);
+    assert_non_null(strstr(err.message, says));
+    tu_fx_end(&x);
+}
+
+static void test_bad_options(void **state)
+{
+    (void)state;
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.cycle = 4;
+    refused(&io, "--temporal");
+    io.temporal = 8;
+    io.visibility_ism = 1;
+    refused(&io, "imperfect shadow maps");
+    io.visibility_ism = 0;
+    io.cycle = GI_INDIRECT_MAX_CYCLE + 1;
+    refused(&io, "slices");
+    io.cycle = GI_INDIRECT_MAX_CYCLE;
+    io.vpls = GI_INDIRECT_MAX_SET / 8;
+    refused(&io, "set of more than");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_converges_to_the_whole_set),
+        cmocka_unit_test(test_without_cycling_it_stays_apart),
+        cmocka_unit_test(test_threads_and_simd),
+        cmocka_unit_test(test_bad_options),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -15,6 +15,8 @@
 #ifndef TEST_FRAME_FIXTURE_H
 #define TEST_FRAME_FIXTURE_H
 
+#include <math.h>
+
 #include "gi_frame.h"
 #include "pf_gltf.h"
 
@@ -104,6 +106,19 @@ static inline void tu_fx_end(tu_fx *x)
 {
     tu_fx_end_frame(x);
     pf_scene_free(&x->scene);
+}
+
+/* Mean relative difference of b's green channel to a's over the n RGB
+ * pixels where a's exceeds 1e-6 (1 when there is none). */
+static inline double tu_mean_rel_green(const float *a, const float *b, size_t n)
+{
+    double rel = 0.0;
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; i++) {
+        double x = a[3 * i + 1], y = b[3 * i + 1];
+        if (x > 1e-6) rel += fabs(y - x) / x, count++;
+    }
+    return count ? rel / count : 1.0;
 }
 
 #endif

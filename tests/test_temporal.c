@@ -59,13 +59,7 @@ static void converges(uint32_t scale)
     for (int k = 0; k < 16; k++) {
         gi_frame_render_raster(&t.f);
         if (k == 0 || k == 15) {
-            double rel = 0.0;
-            uint32_t n = 0;
-            for (size_t i = 0; i < (size_t)W * H; i++) {
-                double a = all.f.ind.filtered[3 * i + 1], b = t.f.ind.filtered[3 * i + 1];
-                if (a > 1e-6) rel += fabs(b - a) / a, n++;
-            }
-            rel /= n;
+            double rel = tu_mean_rel_green(all.f.ind.filtered, t.f.ind.filtered, (size_t)W * H);
             print_message("scale %u, after %d frame(s): mean relative difference to every-VPL shading %.6f\n", scale,
                           k + 1, rel);
             if (k == 0) first = rel;

@@ -56,14 +56,7 @@ static void begin(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint3
     begin_piped(x, threads, simd, vpls, cycle, temporal, no_interleave, 0);
 }
 
-static double mean_rel(const float *a, const float *b)
-{
-    double rel = 0.0;
-    uint32_t n = 0;
-    for (size_t i = 0; i < (size_t)W * H; i++)
-        if (a[3 * i + 1] > 1e-6f) rel += fabs((double)b[3 * i + 1] - a[3 * i + 1]) / a[3 * i + 1], n++;
-    return n ? rel / n : 1.0;
-}
+static double mean_rel(const float *a, const float *b) { return tu_mean_rel_green(a, b, (size_t)W * H); }
 
 static void converges(int pipeline)
 {

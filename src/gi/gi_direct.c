@@ -34,7 +34,7 @@ void gi_stage_shadow_maps(gi_frame *f)
     desc.size = f->shadow_size;
     pf_error err;
     gi_motion_stats *ms = &f->motion_stats;
-    if (!f->shadows_rendered || f->shadow_light_count != s->light_count || f->shadows.count != s->light_count) {
+    if (!f->shadows_rendered || f->shadow_lights.count != s->light_count || f->shadows.count != s->light_count) {
         /* first frame, or lights added/removed: all maps */
         if (f->shadows_rendered) {
             rs_shadow_set_free(&f->shadows);
@@ -56,7 +56,7 @@ void gi_stage_shadow_maps(gi_frame *f)
                                                          f->shadow_bounds_hi);
         for (uint32_t i = 0; i < s->light_count; i++) {
             rs_shadow_map *m = &f->shadows.maps[i];
-            int changed = memcmp(&f->shadow_lights[i], &s->lights[i], sizeof(pf_light)) != 0;
+            int changed = !gi_light_copy_same(&f->shadow_lights, s, i);
             if (!changed && left && m->kind == RS_SHADOW_ORTHO) changed = 1, ms->shadow_faces_whole++;
             if (!changed) {
                 if (mb->pending)
@@ -73,16 +73,10 @@ void gi_stage_shadow_maps(gi_frame *f)
         if (left) f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     }
     f->moved_shadows.pending = 0;
-    if (!f->shadow_lights || f->shadow_light_count != s->light_count) { /* only when the lights were added or removed */
-        pf_light *copy = realloc(f->shadow_lights, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
-        if (!copy) {
-            f->shadows_rendered = 0; /* render everything next frame */
-            return;
-        }
-        f->shadow_lights = copy;
+    if (!gi_light_copy_take(&f->shadow_lights, s)) {
+        f->shadows_rendered = 0; /* render everything next frame */
+        return;
     }
-    if (s->light_count) memcpy(f->shadow_lights, s->lights, sizeof(pf_light) * s->light_count);
-    f->shadow_light_count = s->light_count;
     f->shadows_rendered = 1;
 }
 

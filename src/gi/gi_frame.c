@@ -232,7 +232,7 @@ void gi_frame_free(gi_frame *f)
 {
     rs_gbuffer_free(&f->gbuf);
     rs_shadow_set_free(&f->shadows);
-    free(f->shadow_lights);
+    gi_light_copy_free(&f->shadow_lights);
     gi_indirect_free(&f->ind);
     gi__area_maps_free(&f->area_maps);
     gi_area_lights_free(&f->area);

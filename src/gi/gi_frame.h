@@ -65,6 +65,7 @@
 #include "gi_aa.h"
 #include "gi_area.h"
 #include "gi_indirect.h"
+#include "gi_light.h"
 #include "gi_motion.h"
 #include "rs_paraboloid.h"
 
@@ -202,8 +203,7 @@ typedef struct gi_frame {
     pf_arena scratch;
     rs_gbuffer gbuf;
     rs_shadow_set shadows; /* one map (cube for point lights) per scene light; raster frames only */
-    pf_light *shadow_lights;  /* the lights the maps were rendered for (static lights: maps reused) */
-    uint32_t shadow_light_count;
+    gi_light_copy shadow_lights; /* the lights the maps were rendered for (static lights: maps reused) */
     uint32_t shadow_size;
     int shadows_rendered;     /* 0: render at the next gi_stage_shadow_maps */
     gi_indirect ind;       /* many-light state and buffers (when enabled) */

@@ -691,7 +691,7 @@ typedef struct gi__accumulate_io {
     const uint32_t *tile_x0, *tile_w, *tile_h; /* the tile layout */
     const uint32_t *assign_start;     /* ASSIGNMENT: group g's VPLs at assign[assign_start[g]..[g + 1]) */
     uint32_t shift;                   /* the tiles' group rotation (gi_indirect_tile_group) */
-    uint32_t g0;                      /* the slice's first group (VPL cycling; 0 without) */
+    uint32_t slice;                   /* this frame's slice (VPL cycling; 0 without) */
     float weight;                     /* gi_indirect_tile_weight */
     const float *px, *py, *pz, *nx, *ny, *nz; /* SPLIT */
     const uint32_t *valid;            /* SPLIT */
@@ -707,7 +707,7 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
     uint32_t t = item / rows, row = item % rows;
     if (t >= T || row >= io->tile_h[t]) return;
     const float weight = io->weight; /* each tile sees 1/T of the VPLs (of its slice's, 1/C of them) */
-    const uint32_t grp = io->g0 + gi_tile_group(t, io->shift, T);
+    const uint32_t grp = gi_tile_group(t, io->shift, T, io->slice);
     uint32_t a0 = io->assign_start[grp], a1 = io->assign_start[grp + 1];
     const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;
@@ -791,7 +791,7 @@ void gi_stage_accumulate(gi_frame *f)
         ind->tile_h,
         ind->assign_start,
         ind->shift,
-        ind->slice * T,
+        ind->slice,
         gi_indirect_tile_weight(ind),
         ind->split_px,
         ind->split_py,
@@ -1248,6 +1248,7 @@ typedef struct gi__temporal_ctx {
     const pf_camera *pc;     /* last frame's camera */
     uint32_t W, H, N;        /* the image's size (the indirect stages'); opt.temporal */
     uint32_t s;              /* the indirect scale: the frame is s W x s H (about) */
+    float inv_s;             /* 1 / s */
     float fw, fh;            /* the frame's size */
     float a2, beta;          /* the filter's tests */
     const float *hp[3], *hn[3], *h;
@@ -1287,10 +1288,8 @@ static void gi__temporal_row(void *p, uint32_t y, uint32_t worker)
             if (z > 0.0f) {
                 float sx = pf_v3_dot(d, pc->right) / z, sy = pf_v3_dot(d, pc->up) / z;
                 float px = (sx / c->ta + 1.0f) * 0.5f * c->fw, py = (1.0f - sy / c->th) * 0.5f * c->fh;
-                if (c->s > 1) { /* the nearest reduced sample */
-                    float inv = 1.0f / (float)c->s;
-                    px = (px - 0.5f) * inv + 0.5f, py = (py - 0.5f) * inv + 0.5f;
-                }
+                if (c->s > 1) /* the nearest reduced sample */
+                    px = (px - 0.5f) * c->inv_s + 0.5f, py = (py - 0.5f) * c->inv_s + 0.5f;
                 if (px >= 0.0f && py >= 0.0f && px < (float)W && py < (float)H) {
                     size_t k = (size_t)(uint32_t)py * W + (uint32_t)px;
                     float dx = c->hp[0][k] - g->pos_x[i], dy = c->hp[1][k] - g->pos_y[i], dz = c->hp[2][k] - g->pos_z[i];
@@ -1324,7 +1323,7 @@ void gi_stage_temporal(gi_frame *f)
     c.filtered = low ? ind->filtered_low : ind->filtered;
     c.pc = &ind->hist_camera;
     c.W = ind->w, c.H = ind->h, c.N = ind->opt.temporal;
-    c.s = ind->scale, c.fw = (float)f->width, c.fh = (float)f->height;
+    c.s = ind->scale, c.inv_s = 1.0f / (float)ind->scale, c.fw = (float)f->width, c.fh = (float)f->height;
     c.a2 = ind->alpha * ind->alpha, c.beta = ind->opt.beta;
     for (int k = 0; k < 3; k++) {
         c.hp[k] = ind->hist_p[prev][k], c.hn[k] = ind->hist_nrm[prev][k];

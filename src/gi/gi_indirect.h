@@ -246,11 +246,13 @@ void gi_stage_temporal(struct gi_frame *f);
  * this frame: t itself, or rotated by `shift` (ind->shift: the frame with
  * temporal accumulation, the anti-aliasing sample); with VPL cycling, of
  * this frame's slice, whose groups are slice T .. slice T + T - 1. */
-static inline uint32_t gi_tile_group(uint32_t t, uint32_t shift, uint32_t T) { return (t + shift) % T; }
+static inline uint32_t gi_tile_group(uint32_t t, uint32_t shift, uint32_t T, uint32_t slice)
+{
+    return slice * T + (t + shift) % T;
+}
 static inline uint32_t gi_indirect_tile_group(const gi_indirect *ind, uint32_t t)
 {
-    uint32_t T = ind->n * ind->m;
-    return ind->slice * T + gi_tile_group(t, ind->shift, T);
+    return gi_tile_group(t, ind->shift, ind->n * ind->m, ind->slice);
 }
 /* The weight of a tile pixel's sum: the tiles T times the slices C (each
  * pixel sees 1 / (T C) of the set). */

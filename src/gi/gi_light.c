@@ -1,6 +1,9 @@
 /* gi_light: punctual-light irradiance (see gi_light.h). */
 #include "gi_light.h"
 
+#include <stdlib.h>
+#include <string.h>
+
 float gi_light_spot_factor(const pf_light *light, float cos_angle)
 {
     float cos_outer = cosf(light->outer_cone), cos_inner = cosf(light->inner_cone);
@@ -42,4 +45,33 @@ pf_ray gi_light_shadow_ray(const gi_light_sample *ls, pf_vec3 p, pf_vec3 ng)
     r.tnear = 0.0f;
     r.tfar = isinf(ls->distance) ? INFINITY : ls->distance * (1.0f - 1.0e-4f);
     return r;
+}
+
+int gi_light_copy_same(const gi_light_copy *c, const pf_scene *s, uint32_t i)
+{
+    return i < c->count && i < s->light_count && !memcmp(&c->v[i], &s->lights[i], sizeof(pf_light));
+}
+
+int gi_light_copy_all_same(const gi_light_copy *c, const pf_scene *s)
+{
+    return c->count == s->light_count && (!c->count || !memcmp(c->v, s->lights, sizeof(pf_light) * c->count));
+}
+
+int gi_light_copy_take(gi_light_copy *c, const pf_scene *s)
+{
+    if (!c->v || c->count != s->light_count) { /* only when lights were added or removed */
+        pf_light *copy = realloc(c->v, sizeof(pf_light) * (s->light_count ? s->light_count : 1));
+        if (!copy) return 0;
+        c->v = copy;
+    }
+    if (s->light_count) memcpy(c->v, s->lights, sizeof(pf_light) * s->light_count);
+    c->count = s->light_count;
+    return 1;
+}
+
+void gi_light_copy_free(gi_light_copy *c)
+{
+    free(c->v);
+    c->v = NULL;
+    c->count = 0;
 }

@@ -35,4 +35,20 @@ int gi_light_irradiance(const pf_light *light, pf_vec3 p, pf_vec3 n, gi_light_sa
  * short of the light (a light lying on a surface does not shadow itself). */
 pf_ray gi_light_shadow_ray(const gi_light_sample *ls, pf_vec3 p, pf_vec3 ng);
 
+/* A copy of a scene's lights, to tell later what changed (the direct
+ * light's shadow maps, gi_direct.c; IR's unchanged set, gi_ir.c).
+ * Zero-initialise; lights compare as bytes, field for field (pf_light has
+ * no padding). */
+typedef struct gi_light_copy {
+    pf_light *v;
+    uint32_t count;
+} gi_light_copy;
+/* 1 when the copy has a light i equal to light i of s. */
+int gi_light_copy_same(const gi_light_copy *c, const pf_scene *s, uint32_t i);
+/* 1 when the copy holds exactly s's lights (as many, each the same). */
+int gi_light_copy_all_same(const gi_light_copy *c, const pf_scene *s);
+/* Copies s's lights in; 0 (the copy unchanged) when out of memory. */
+int gi_light_copy_take(gi_light_copy *c, const pf_scene *s);
+void gi_light_copy_free(gi_light_copy *c);
+
 #endif

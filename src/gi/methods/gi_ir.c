@@ -51,8 +51,8 @@ typedef struct gi__ir_state {
     int have_key;
     const pf_scene *scene;
     const pf_rt *rt;
-    uint32_t budget, bounces, epoch, light_count;
-    pf_light *lights; /* light_count copies */
+    uint32_t budget, bounces, epoch;
+    gi_light_copy lights;
 } gi__ir_state;
 
 /* 1 when this update's paths would be the last update's: same inputs, no
@@ -63,29 +63,16 @@ static int gi__ir_same_inputs(const gi__ir_state *st, const gi_vpl_inputs *in)
     const gi_motion *m = in->motion;
     return st->have_key && !st->reseed && st->scene == s && st->rt == in->rt && st->budget == in->budget &&
            st->bounces == in->bounces && st->epoch == (m ? m->epoch : 0u) && !(m && (m->moved || m->emitters)) &&
-           st->light_count == s->light_count &&
-           (s->light_count == 0 || !memcmp(st->lights, s->lights, sizeof(pf_light) * s->light_count));
+           gi_light_copy_all_same(&st->lights, s);
 }
 
 /* Records what this update traced from (a failed allocation only means
  * the next update traces again). */
 static void gi__ir_keep_inputs(gi__ir_state *st, const gi_vpl_inputs *in)
 {
-    const pf_scene *s = in->scene;
-    st->have_key = 0;
-    if (st->light_count != s->light_count) {
-        free(st->lights);
-        st->lights = s->light_count ? malloc(sizeof(pf_light) * s->light_count) : NULL;
-        st->light_count = s->light_count;
-        if (s->light_count && !st->lights) {
-            st->light_count = 0;
-            return;
-        }
-    }
-    if (s->light_count) memcpy(st->lights, s->lights, sizeof(pf_light) * s->light_count);
-    st->scene = s, st->rt = in->rt, st->budget = in->budget, st->bounces = in->bounces;
+    st->have_key = gi_light_copy_take(&st->lights, in->scene);
+    st->scene = in->scene, st->rt = in->rt, st->budget = in->budget, st->bounces = in->bounces;
     st->epoch = in->motion ? in->motion->epoch : 0u;
-    st->have_key = 1;
 }
 
 static pf_result gi__ir_create(void **state, const gi_params *params, pf_error *err)
@@ -107,7 +94,7 @@ static void gi__ir_destroy(void *state)
     gi__ir_state *s = state;
     if (!s) return;
     gi_vpl_set_free(&s->prev);
-    free(s->lights);
+    gi_light_copy_free(&s->lights);
     free(s);
 }
 

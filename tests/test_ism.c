@@ -228,7 +228,7 @@ static double agreement(gi_frame *f, uint64_t *pairs, double *lit_ray, double *l
             if (!(pf_v3_dot(nrm, w) > 0.0f) || !(-pf_v3_dot(v->nrm, w) > 0.0f)) continue;
             pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
             int ray_vis = !pf_rt_occluded1(f->rt, ray);
-            int map_vis = rs_para_visible_scaled(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos,
+            int map_vis = rs_para_visible_scaled(ind->atlas + vi * map, R, ind->range, &ind->frames[vi], pos, NULL,
                                                  pf_v3_dot(nrm, w), ind->bias_scale);
             agree += (uint64_t)(ray_vis == map_vis);
             vr += (uint64_t)ray_vis, vm += (uint64_t)map_vis;

@@ -11,8 +11,8 @@
  * - the paraboloid lookup (rs_para_lookup.h, rs_para_kernels.visible)
  *   against the scalar rs_para_visible_scaled: random maps (empty and
  *   outside codes included), VPL frames, points in front, behind, on the
- *   axis and near the rim, bias scales 1 and 3;
- * - that rs_para_visible_at is rs_para_visible_scaled with scale 1;
+ *   axis and near the rim, the slope test with bias scales 1 and 3 and the
+ *   receiver-plane test with random, zero and grazing normals;
  * - the shadow maps' PCF lookup (rs_shadow_visibility8 on every path, AVX-512
  *   included) against the scalar rs_shadow_visibility: spot, cube and
  *   orthographic maps, power-of-two and other sizes, PCF16 and PCF1, points
@@ -263,7 +263,7 @@ static void test_para_lookup(void **state)
     int n = tables(simd);
     uint64_t s = 99;
     const uint32_t res[2] = {128, 67};
-    uint32_t visible = 0, total = 0;
+    uint32_t visible = 0, total = 0, plane_visible = 0, plane_total = 0;
     for (int r = 0; r < 2; r++) {
         uint32_t R = res[r];
         uint16_t *map = malloc(((size_t)R * R + 8) * sizeof(uint16_t));
@@ -278,8 +278,9 @@ static void test_para_lookup(void **state)
             pf_vec3 nn = pf_v3((float)rng_unit(&s) - 0.5f, (float)rng_unit(&s) - 0.5f, (float)rng_unit(&s) - 0.5f);
             if (it % 50 == 0) nn = pf_v3(0, 0, 1);
             rs_para_frame f = rs_para_frame_make(o, nn);
-            float scale = it % 2 ? 1.0f : 3.0f;
-            float px[16], py[16], pz[16], cr[16];
+            const int mode = it % 3; /* slope x 1, slope x 3, receiver plane */
+            float scale = mode == 1 ? 3.0f : 1.0f;
+            float px[16], py[16], pz[16], cr[16], nx[16], ny[16], nz[16];
             for (int i = 0; i < 16; i++) {
                 pf_vec3 d = pf_v3((float)rng_unit(&s) * 2 - 1, (float)rng_unit(&s) * 2 - 1, (float)rng_unit(&s) * 2 - 1);
                 float t = (float)rng_unit(&s) * 6.0f;
@@ -292,30 +293,41 @@ static void test_para_lookup(void **state)
                 cr[i] = (float)rng_unit(&s) * 2.0f - 1.0f;
                 if (i == 7) cr[i] = 0.0f;
                 if (i == 8) cr[i] = 1.0f;
+                pf_vec3 m = pf_v3_normalize(
+                    pf_v3((float)rng_unit(&s) - 0.5f, (float)rng_unit(&s) - 0.5f, (float)rng_unit(&s) - 0.5f));
+                if (i == 9) m = pf_v3(0, 0, 0);                      /* no plane: the window's near end */
+                if (i == 10) m = pf_v3_normalize(pf_v3_cross(d, f.t)); /* grazing: the ray in the plane */
+                if (i == 11) m = pf_v3_normalize(d);                 /* facing the VPL */
+                nx[i] = m.x, ny[i] = m.y, nz[i] = m.z;
             }
             uint32_t ref = 0;
-            for (int i = 0; i < 16; i++)
-                ref |= (uint32_t)rs_para_visible_scaled(map, R, range, &f, pf_v3(px[i], py[i], pz[i]), cr[i], scale)
+            for (int i = 0; i < 16; i++) {
+                pf_vec3 m = pf_v3(nx[i], ny[i], nz[i]);
+                ref |= (uint32_t)rs_para_visible_scaled(map, R, range, &f, pf_v3(px[i], py[i], pz[i]),
+                                                        mode == 2 ? &m : NULL, cr[i], scale)
                        << i;
-            if (scale == 1.0f)
-                for (int i = 0; i < 16; i++)
-                    assert_int_equal(rs_para_visible_at(map, R, range, &f, pf_v3(px[i], py[i], pz[i]), cr[i]),
-                                     (int)(ref >> i & 1));
+            }
             visible += (uint32_t)__builtin_popcount(ref);
             total += 16;
+            if (mode == 2) plane_visible += (uint32_t)__builtin_popcount(ref), plane_total += 16;
             for (int p = 0; p < n; p++) {
                 const rs_para_kernels *k = rs_para_kernels_for(simd[p]);
                 uint32_t got = 0;
                 for (uint32_t i0 = 0; i0 < 16; i0 += k->lanes)
-                    got |= k->visible(map, R, range, scale, &f, px + i0, py + i0, pz + i0, cr + i0) << i0;
+                    got |= k->visible(map, R, range, scale, &f, px + i0, py + i0, pz + i0, cr + i0,
+                                      mode == 2 ? nx + i0 : NULL, mode == 2 ? ny + i0 : NULL,
+                                      mode == 2 ? nz + i0 : NULL)
+                           << i0;
                 if (got != ref)
                     fail_msg("paraboloid lookup %s: %#x, scalar %#x (R %u, iteration %d)", k->isa, got, ref, R, it);
             }
         }
         free(map);
     }
-    print_message("paraboloid lookup: %u of %u points visible, %d paths identical\n", visible, total, n);
+    print_message("paraboloid lookup: %u of %u points visible (receiver plane: %u of %u), %d paths identical\n",
+                  visible, total, plane_visible, plane_total, n);
     assert_true(visible > total / 10 && visible < total);
+    assert_true(plane_visible > plane_total / 10 && plane_visible < plane_total);
 }
 
 /* ------------------------------------------------------------ PCF lookup */

@@ -131,8 +131,9 @@ typedef struct softgi_desc {
     float clamp;            /* bounded geometry term b = clamp / diagonal^2, > 0; 0: 400; SOFTGI_CLAMP_OFF:
                                none (--clamp C, --clamp 0) */
     const char *filter;     /* "box", "bilateral", "gaussian", "atrous", "none"; NULL: "box" (--filter) */
-    const char *visibility; /* the VPLs' shadows: "paraboloid", "ism", "raytrace"; NULL: "paraboloid"
-                               (--visibility) */
+    const char *visibility; /* the VPLs' shadows: "paraboloid" (exact maps, receiver-plane test),
+                               "paraboloid-slope" (exact maps, slope-scaled bias), "ism", "raytrace";
+                               NULL: "paraboloid" (--visibility) */
     uint32_t ism_res;       /* visibility "ism" only: texels per side, a power of two 8..512; 0: 64 (--ism-res) */
     uint32_t ism_points;    /* visibility "ism" only: points a frame, 1000..1e8; 0: the default (--ism-points) */
     float ism_bias;         /* visibility "ism" only: bias scale, 1..64; 0: the default (--ism-bias) */

@@ -218,6 +218,7 @@ pf_result api_indirect_options(const softgi_desc *d, gi_indirect_options *io, pf
     io->no_interleave = (d->flags & SOFTGI_NO_INTERLEAVE) != 0;
     io->visibility_ism = d->visibility && !strcmp(d->visibility, "ism");
     io->visibility_raytrace = d->visibility && !strcmp(d->visibility, "raytrace");
+    io->para_slope = d->visibility && !strcmp(d->visibility, "paraboloid-slope");
     if (!io->visibility_ism && (d->ism_res || d->ism_points || d->ism_bias != 0.0f))
         return pf_error_set(err, PF_ERR_ARGUMENT, "--ism-res, --ism-points and --ism-bias need --visibility ism");
     io->ism.resolution = d->ism_res;
@@ -255,6 +256,7 @@ pf_result api_frame_create(gi_frame *f, const softgi_desc *d, const pf_scene *sc
                         .width = d->width ? d->width : API_DEFAULT_WIDTH,
                         .height = d->height ? d->height : API_DEFAULT_HEIGHT, .shadow_size = d->shadow_size,
                         .area_strata = d->area_strata, .area_points = d->area_points,
+                        .area_slope = d->visibility && !strcmp(d->visibility, "paraboloid-slope"),
                         .indirect = with_indirect ? &io : NULL,
                         .indirect_only = (d->flags & SOFTGI_INDIRECT_ONLY) != 0, .aa_samples = d->aa,
                         .taa_frames = d->taa};

@@ -230,7 +230,7 @@ static softgi_result api__check_frame_fields(const softgi_desc *d, softgi_error 
 }
 
 static const char *const api__filters[] = {"box", "bilateral", "gaussian", "atrous", "none", NULL};
-static const char *const api__visibilities[] = {"paraboloid", "ism", "raytrace", NULL};
+static const char *const api__visibilities[] = {"paraboloid", "paraboloid-slope", "ism", "raytrace", NULL};
 
 /* The method's own checks of its parameters (its create), now rather
  * than at the first frame, after the many-light options' own checks. */
@@ -297,7 +297,8 @@ softgi_context *softgi_create(const softgi_desc *desc, softgi_error *err)
     }
     const char *visibility = d->visibility ? api__choice(d->visibility, api__visibilities) : NULL;
     if (d->visibility && !visibility) {
-        api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_desc: visibility '%.100s': expected paraboloid, ism or raytrace",
+        api__error(err, SOFTGI_ERR_ARGUMENT,
+                   "softgi_desc: visibility '%.100s': expected paraboloid, paraboloid-slope, ism or raytrace",
                    d->visibility);
         return NULL;
     }
@@ -816,7 +817,10 @@ softgi_result softgi_get_info(const softgi_context *c, softgi_info *info, softgi
                 info->tiles_n = f->ind.n;
                 info->tiles_m = f->ind.m;
                 info->clamp_b = f->ind.b;
-                info->visibility = f->ind.ism ? "imperfect shadow maps" : f->ind.para ? "paraboloid maps" : "Embree rays";
+                info->visibility = f->ind.ism     ? "imperfect shadow maps"
+                                   : !f->ind.para ? "Embree rays"
+                                   : f->ind.plane ? "paraboloid maps"
+                                                  : "paraboloid maps, slope bias";
                 info->indirect_scale = f->ind.scale;
             }
         }

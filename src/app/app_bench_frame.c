@@ -404,7 +404,8 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
         out[m].threads = threads;
         out[m].pipeline = modes[m];
         gi_frame_desc fd = {.scene = lit, .rt = rt, .jobs = jobs, .raster = rs, .camera = &cam, .width = BF_W,
-                            .height = BF_H, .shadow_size = o->shadow_size, .aa_samples = o->aa,
+                            .height = BF_H, .shadow_size = o->shadow_size, .area_slope = o->visibility_slope,
+                            .aa_samples = o->aa,
                             .taa_frames = o->taa};
         if ((r = gi_frame_create(&f[m], &fd, err)) != PF_OK) break;
         ready++;
@@ -741,7 +742,10 @@ int app_bench_frame(const pf_options *o)
     if (pf_isa_resolve(o->isa, &isa, &err) != PF_OK) return app_fail(&err);
     const char *dir = o->scenes_dir ? o->scenes_dir : "../shared/scenes";
     const char *method = o->method ? o->method : "ir";
-    const char *visibility = o->visibility_raytrace ? "raytrace" : o->visibility_ism ? "ism" : "paraboloid";
+    const char *visibility = o->visibility_raytrace ? "raytrace"
+                             : o->visibility_ism    ? "ism"
+                             : o->visibility_slope  ? "paraboloid-slope"
+                                                    : "paraboloid";
     uint32_t frames = o->frames ? o->frames : 15;
     const uint32_t aa = o->aa ? o->aa : 1;
     uint32_t thread_list[2] = {1, 2}, nthreads = 2;

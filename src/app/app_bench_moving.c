@@ -220,7 +220,7 @@ static pf_result bm__world_make(bm_world *w, const pf_scene *src, pf_isa isa, pf
     pf_camera cam;
     if ((r = pf_camera_look_at(&cam, bm_eye, bm_target, pf_radians(bm_fovy), err)) != PF_OK) return r;
     gi_frame_desc fd = {.scene = &w->scene, .rt = w->rt, .jobs = jobs, .raster = w->raster, .camera = &cam,
-                        .width = BM_W, .height = BM_H};
+                        .width = BM_W, .height = BM_H, .area_slope = o->visibility_slope};
     if ((r = gi_frame_create(&w->frame, &fd, err)) != PF_OK) return r;
     w->frame_ready = 1;
     gi_indirect_options io;

@@ -54,8 +54,9 @@ void app_stem(const pf_options *o, char *stem, size_t size)
 pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_desc *d, pf_error *err)
 {
     memset(d, 0, sizeof *d);
-    if (o->visibility_ism && o->visibility_raytrace && !o->direct_only)
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--visibility: give one of paraboloid, ism or raytrace");
+    if (o->visibility_ism + o->visibility_raytrace + o->visibility_slope > 1 && !o->direct_only)
+        return pf_error_set(err, PF_ERR_ARGUMENT,
+                            "--visibility: give one of paraboloid, paraboloid-slope, ism or raytrace");
     d->width = width;
     d->height = height;
     d->threads = o->threads;
@@ -77,7 +78,10 @@ pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_
     d->tiles_m = o->tiles_m;
     d->clamp = !o->clamp_set ? 0.0f : o->clamp == 0.0f ? SOFTGI_CLAMP_OFF : o->clamp;
     d->filter = o->filter;
-    d->visibility = o->visibility_ism ? "ism" : o->visibility_raytrace ? "raytrace" : NULL;
+    d->visibility = o->visibility_ism         ? "ism"
+                    : o->visibility_raytrace  ? "raytrace"
+                    : o->visibility_slope     ? "paraboloid-slope"
+                                              : NULL;
     d->ism_res = o->ism_res;
     d->ism_points = o->ism_points;
     d->ism_bias = o->ism_bias;

@@ -1022,7 +1022,10 @@ static void view_draw_status(view_app *a, view_col *c)
         return;
     }
     const gi_indirect_options *o = &f->ind.opt;
-    const char *vis = o->visibility_raytrace ? "raytrace" : o->visibility_ism ? "ism" : "paraboloid";
+    const char *vis = o->visibility_raytrace ? "raytrace"
+                      : o->visibility_ism    ? "ism"
+                      : o->para_slope        ? "paraboloid-slope"
+                                             : "paraboloid";
     char clamp[32];
     if (o->clamp > 0.0f) snprintf(clamp, sizeof clamp, "%g", (double)o->clamp);
     else snprintf(clamp, sizeof clamp, "off");

@@ -125,8 +125,10 @@ static const pf__opt k_options[] = {
      "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian;\n"
      "atrous: the box, then variance-guided a-trous levels,\nDammertz 2010 and SVGF 2017; docs/frame.md)",
      NULL},
-    {PF__OPT_VISIBILITY, "--visibility", NULL, "paraboloid|ism|raytrace", FRAME | BF,
-     "VPL visibility (default: exact paraboloid maps)", NULL},
+    {PF__OPT_VISIBILITY, "--visibility", NULL, "paraboloid|paraboloid-slope|ism|raytrace", FRAME | BF,
+     "VPL visibility (default: exact paraboloid maps with the\nreceiver-plane test; paraboloid-slope: the same maps "
+     "with the\npapers' slope-scaled bias; docs/frame.md)",
+     NULL},
     {PF__OPT_ISM_RES, "--ism-res", NULL, "N", FRAME | BF,
      "--visibility ism: texels per ISM side, a power of two 8..512\n(default 64)", NULL},
     {PF__OPT_ISM_POINTS, "--ism-points", NULL, "N", FRAME | BF,
@@ -647,10 +649,13 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
                              val);
         break;
     case PF__OPT_VISIBILITY:
-        k = pf__choice(val, "paraboloid|ism|raytrace");
-        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--visibility '%s': expected paraboloid, ism or raytrace", val);
+        k = pf__choice(val, "paraboloid|ism|raytrace|paraboloid-slope");
+        if (k < 0)
+            r = pf_error_set(err, PF_ERR_ARGUMENT,
+                             "--visibility '%s': expected paraboloid, paraboloid-slope, ism or raytrace", val);
         o->visibility_ism |= k == 1;
         o->visibility_raytrace |= k == 2;
+        o->visibility_slope |= k == 3;
         break;
     case PF__OPT_ISM_RES:
         r = pf__uint(a, val, 8, 512, &o->ism_res, err);

@@ -76,6 +76,7 @@ typedef struct pf_options {
     uint32_t param_count;    /* --param KEY=VALUE (repeatable): method parameters */
     const char *params[32];
     int visibility_ism;      /* --visibility ism: imperfect shadow maps */
+    int visibility_slope;    /* --visibility paraboloid-slope: exact maps, slope-scaled bias */
     uint32_t ism_res;        /* --ism-res N: ISM texels per side (0: gi_ism.h default) */
     uint32_t ism_points;     /* --ism-points N: ISM points per frame (0: default) */
     float ism_bias;          /* --ism-bias S: ISM bias scale (0: default) */

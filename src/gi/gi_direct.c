@@ -84,6 +84,7 @@ void gi_stage_area_shadow_maps(gi_frame *f)
 {
     gi_area_maps *m = &f->area_maps;
     gi_moved_box *mb = &f->moved_area;
+    m->plane = !f->area_slope;
     if (m->count == 0 || (m->rendered && !mb->pending)) return; /* drawn once, again where geometry moved */
     pf_vec3 pos[64], nrm[64];
     size_t map = (size_t)RS_PARA_DEFAULT_RES * RS_PARA_DEFAULT_RES;
@@ -122,7 +123,9 @@ pf_vec3 gi__direct_area_irradiance(const gi_area_maps *m, pf_vec3 pos, pf_vec3 n
         pf_vec3 w = pf_v3_scale(d, 1.0f / r);
         float cr = pf_v3_dot(nrm, w), ce = -pf_v3_dot(fr->n, w);
         if (!(cr > 0.0f) || !(ce > 0.0f)) continue;
-        if (!rs_para_visible_at(m->atlas + k * map, RS_PARA_DEFAULT_RES, m->range, fr, pos, cr)) continue;
+        if (!rs_para_visible_scaled(m->atlas + k * map, RS_PARA_DEFAULT_RES, m->range, fr, pos, m->plane ? &nrm : NULL,
+                                    cr, 1.0f))
+            continue;
         e = pf_v3_add(e, pf_v3_scale(m->weight[k], cr * ce / r2));
     }
     return e;

@@ -219,6 +219,7 @@ pf_result gi_frame_create(gi_frame *f, const gi_frame_desc *d, pf_error *err)
         cam = &d->scene->cameras[0];
     }
     pf_result r = gi__frame_init(f, d->scene, d->rt, d->raster, d->jobs, cam, d->width, d->height, d->shadow_size, err);
+    f->area_slope = d->area_slope;
     if (r == PF_OK && (d->area_strata || d->area_points))
         r = gi_frame_set_area_sampling(f, d->area_strata ? d->area_strata : GI_AREA_DEFAULT_STRATA,
                                        d->area_points ? d->area_points : GI_AREA_DEFAULT_POINTS, err);

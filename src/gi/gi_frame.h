@@ -172,6 +172,7 @@ typedef struct gi_area_maps {
     pf_vec3 *weight;       /* Le A_k, RGB (W/sr at normal exitance) */
     float range;
     int rendered;          /* maps drawn (at the first frame) */
+    int plane;             /* the receiver-plane test (!gi_frame.area_slope, set by the stage) */
 } gi_area_maps;
 
 /* Progress of a long stage (the VPLs' maps of a first frame with many
@@ -222,6 +223,7 @@ typedef struct gi_frame {
     /* moved geometry (gi_motion.h, gi_frame_geometry_moved): what the
      * stages have yet to catch up with */
     uint32_t area_points;        /* K as set (area_maps.count is 0 without emitters) */
+    int area_slope;              /* gi_frame_desc.area_slope */
     gi_motion motion;            /* for the VPL method: cleared after each update */
     gi_moved_box moved_shadows;  /* for gi_stage_shadow_maps */
     gi_moved_box moved_area;     /* for gi_stage_area_shadow_maps */
@@ -241,6 +243,8 @@ typedef struct gi_frame_desc {
     uint32_t shadow_size;        /* texels per side of each direct-light shadow map (0: 1024) */
     uint32_t area_strata;        /* ray-traced area lights: strata per side (0: GI_AREA_DEFAULT_STRATA) */
     uint32_t area_points;        /* rasterized area lights: K points (0: GI_AREA_DEFAULT_POINTS) */
+    int area_slope;              /* rasterized area lights: the slope-scaled bias test instead of the
+                                    receiver-plane test (--visibility paraboloid-slope; rs_paraboloid.h) */
     const gi_indirect_options *indirect; /* NULL: no indirect light (steps 3-9 off) */
     int indirect_only;           /* with indirect: no emission and direct light in the image */
     uint32_t aa_samples;         /* jittered samples per pixel, 1..GI_AA_MAX_SAMPLES (0: 1, the pixel centres) */

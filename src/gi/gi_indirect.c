@@ -149,6 +149,7 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
             if (r != PF_OK) return r;
             ind->bias_scale = gi_ism_bias_scale(ind->ism);
         } else {
+            ind->plane = !o.para_slope;
             rs_para_options po;
             memset(&po, 0, sizeof po);
             po.resolution = o.para_res;
@@ -748,9 +749,9 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
             pf_vec3 c = gi_vpl_irradiance(v, pos, nrm, in->b, &w, &r, NULL, NULL);
             if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) continue;
             int visible;
-            if (in->atlas) { /* exact maps (bias_scale 1) or ISMs: the one lookup */
+            if (in->atlas) { /* exact maps (the receiver-plane test or bias_scale 1) or ISMs: the one lookup */
                 visible = rs_para_visible_scaled(in->atlas + vi * map, R, in->range, &in->frames[vi], pos,
-                                                 pf_v3_dot(nrm, w), in->bias_scale);
+                                                 in->plane ? &nrm : NULL, pf_v3_dot(nrm, w), in->bias_scale);
             } else {
                 pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
                 visible = !pf_rt_occluded1(io->rt, ray);
@@ -781,7 +782,8 @@ void gi_stage_accumulate(gi_frame *f)
     ind->slice = gi__slice(ind);
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
     const gi__accumulate_io io = {
-        {ind->vpls.v, ind->assign, ind->atlas, ind->frames, ind->opt.para_res, ind->range, ind->bias_scale, ind->b},
+        {ind->vpls.v, ind->assign, ind->atlas, ind->frames, ind->opt.para_res, ind->range, ind->bias_scale, ind->plane,
+         ind->b},
         f->rt,
         gi__kernels(f),
         T,

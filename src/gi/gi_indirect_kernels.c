@@ -73,8 +73,8 @@ static void gi__accumulate(const gi_accumulate_in *in, const float *px_, const f
             simd_f G = simd_div_f(simd_mul_f(c1, c2), r2);
             G = simd_select_f(simd_gt_f(G, b), b, G); /* the bounded geometry term */
             /* the VPL's map (rs_para_visible_scaled lane-wise), receiver cosine n . w */
-            simd_mask vis = simd_mask_and(ok, rs_para_visible_lanes(mp, R, in->range, in->bias_scale,
-                                                                    &in->frames[vi], Px, Py, Pz, c1));
+            simd_mask vis = simd_mask_and(ok, rs_para_visible_lanes(mp, R, in->range, in->bias_scale, &in->frames[vi],
+                                                                    Px, Py, Pz, c1, in->plane, Nx, Ny, Nz));
             acc[g][0] = simd_add_f(acc[g][0], simd_select_f(vis, simd_mul_f(ir, G), zero));
             acc[g][1] = simd_add_f(acc[g][1], simd_select_f(vis, simd_mul_f(ig, G), zero));
             acc[g][2] = simd_add_f(acc[g][2], simd_select_f(vis, simd_mul_f(ib, G), zero));

@@ -21,6 +21,7 @@ typedef struct gi_accumulate_in {
     const rs_para_frame *frames;   /* each map's VPL frame */
     uint32_t para_res;             /* R */
     float range, bias_scale;       /* the maps' quantisation range; the lookup's bias scale */
+    int plane;                     /* 1: the receiver-plane test (exact maps; rs_paraboloid.h "Lookup") */
     float b;                       /* the bounded geometry term's bound */
 } gi_accumulate_in;
 

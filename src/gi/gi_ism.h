@@ -31,9 +31,10 @@
  * Maps are exactly rs_paraboloid's (rs_paraboloid.h): same stereographic
  * parametrisation, texel layout R x R per map, map k at atlas + k R R, the
  * same 16-bit distance codes (code = floor(t * 65534 / range)), so the
- * frame's lookup (rs_para_visible_at and the SIMD accumulation) reads them
- * unchanged; only the bias differs (rs_para_visible_scaled: the exact maps'
- * bias times bias_scale, see GI_ISM_DEFAULT_BIAS).
+ * frame's lookup (rs_para_visible_scaled and the SIMD accumulation) reads
+ * them unchanged; only the test differs: the slope-scaled bias times
+ * bias_scale (see GI_ISM_DEFAULT_BIAS), where the exact maps take the
+ * receiver-plane test (a splatted depth is not the texel centre's ray).
  *
  * Every VPL's ISM is rebuilt every frame: a map costs a few thousand splats,
  * and the points are regenerated and reassigned to VPLs at random each frame

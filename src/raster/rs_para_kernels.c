@@ -204,10 +204,13 @@ static uint64_t rs__scan(const rs_para_context *ctx, rs__scratch *sc, rs__setup 
 
 static uint32_t rs__visible(const uint16_t *map, uint32_t resolution, float range, float bias_scale,
                             const rs_para_frame *f, const float *px, const float *py, const float *pz,
-                            const float *cos_receiver)
+                            const float *cos_receiver, const float *nx, const float *ny, const float *nz)
 {
+    const simd_f zero = simd_zero_f();
     return simd_mask_bits(rs_para_visible_lanes(map, resolution, range, bias_scale, f, simd_loadu_f(px),
-                                                simd_loadu_f(py), simd_loadu_f(pz), simd_loadu_f(cos_receiver)));
+                                                simd_loadu_f(py), simd_loadu_f(pz), simd_loadu_f(cos_receiver),
+                                                nx != NULL, nx ? simd_loadu_f(nx) : zero, ny ? simd_loadu_f(ny) : zero,
+                                                nz ? simd_loadu_f(nz) : zero));
 }
 
 const rs_para_kernels RS_PARA_KERNELS = {SIMD_NAME, SIMD_W, rs__front, rs__scan, rs__visible};

@@ -144,10 +144,11 @@ typedef struct rs_para_kernels {
     void (*front)(const rs_para_context *ctx, rs__scratch *sc, const rs_para_frame *f, const rs__cluster *cl);
     uint64_t (*scan)(const rs_para_context *ctx, rs__scratch *sc, rs__setup *s, rs__rect r);
     /* rs_para_visible_lanes (rs_para_lookup.h) of `lanes` points (arrays of
-     * `lanes`): bit i set iff point i is visible (rs_para_visible_scaled) */
+     * `lanes`): bit i set iff point i is visible (rs_para_visible_scaled);
+     * normals nx, ny, nz (all or none NULL) select the receiver-plane test */
     uint32_t (*visible)(const uint16_t *map, uint32_t resolution, float range, float bias_scale,
                         const rs_para_frame *f, const float *px, const float *py, const float *pz,
-                        const float *cos_receiver);
+                        const float *cos_receiver, const float *nx, const float *ny, const float *nz);
 } rs_para_kernels;
 
 extern const rs_para_kernels rs_para_kernels_scalar;

@@ -250,7 +250,7 @@ float rs_para_bias(uint32_t resolution, float range, const rs_para_frame *f, pf_
 }
 
 int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f,
-                           pf_vec3 p, float cos_receiver, float bias_scale)
+                           pf_vec3 p, const pf_vec3 *plane_n, float cos_receiver, float bias_scale)
 {
     /* rs_para_bias + rs_para_visible in one pass: the local direction, its
      * length and its (u, v) are computed once (the many-light accumulation
@@ -263,15 +263,30 @@ int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range
     float w = dist * (4.0f / (float)resolution) / (1.0f + (u * u + v * v));
     float c = fabsf(cos_receiver), s = sqrtf(fmaxf(0.0f, 1.0f - c * c));
     float tan_t = c > s / RS_PARA_TAN_MAX ? s / c : RS_PARA_TAN_MAX;
-    uint16_t code = map[rs_para_texel_of_uv(resolution, u, v)];
+    uint32_t t = rs_para_texel_of_uv(resolution, u, v);
+    uint16_t code = map[t];
     if (code > RS_PARA_MAX_CODE) return 1;
-    return dist <= rs_para_decode(code, range) + bias_scale * (w * (1.0f + tan_t) + 2.0f * range / RS_PARA_CODES);
-}
-
-int rs_para_visible_at(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,
-                       float cos_receiver)
-{
-    return rs_para_visible_scaled(map, resolution, range, f, p, cos_receiver, 1.0f); /* x 1 is exact */
+    float step2 = 2.0f * range / RS_PARA_CODES;
+    float bias = w * (1.0f + tan_t) + step2;
+    if (!plane_n) return dist <= rs_para_decode(code, range) + bias_scale * bias;
+    /* The receiver-plane test (see the header): the distance at which the
+     * texel centre's ray meets the receiver's plane, kept within the slope
+     * bias of the point's own distance, against the stored distance. */
+    float R = (float)resolution, fi = (float)(t % resolution), fj = (float)(t / resolution);
+    float uc = ((fi + fi + 1.0f) - R) / R, vc = ((fj + fj + 1.0f) - R) / R;
+    float rc = uc * uc + vc * vc;
+    pf_vec3 n = *plane_n;
+    float nx = (n.x * f->t.x + n.y * f->t.y) + n.z * f->t.z;
+    float ny = (n.x * f->b.x + n.y * f->b.y) + n.z * f->b.z;
+    float nz = (n.x * f->n.x + n.y * f->n.y) + n.z * f->n.z;
+    float num = (nx * d.x + ny * d.y) + nz * d.z;
+    float dn = (nx * (uc + uc) + ny * (vc + vc)) + nz * (1.0f - rc);
+    float lo = dist - bias, hi = dist + bias, at = lo;
+    if (fabsf(dn) > RS_PARA_PLANE_MIN_COS) {
+        float sp = num * (1.0f + rc) / dn;
+        if (sp > 0.0f) at = sp < lo ? lo : (sp > hi ? hi : sp);
+    }
+    return at <= rs_para_decode(code, range) + (w * RS_PARA_PLANE_EPS + step2);
 }
 
 int rs_para_visible(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 p,

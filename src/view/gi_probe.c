@@ -39,8 +39,9 @@ static int gi__vpl_visible(const gi_frame *f, uint32_t vi, pf_vec3 pos, pf_vec3 
     const gi_indirect *ind = &f->ind;
     const uint32_t R = ind->opt.para_res;
     const uint16_t *map = ind->atlas ? ind->atlas + (size_t)vi * R * R : NULL;
-    if (map) /* exact maps (bias_scale 1) or ISMs: the one lookup */
-        return rs_para_visible_scaled(map, R, ind->range, &ind->frames[vi], pos, pf_v3_dot(nrm, w), ind->bias_scale);
+    if (map) /* exact maps (the receiver-plane test or bias_scale 1) or ISMs: the one lookup */
+        return rs_para_visible_scaled(map, R, ind->range, &ind->frames[vi], pos, ind->plane ? &nrm : NULL,
+                                      pf_v3_dot(nrm, w), ind->bias_scale);
     pf_ray ray = {pf_rt_offset_origin(pos, nrm, w), 0.0f, w, r * (1.0f - 1.0e-4f)};
     return !pf_rt_occluded1(f->rt, ray);
 }

@@ -404,7 +404,10 @@ static void fz_check_image(const gi_frame *f, const fz_frame_cfg *c, int frame)
                 "%u VPLs, visibility %s, simd %s, isa %s\n",
                 frame, px % f->width, px / f->width, i % 3, (double)v, (double)f->direct[i], f->width, f->height,
                 c->raytrace ? "ray-traced" : "rasterized", c->io.method->name, c->io.vpls,
-                c->io.visibility_raytrace ? "raytrace" : c->io.visibility_ism ? "ism" : "paraboloid",
+                c->io.visibility_raytrace ? "raytrace"
+                : c->io.visibility_ism    ? "ism"
+                : c->io.para_slope        ? "paraboloid-slope"
+                                          : "paraboloid",
                 rs_simd_name(c->simd), pf_isa_name(c->isa));
         if (f->indirect)
             fprintf(stderr, "  indirect: combined %g filtered %g\n", (double)f->ind.combined[i],
@@ -440,6 +443,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint8_t vis = fz_u8(&in);
     c.io.visibility_raytrace = vis % 3 == 1;
     c.io.visibility_ism = vis % 3 == 2;
+    c.io.para_slope = vis % 3 == 0 && (vis & 0x80); /* exact maps: the slope-scaled bias test for half */
     if (c.io.visibility_ism) {
         c.io.ism.resolution = 8u << ((vis / 3) % 3); /* 8, 16, 32 */
         c.io.ism.points = 1000u + 1000u * ((vis / 9) % 20);

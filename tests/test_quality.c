@@ -93,9 +93,11 @@ static void test_table(void **state)
     assert_non_null(strstr(t, "threads"));
     assert_non_null(strstr(t, "cornell, 1 bounce: reference noise 0."));
     assert_non_null(strstr(t, "cornell, 3 bounces: reference noise 0."));
-    static const char *const settings[] = {"paper", "softgi", "temporal", "atrous", "atrous+temporal", "cycle"};
-    double ir[6][6], iir[6][6];
-    for (int k = 0; k < 6; k++) {
+    static const char *const settings[] = {"paper",           "softgi", "temporal", "atrous",
+                                           "atrous+temporal", "cycle",  "cycle32"};
+    enum { NSET = sizeof settings / sizeof settings[0] };
+    double ir[NSET][6], iir[NSET][6];
+    for (int k = 0; k < NSET; k++) {
         row_numbers(t, "ir", 3, settings[k], ir[k]);
         row_numbers(t, "iir", 1, settings[k], iir[k]);
         for (int c = 0; c < 2; c++) assert_true(ir[k][c] >= 0.0 && iir[k][c] >= 0.0);
@@ -106,10 +108,10 @@ static void test_table(void **state)
     /* the temporal setting averages the rotating tile groups: closer to the
      * proxy (every VPL at every pixel) than one interleaved frame */
     assert_true(ir[2][1] < ir[0][1]);
-    /* exactly twelve rows: two methods, six settings */
+    /* exactly fourteen rows: two methods, seven settings */
     size_t rows = 0;
     for (const char *p = strstr(t, "| cornell | `"); p; p = strstr(p + 1, "| cornell | `")) rows++;
-    assert_int_equal(rows, 12);
+    assert_int_equal(rows, 14);
 
     /* the same settings again: the references and proxies are reused, and
      * the numbers are the same (the frames are deterministic) */
@@ -121,7 +123,7 @@ static void test_table(void **state)
         fail_msg("the second run did not reuse the cache:\n%s", out);
     char *again = read_text(path);
     double v[6];
-    for (int k = 0; k < 6; k++) {
+    for (int k = 0; k < NSET; k++) {
         row_numbers(again, "ir", 3, settings[k], v);
         for (int c = 0; c < 4; c++) assert_true(fabs(v[c] - ir[k][c]) < 1e-3);
     }

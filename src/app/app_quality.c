@@ -26,8 +26,9 @@
  * that records the settings (and the reference's noise), and reused while
  * the stamp matches (--rerun-reference renders them again; the stamp cannot
  * know of a changed renderer, so after one, rerun).
- * Then every method at three settings, rendered in this process with the
- * frame `softgi render` builds (options parsed by pf_cli as render's):
+ * Then every method at the settings of qu__setting (below), rendered in
+ * this process with the frame `softgi render` builds (options parsed by
+ * pf_cli as render's), among them:
  *   paper:    the method's paper defaults (--vpls VPLs, 4x4 interleaved
  *             tiles, box filter, clamp 400, paraboloid maps with the papers'
  *             slope-scaled bias, --visibility paraboloid-slope);
@@ -35,7 +36,8 @@
  *             (the clamp's energy added back; docs/frame.md "Beyond the
  *             papers");
  *   temporal: softgi's setting with --temporal 16 on a static view, frame 15
- *             of 16 (every tile group seen once).
+ *             of 16 (every tile group seen once);
+ *   atrous, atrous+temporal, cycle, cycle32: see qu__setting.
  * Each image is the indirect light only (--indirect-only, as the reference)
  * and is compared with the reference and the proxy of the method's own
  * bounce count (ir, smc, mir: 3 = --bounces; iir, invtm, tcas: 1, as their
@@ -78,7 +80,8 @@
 
 /* paper: the papers' defaults; softgi: + --compensate on; temporal: softgi +
  * --temporal 16; atrous: softgi + --filter atrous; atrous+temporal: both;
- * cycle: temporal + --vpl-cycle 16 (16 slices of --vpls, one a frame) */
+ * cycle: temporal + --vpl-cycle 16 (16 slices of --vpls, one a frame);
+ * cycle32: --temporal 32 --vpl-cycle 32, frame 31 of 32 */
 typedef enum qu__setting {
     QU_PAPER,
     QU_SOFTGI,
@@ -86,11 +89,17 @@ typedef enum qu__setting {
     QU_ATROUS,
     QU_ATROUS_TEMPORAL,
     QU_CYCLE,
+    QU_CYCLE32,
     QU_SETTINGS
 } qu__setting;
-static const char *const k_setting_names[QU_SETTINGS] = {"paper",  "softgi",          "temporal",
-                                                         "atrous", "atrous+temporal", "cycle"};
-static int qu__temporal(int k) { return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL || k == QU_CYCLE; }
+static const char *const k_setting_names[QU_SETTINGS] = {"paper",  "softgi",          "temporal", "atrous",
+                                                         "atrous+temporal", "cycle", "cycle32"};
+static int qu__temporal(int k)
+{
+    return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL || k == QU_CYCLE || k == QU_CYCLE32;
+}
+/* frames rendered of a temporal setting (the last one is compared) */
+static uint32_t qu__temporal_frames(int k) { return k == QU_CYCLE32 ? 2u * QU_TEMPORAL_FRAMES : QU_TEMPORAL_FRAMES; }
 
 /* The scenes the table knows. */
 typedef struct qu__scene {
@@ -254,15 +263,15 @@ static pf_result qu__options(qu__run *run, const qu__config *c, pf_options *o, p
         }
         if (qu__temporal(c->setting)) {
             qu__push(&v, "--temporal");
-            qu__push(&v, "16");
+            qu__push(&v, c->setting == QU_CYCLE32 ? "32" : "16");
         }
         if (c->setting == QU_ATROUS || c->setting == QU_ATROUS_TEMPORAL) {
             qu__push(&v, "--filter");
             qu__push(&v, "atrous");
         }
-        if (c->setting == QU_CYCLE) {
+        if (c->setting == QU_CYCLE || c->setting == QU_CYCLE32) {
             qu__push(&v, "--vpl-cycle");
-            qu__push(&v, "16");
+            qu__push(&v, c->setting == QU_CYCLE32 ? "32" : "16");
         }
     }
     if (v.argc >= QU_MAX_ARGS) return pf_error_set(err, PF_ERR_ARGUMENT, "evaluate --quality: too many parameters");
@@ -559,8 +568,8 @@ static int qu__scene_rows(qu__run *run, const qu__scene *s, const char *path, FI
             c.setting = (qu__setting)k;
             qu__result res = {0};
             /* paper and softgi: the first frame's image, and a second frame of the view for the steady
-             * state's time; temporal (and atrous+temporal): frame 15 of 16 */
-            uint32_t frames = qu__temporal(k) ? QU_TEMPORAL_FRAMES : 2;
+             * state's time; temporal (and atrous+temporal, cycle): frame 15 of 16; cycle32: 31 of 32 */
+            uint32_t frames = qu__temporal(k) ? qu__temporal_frames(k) : 2;
             r = qu__render(run, &c, &su, raster, w, h, frames, qu__temporal(k) ? frames - 1 : 0, &res, &err);
             if (r != PF_OK) {
                 status = app_fail(&err);
@@ -750,7 +759,8 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
                    "(Laine's box, then variance-guided a-trous levels); **atrous+temporal**: both; **cycle**: "
                    "temporal's with `--vpl-cycle 16`, a set of 16 x --vpls VPLs, each frame shading one slice of "
                    "--vpls in turn, so frame 15 has averaged them all (the first 16 frames draw each slice's maps, "
-                   "a static view draws none after) ([frame.md](../frame.md)).\n\n");
+                   "a static view draws none after) ([frame.md](../frame.md)); **cycle32**: the same with "
+                   "`--temporal 32 --vpl-cycle 32`, frame 31 of 32 (8,192 VPLs at --vpls 256).\n\n");
         fprintf(d, "Columns: MRE = mean relative error per pixel of luminance (`gi_metrics_mean_relative_error`, "
                    "pixels whose ground-truth luminance exceeds 1e-4), against the reference and the proxy; energy = "
                    "sum of luminance over the ground truth's; ms = wall time of the first frame (every VPL's map "

@@ -12,7 +12,11 @@
  * is not (rs_para_texel_of_uv, two passes), the stored code, and
  *   visible = d.z > 0 && (code empty || |d| <= decode(code) + bias_scale (w (1 + tan) + 2 steps))
  * with w = |d| (4 / R) / (1 + u^2 + v^2) and tan = min(tan(theta), RS_PARA_TAN_MAX) from
- * cos_receiver. sqrt and division are correctly rounded, floor, min/max
+ * cos_receiver, or with receiver normals the receiver-plane test
+ * (rs_paraboloid.h "Lookup": the plane's distance along the texel centre's
+ * ray, from the texel's column and row, clamped to |d| -+ bias, against
+ * decode(code) + RS_PARA_PLANE_EPS w + 2 steps). sqrt and division are
+ * correctly rounded, floor, min/max
  * and the integer texel arithmetic exact, so every lane gets the scalar
  * bits. Every lane is gathered (indices are clamped into the map even for
  * NaN directions), so the map needs RS_PARA_LOOKUP_SLACK bytes after its

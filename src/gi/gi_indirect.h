@@ -100,7 +100,7 @@ typedef struct gi_indirect_options {
     int visibility_raytrace;     /* Embree shadow rays instead of paraboloid maps */
     int visibility_ism;          /* imperfect shadow maps (Ritschel 2008) instead of exact paraboloid maps */
     int para_slope;              /* exact maps: the slope-scaled bias test instead of the receiver-plane
-                                    test (rs_paraboloid.h "Lookup"; --para-test slope) */
+                                    test (rs_paraboloid.h "Lookup"; --visibility paraboloid-slope) */
     float clamp;                 /* b = clamp / diagonal^2; 0 = off; < 0 = default 400 */
     gi_filter_kind filter;
     float alpha_rel;             /* filter position threshold, x diagonal (0: 0.02) */
@@ -163,7 +163,7 @@ typedef struct gi_indirect {
     rs_para_context *para;
     gi_ism *ism;              /* --visibility ism (then para is NULL) */
     float bias_scale;         /* map bias x this: 1 for exact maps, the ISM bias scale for ISMs */
-    int plane;                /* exact maps with the receiver-plane test (not ISMs, not --para-test slope) */
+    int plane;                /* exact maps with the receiver-plane test (not ISMs, not paraboloid-slope) */
     uint16_t *atlas;          /* exact maps or ISMs, rs_paraboloid layout, R = opt.para_res */
     uint32_t atlas_slots;
     /* static maps (exact maps of a scene whose geometry moves: the maps of

@@ -137,11 +137,16 @@ rs_para_frame rs_para_frame_make(pf_vec3 position, pf_vec3 normal)
     return f;
 }
 
+/* A world-space vector in the map's frame (no translation). */
+static pf_vec3 rs__rotate(const rs_para_frame *f, pf_vec3 v)
+{
+    return pf_v3((v.x * f->t.x + v.y * f->t.y) + v.z * f->t.z, (v.x * f->b.x + v.y * f->b.y) + v.z * f->b.z,
+                 (v.x * f->n.x + v.y * f->n.y) + v.z * f->n.z);
+}
+
 pf_vec3 rs_para_to_local(const rs_para_frame *f, pf_vec3 p)
 {
-    float px = p.x - f->o.x, py = p.y - f->o.y, pz = p.z - f->o.z;
-    return pf_v3((px * f->t.x + py * f->t.y) + pz * f->t.z, (px * f->b.x + py * f->b.y) + pz * f->b.z,
-                 (px * f->n.x + py * f->n.y) + pz * f->n.z);
+    return rs__rotate(f, pf_v3(p.x - f->o.x, p.y - f->o.y, p.z - f->o.z));
 }
 
 static inline float rs__texel_centre(uint32_t res, uint32_t i)
@@ -223,10 +228,7 @@ float rs_para_decode(uint16_t code, float range)
 
 float rs_para_depth(const uint16_t *map, uint32_t resolution, float range, const rs_para_frame *f, pf_vec3 dir)
 {
-    pf_vec3 d = pf_v3((dir.x * f->t.x + dir.y * f->t.y) + dir.z * f->t.z,
-                      (dir.x * f->b.x + dir.y * f->b.y) + dir.z * f->b.z,
-                      (dir.x * f->n.x + dir.y * f->n.y) + dir.z * f->n.z);
-    return rs_para_decode(rs_para_fetch(map, resolution, d), range);
+    return rs_para_decode(rs_para_fetch(map, resolution, rs__rotate(f, dir)), range);
 }
 
 float rs_para_texel_world_size(uint32_t resolution, float dist, pf_vec3 d)
@@ -275,12 +277,9 @@ int rs_para_visible_scaled(const uint16_t *map, uint32_t resolution, float range
     float R = (float)resolution, fi = (float)(t % resolution), fj = (float)(t / resolution);
     float uc = ((fi + fi + 1.0f) - R) / R, vc = ((fj + fj + 1.0f) - R) / R;
     float rc = uc * uc + vc * vc;
-    pf_vec3 n = *plane_n;
-    float nx = (n.x * f->t.x + n.y * f->t.y) + n.z * f->t.z;
-    float ny = (n.x * f->b.x + n.y * f->b.y) + n.z * f->b.z;
-    float nz = (n.x * f->n.x + n.y * f->n.y) + n.z * f->n.z;
-    float num = (nx * d.x + ny * d.y) + nz * d.z;
-    float dn = (nx * (uc + uc) + ny * (vc + vc)) + nz * (1.0f - rc);
+    pf_vec3 n = rs__rotate(f, *plane_n);
+    float num = (n.x * d.x + n.y * d.y) + n.z * d.z;
+    float dn = (n.x * (uc + uc) + n.y * (vc + vc)) + n.z * (1.0f - rc);
     float lo = dist - bias, hi = dist + bias, at = lo;
     if (fabsf(dn) > RS_PARA_PLANE_MIN_COS) {
         float sp = num * (1.0f + rc) / dn;

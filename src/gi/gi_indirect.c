@@ -688,7 +688,7 @@ typedef struct gi__accumulate_io {
     gi_accumulate_in in;              /* the VPLs, their lists and maps (the kernels' input) */
     const pf_rt *rt;                  /* --visibility raytrace (no atlas): Embree's scene */
     const gi_indirect_kernels *kt;    /* the SIMD path's kernels, NULL on the scalar path */
-    uint32_t T, rows;                 /* tiles; the tallest tile's rows */
+    uint32_t T, bands;                /* tiles; the tallest tile's bands of GI_ACC_BAND rows */
     const uint32_t *tile_x0, *tile_w, *tile_h; /* the tile layout */
     const uint32_t *assign_start;     /* ASSIGNMENT: group g's VPLs at assign[assign_start[g]..[g + 1]) */
     uint32_t shift;                   /* the tiles' group rotation (gi_indirect_tile_group) */
@@ -699,28 +699,36 @@ typedef struct gi__accumulate_io {
     float *split_e;                   /* ACCUMULATED */
 } gi__accumulate_io;
 
-static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
+/* One job item: a band of GI_ACC_BAND rows of one tile. A tile's rows lie
+ * one after another in the split layout, so the band is one run of pixels,
+ * handed to the kernel GI_ACC_GROUPS x SIMD_W at a time: each VPL's map is
+ * read for that many neighbouring pixels before the next VPL's (measured:
+ * rows one at a time cost 7-10% more on Sibenik at 1024x768, the maps'
+ * texels coming from further down the cache hierarchy). Pixels fall to the
+ * scalar lookup only at the band's end, with the same bits. */
+static void gi__accumulate_band(void *p, uint32_t item, uint32_t worker)
 {
     (void)worker;
     const gi__accumulate_io *io = p;
     const gi_accumulate_in *in = &io->in;
-    uint32_t T = io->T, rows = io->rows;
-    uint32_t t = item / rows, row = item % rows;
-    if (t >= T || row >= io->tile_h[t]) return;
+    uint32_t T = io->T, bands = io->bands;
+    uint32_t t = item / bands, r0 = item % bands * GI_ACC_BAND;
+    if (t >= T || r0 >= io->tile_h[t]) return;
+    uint32_t r1 = r0 + GI_ACC_BAND < io->tile_h[t] ? r0 + GI_ACC_BAND : io->tile_h[t];
+    const uint32_t k1 = io->tile_x0[t] + r1 * io->tile_w[t];
+    uint32_t k = io->tile_x0[t] + r0 * io->tile_w[t];
     const float weight = io->weight; /* each tile sees 1/T of the VPLs (of its slice's, 1/C of them) */
     const uint32_t grp = gi_tile_group(t, io->shift, T, io->slice);
     uint32_t a0 = io->assign_start[grp], a1 = io->assign_start[grp + 1];
     const uint32_t R = in->para_res;
     const size_t map = (size_t)R * R;
-    uint32_t a = 0;
     const gi_indirect_kernels *kt = io->kt;
     if (in->atlas && kt) {
         const uint32_t W = kt->width;
         float ew[3 * 16 * GI_ACC_GROUPS];
-        while (a + W <= io->tile_w[t]) {
-            uint32_t groups = (io->tile_w[t] - a) / W;
+        while (k + W <= k1) {
+            uint32_t groups = (k1 - k) / W;
             if (groups > GI_ACC_GROUPS) groups = GI_ACC_GROUPS;
-            uint32_t k = io->tile_x0[t] + row * io->tile_w[t] + a;
             kt->accumulate(in, io->px + k, io->py + k, io->pz + k, io->nx + k, io->ny + k, io->nz + k, groups, a0, a1,
                            ew);
             for (uint32_t i = 0; i < W * groups; i++) {
@@ -730,11 +738,10 @@ static void gi__accumulate_row(void *p, uint32_t item, uint32_t worker)
                 e[1] = valid ? ew[3 * i + 1] * weight : 0.0f;
                 e[2] = valid ? ew[3 * i + 2] * weight : 0.0f;
             }
-            a += W * groups;
+            k += W * groups;
         }
     }
-    for (; a < io->tile_w[t]; a++) {
-        uint32_t k = io->tile_x0[t] + row * io->tile_w[t] + a;
+    for (; k < k1; k++) {
         float *e = io->split_e + 3 * (size_t)k;
         e[0] = e[1] = e[2] = 0.0f;
         if (!io->valid[k]) continue;
@@ -787,7 +794,7 @@ void gi_stage_accumulate(gi_frame *f)
         f->rt,
         gi__kernels(f),
         T,
-        rows,
+        (rows + GI_ACC_BAND - 1) / GI_ACC_BAND,
         ind->tile_x0,
         ind->tile_w,
         ind->tile_h,
@@ -803,7 +810,7 @@ void gi_stage_accumulate(gi_frame *f)
         ind->split_nz,
         ind->split_valid,
         ind->split_e};
-    pf_jobs_parallel_for(f->jobs, gi__accumulate_row, (void *)&io, T * rows, 1);
+    pf_jobs_parallel_for(f->jobs, gi__accumulate_band, (void *)&io, T * io.bands, 1);
 }
 
 /* ---------------------------------------------------------- 8. combine */

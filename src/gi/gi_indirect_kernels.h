@@ -10,7 +10,9 @@
 #include "gi_frame.h"
 
 /* Runs of `width` pixels processed together: at most this many per call. */
-#define GI_ACC_GROUPS 32
+#define GI_ACC_GROUPS 128
+/* Tile rows per job item of the accumulation (gi_indirect.c). */
+#define GI_ACC_BAND 8
 
 /* What the accumulation (step 7) reads: the VPLs, the tiles' VPL lists and
  * the VPLs' maps (exact paraboloid maps or ISMs), explicitly. */

@@ -9,7 +9,8 @@
  * of the scalar code becomes a lane mask applied at the end, latest check
  * first so that the earliest one wins as it does there; a cube map's
  * per-face constants are gathered by each lane's face; the PCF taps are
- * gathers from the face planes at the same clamped texel indices. The
+ * loads of four consecutive texels per lane and row (or gathers at the
+ * clamped indices near a face's edge), the same texels. The
  * normal offset (step 3, off by default) is not vectorised:
  * rs_shadow_lookup_eligible sends such maps to the scalar lookup. */
 #ifndef RS_SHADOW_LOOKUP_H
@@ -180,6 +181,17 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
      * receiver's plane at the tap's texel centre plus the bias */
     const simd_i last = simd_set1_i((int32_t)m->size - 1), size_i = simd_set1_i((int32_t)m->size);
     const simd_i plane_off = simd_mullo_i(face, simd_set1_i((int32_t)(m->size * m->size)));
+    /* A row's four taps are four consecutive texels: where every active
+     * lane's columns x0 .. x0 + 3 lie inside the face (no clamping, the
+     * usual case: faces carry a margin), one 4-float load per lane and row
+     * (simd_gather4_f; the other lanes read the plane's first texels),
+     * else one gather per tap at the clamped column. The same texels
+     * either way. */
+    const uint32_t act = simd_mask_bits(active);
+    const int rows4 = pcf && m->size >= 4 &&
+                      (simd_mask_bits(simd_mask_and(simd_mask_not(simd_gt_i(izero, x0)),
+                                                    simd_mask_not(simd_gt_i(x0, simd_set1_i((int32_t)m->size - 4))))) &
+                       act) == act;
     simd_i lit = izero;
     for (int j = 0; j < n; j++) {
         simd_i yy = simd_add_i(y0, simd_set1_i(j));
@@ -187,10 +199,17 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
         simd_i row = simd_add_i(plane_off, simd_mullo_i(yc, size_i));
         simd_f ty = simd_sub_f(simd_add_f(simd_i2f(yy), half), fy);
         simd_f zy = simd_add_f(simd_add_f(zs_p, simd_mul_f(gy, ty)), zs_bias);
+        simd_f taps[4];
+        if (rows4) simd_gather4_f(m->depth, simd_select_i(active, simd_add_i(row, x0), izero), taps);
         for (int i = 0; i < n; i++) {
             simd_i xx = simd_add_i(x0, simd_set1_i(i));
-            simd_i xc = simd_min_i(simd_max_i(xx, izero), last);
-            simd_f tap = simd_maskz_gather_f(m->depth, simd_add_i(row, xc), active);
+            simd_f tap;
+            if (rows4) {
+                tap = taps[i];
+            } else {
+                simd_i xc = simd_min_i(simd_max_i(xx, izero), last);
+                tap = simd_maskz_gather_f(m->depth, simd_add_i(row, xc), active);
+            }
             simd_f tx = simd_sub_f(simd_add_f(simd_i2f(xx), half), fx);
             simd_mask le = simd_le_f(tap, simd_add_f(zy, simd_mul_f(gx, tx)));
             lit = simd_add_i(lit, simd_select_i(le, ione, izero));

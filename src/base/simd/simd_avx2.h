@@ -209,6 +209,20 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
 {
     return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, idx, m, 4);
 }
+/* lane l's four floats: row l & 3 of the 4x4 transposed in 128-bit half
+ * l >> 2 (rows q and q + 4 share a register) */
+static inline void simd_gather4_f(const float *base, simd_i idx, simd_f out[4])
+{
+    int32_t i[8];
+    _mm256_storeu_si256((__m256i *)i, idx);
+    __m256 r[4];
+    for (int q = 0; q < 4; q++)
+        r[q] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(base + i[q])), _mm_loadu_ps(base + i[q + 4]), 1);
+    __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    out[0] = _mm256_shuffle_ps(t0, t2, 0x44), out[1] = _mm256_shuffle_ps(t0, t2, 0xee);
+    out[2] = _mm256_shuffle_ps(t1, t3, 0x44), out[3] = _mm256_shuffle_ps(t1, t3, 0xee);
+}
 /* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
  * vectors of their first, second and third members (data movement only). */
 static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)

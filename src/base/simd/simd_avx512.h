@@ -150,6 +150,24 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
 {
     return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), (__mmask16)m, idx, base, 4);
 }
+/* lane l's four floats: row l & 3 of the 4x4 transposed in 128-bit block
+ * l >> 2 (rows q, q + 4, q + 8, q + 12 share a register) */
+static inline void simd_gather4_f(const float *base, simd_i idx, simd_f out[4])
+{
+    int32_t i[16];
+    _mm512_storeu_si512((void *)i, idx);
+    __m512 r[4];
+    for (int q = 0; q < 4; q++) {
+        __m512 v = _mm512_castps128_ps512(_mm_loadu_ps(base + i[q]));
+        v = _mm512_insertf32x4(v, _mm_loadu_ps(base + i[q + 4]), 1);
+        v = _mm512_insertf32x4(v, _mm_loadu_ps(base + i[q + 8]), 2);
+        r[q] = _mm512_insertf32x4(v, _mm_loadu_ps(base + i[q + 12]), 3);
+    }
+    __m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpackhi_ps(r[0], r[1]);
+    __m512 t2 = _mm512_unpacklo_ps(r[2], r[3]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
+    out[0] = _mm512_shuffle_ps(t0, t2, 0x44), out[1] = _mm512_shuffle_ps(t0, t2, 0xee);
+    out[2] = _mm512_shuffle_ps(t1, t3, 0x44), out[3] = _mm512_shuffle_ps(t1, t3, 0xee);
+}
 /* The SIMD_W triples at p (3 SIMD_W floats: x0 y0 z0 x1 y1 z1 ...) as three
  * vectors of their first, second and third members (data movement only). */
 static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)

@@ -410,6 +410,14 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
     for (int l = 0; l < SIMD_W; l++) r.v[l] = m >> l & 1 ? base[idx.v[l]] : 0.0f;
     return r;
 }
+/* Four consecutive floats per lane, transposed: lane l of out[k] is
+ * base[idx_l + k] (data movement only; every lane's four floats must lie
+ * inside the array). One 4-float load per lane instead of four gathers. */
+static inline void simd_gather4_f(const float *base, simd_i idx, simd_f out[4])
+{
+    for (int k = 0; k < 4; k++)
+        for (int l = 0; l < SIMD_W; l++) out[k].v[l] = base[idx.v[l] + k];
+}
 
 /* Stamps of 4-pixel rows (SIMD_W / 4 rows): lane l is column l & 3 of row
  * l >> 2 of a row-major plane with row stride `stride`. */

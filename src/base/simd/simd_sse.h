@@ -225,6 +225,15 @@ static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mas
     for (int l = 0; l < 4; l++) v[l] = b >> l & 1 ? base[i[l]] : 0.0f;
     return _mm_loadu_ps(v);
 }
+static inline void simd_gather4_f(const float *base, simd_i idx, simd_f out[4])
+{
+    int32_t i[4];
+    _mm_storeu_si128((__m128i *)i, idx);
+    __m128 r0 = _mm_loadu_ps(base + i[0]), r1 = _mm_loadu_ps(base + i[1]);
+    __m128 r2 = _mm_loadu_ps(base + i[2]), r3 = _mm_loadu_ps(base + i[3]);
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+    out[0] = r0, out[1] = r1, out[2] = r2, out[3] = r3;
+}
 
 static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
 {

@@ -32,6 +32,10 @@
  *   farther than 3 texels from it.
  * - Bias: every floor point a spot, a point light or a low sun reaches
  *   (up to 83 degrees from the normal) is fully lit: no acne.
+ * - Receiver-driven tiles: a frame draws the tiles its pixels' lookups
+ *   read (checked against the lookup's window worked out here) and reads
+ *   no other (undrawn texels poisoned, the direct light unchanged); a light
+ *   that stays completes its map once; the direct light equals whole maps'.
  * - Frustum and box edges, cube face selection, bad input.
  * Timing is not a test's job: `softgi bench raster` times the cube map
  * (docs/perf.md). */
@@ -53,6 +57,7 @@
 #include "pf_rt.h"
 #include "rs_raster.h"
 #include "rs_shadow.h"
+#include "test_frame_fixture.h"
 #include "test_util.h"
 
 #define CORNELL_PATH SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
@@ -959,6 +964,137 @@ static void test_bad_input(void **state)
     pf_scene_free(&s);
 }
 
+/* ---------------------------------------------------- receiver-driven tiles */
+
+/* Every texel outside the maps' valid tiles set to 1 (the nearest depth:
+ * a lookup reading one would see a shadow), then the direct light again:
+ * the same bytes, so the frame read valid tiles only. Returns the tiles
+ * valid over all maps. */
+static uint32_t poison_and_compare(gi_frame *f, const char *what)
+{
+    const size_t n = (size_t)3 * f->width * f->height;
+    float *before = malloc(n * sizeof(float));
+    assert_non_null(before);
+    memcpy(before, f->direct, n * sizeof(float));
+    uint32_t valid = 0, lit = 0;
+    for (uint32_t l = 0; l < f->shadows.count; l++) {
+        rs_shadow_map *m = &f->shadows.maps[l];
+        for (uint32_t face = 0; face < m->face_count; face++)
+            for (uint32_t y = 0; y < m->size; y++)
+                for (uint32_t x = 0; x < m->size; x++) {
+                    if (rs_shadow_texel_valid(m, face, x, y)) {
+                        valid += x % RS_TILE == 0 && y % RS_TILE == 0;
+                        continue;
+                    }
+                    rs_shadow_map_face(m, face)[(size_t)y * m->size + x] = 1.0f;
+                }
+    }
+    gi_stage_direct_shadowmap(f);
+    if (memcmp(before, f->direct, n * sizeof(float))) fail_msg("%s: the direct light read a tile it did not draw", what);
+    for (size_t i = 0; i < n; i++) lit += before[i] > 0.0f;
+    assert_true(lit > n / 8); /* the lights do reach what the camera sees */
+    free(before);
+    return valid;
+}
+
+/* The tiles each lookup reads, worked out here as rs_shadow_visibility does
+ * (the face, the face's matrix, the 4 x 4 window's clamped texels) for every
+ * pixel with a surface: each must be in the maps' need, as marked by the
+ * frame's last sample (rs_shadow_need_lanes). */
+static void need_covers_lookups(const gi_frame *f)
+{
+    for (uint32_t l = 0; l < f->shadows.count; l++) {
+        const rs_shadow_map *m = &f->shadows.maps[l];
+        for (uint32_t i = 0; i < f->width * f->height; i++) {
+            if (f->gbuf.prim[i] == RS_GBUFFER_EMPTY) continue;
+            pf_vec3 p = pf_v3(f->gbuf.pos_x[i], f->gbuf.pos_y[i], f->gbuf.pos_z[i]);
+            uint32_t face = m->kind == RS_SHADOW_CUBE ? rs_shadow_cube_face(m->eye, p) : 0;
+            float c[4];
+            rs_mat4_transform(&m->view_proj[face], p, c);
+            float x = m->kind == RS_SHADOW_ORTHO ? c[0] : c[0] / c[3], y = m->kind == RS_SHADOW_ORTHO ? c[1] : c[1] / c[3];
+            float s = (float)m->size;
+            float fx = fminf(fmaxf((0.5f * x + 0.5f) * s, -8.0f), s + 8.0f);
+            float fy = fminf(fmaxf((0.5f - 0.5f * y) * s, -8.0f), s + 8.0f);
+            int x0 = (int)floorf(fx - 1.5f), y0 = (int)floorf(fy - 1.5f), last = (int)m->size - 1;
+            for (int ty = y0; ty < y0 + 4; ty++)
+                for (int tx = x0; tx < x0 + 4; tx++) {
+                    int cx = tx < 0 ? 0 : (tx > last ? last : tx), cy = ty < 0 ? 0 : (ty > last ? last : ty);
+                    uint32_t t = (uint32_t)cy / RS_TILE * m->tiles_side + (uint32_t)cx / RS_TILE;
+                    if (!(m->need[(size_t)face * m->tile_words + t / 64] >> (t % 64) & 1u))
+                        fail_msg("light %u: pixel %u reads texel (%d, %d) of face %u, a tile not marked needed", l, i,
+                                 cx, cy, face);
+                }
+        }
+    }
+}
+
+/* Receiver-driven rendering (gi_stage_shadow_maps, rs_shadow_render_needed):
+ * on the Cornell box lit by a spot, a point light (cube) and a sun, 1024^2
+ * maps (256 tiles a face), a frame draws only the tiles its receivers read
+ * and reads no other (need_covers_lookups, poison_and_compare):
+ * - the first frame draws fewer tiles than the maps hold;
+ * - the camera moved, the lights kept: the maps are completed (a light
+ *   that stays costs nothing afterwards), every tile valid;
+ * - the lights moved: fresh maps, again only the needed tiles;
+ * - that frame's direct light equals the one from maps drawn whole
+ *   (rs_shadow_render), bit for bit. */
+static void test_needed_tiles(void **state)
+{
+    (void)state;
+    tu_fx x;
+    tu_load(&x.scene, CORNELL_PATH);
+    pf_light *lights = realloc(x.scene.lights, 3 * sizeof(pf_light));
+    assert_non_null(lights);
+    x.scene.lights = lights;
+    x.scene.light_count = 3;
+    lights[0] = make_spot(pf_v3(0.45f, 0.5f, 0.1f), pf_v3(0.25f, 0.0f, 0.35f), 30.0f, 40.0f);
+    lights[1] = make_point(pf_v3(0.278f, 0.5388f, 0.2795f));
+    lights[2] = make_directional(pf_v3(-0.3f, -0.6f, 1.0f));
+    assert_true(x.scene.camera_count > 0);
+    pf_camera cam = x.scene.cameras[0];
+    tu_fx_desc d = {.threads = 2, .simd = rs_simd_for_isa(pf_isa_detect()), .w = 160, .h = 120, .cam = &cam,
+                    .shadow_size = 1024};
+    tu_fx_begin_with(&x, &d);
+    const uint32_t all = 256 * (1 + 6 + 1);
+
+    gi_frame_render_raster(&x.f);
+    assert_int_equal(x.f.status, PF_OK);
+    need_covers_lookups(&x.f);
+    uint32_t drawn = x.f.motion_stats.shadow_tiles, valid = poison_and_compare(&x.f, "first frame");
+    print_message("receiver-driven shadow maps: first frame %u of %u tiles\n", drawn, all);
+    assert_int_equal(drawn, valid);
+    assert_true(drawn > 0 && drawn < all);
+
+    x.f.camera.eye = pf_v3_add(x.f.camera.eye, pf_v3_scale(x.f.camera.right, 0.05f)); /* lights kept */
+    gi_frame_render_raster(&x.f);
+    assert_int_equal(x.f.status, PF_OK);
+    drawn = x.f.motion_stats.shadow_tiles;
+    assert_int_equal(poison_and_compare(&x.f, "camera moved"), all);
+    assert_int_equal(drawn, all - valid);
+    gi_frame_render_raster(&x.f); /* and then nothing */
+    assert_int_equal(x.f.motion_stats.shadow_tiles, 0);
+
+    for (int l = 0; l < 3; l++) x.scene.lights[l].position = pf_v3_add(x.scene.lights[l].position, pf_v3(0.03f, -0.02f, 0.01f));
+    x.scene.lights[2].direction = pf_v3_normalize(pf_v3(-0.25f, -0.6f, 1.0f));
+    gi_frame_render_raster(&x.f);
+    assert_int_equal(x.f.status, PF_OK);
+    drawn = x.f.motion_stats.shadow_tiles;
+    need_covers_lookups(&x.f);
+    assert_int_equal(poison_and_compare(&x.f, "lights moved"), drawn);
+    assert_true(drawn > 0 && drawn < all);
+    print_message("receiver-driven shadow maps: moved lights %u of %u tiles\n", drawn, all);
+
+    const size_t n = (size_t)3 * x.f.width * x.f.height;
+    float *partial = malloc(n * sizeof(float));
+    assert_non_null(partial);
+    memcpy(partial, x.f.direct, n * sizeof(float));
+    rs_shadow_set_render(x.rs, &x.f.shadows, NULL);
+    gi_stage_direct_shadowmap(&x.f);
+    if (memcmp(partial, x.f.direct, n * sizeof(float))) fail_msg("the needed tiles' direct light differs from whole maps'");
+    free(partial);
+    tu_fx_end(&x);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -966,7 +1102,7 @@ int main(void)
         cmocka_unit_test(test_outside),           cmocka_unit_test(test_no_acne),
         cmocka_unit_test(test_pcf_edge),          cmocka_unit_test(test_map_matches_rays),
         cmocka_unit_test(test_deterministic),     cmocka_unit_test(test_simd_matches_scalar),
-        cmocka_unit_test(test_simd_face_borders),
+        cmocka_unit_test(test_simd_face_borders), cmocka_unit_test(test_needed_tiles),
         cmocka_unit_test(test_agreement_cornell), cmocka_unit_test(test_agreement_maze),
         cmocka_unit_test(test_agreement_sibenik),
     };

@@ -131,6 +131,10 @@ typedef struct bf_result {
     uint32_t first_moved, first_maps;
     /* summed over the measured frames: should be 0 with a static light */
     uint64_t moved_after, maps_after;
+    /* direct-light shadow-map tiles drawn (gi_stage_shadow_maps): the first
+     * frame's, the later frames' sum, and how many the maps hold */
+    uint32_t first_tiles, tiles_total;
+    uint64_t tiles_after;
     /* pipelining off: the job profile per stage, medians (app_amdahl) */
     int have_amdahl;
     app_amdahl amdahl;
@@ -439,6 +443,11 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
                 res->first_ms = ms;
                 res->first_moved = moved;
                 res->first_maps = f[m].ind.maps_rendered;
+                res->first_tiles = f[m].motion_stats.shadow_tiles;
+                res->tiles_total = 0;
+                for (uint32_t l = 0; l < f[m].shadows.count; l++)
+                    res->tiles_total += f[m].shadows.maps[l].face_count * f[m].shadows.maps[l].tiles_side *
+                                        f[m].shadows.maps[l].tiles_side;
                 res->vpl_count = f[m].ind.vpls.count;
                 res->stages.count = 0;
                 res->parts.count = 0;
@@ -449,6 +458,7 @@ static pf_result bf__measure(const pf_scene *lit, pf_light *light, const bf_scen
             }
             res->moved_after += moved;
             res->maps_after += f[m].ind.maps_rendered;
+            res->tiles_after += f[m].motion_stats.shadow_tiles;
             frame_ms[m][i - 1] = ms;
             bf__collect(&res->stages, stage_ms[m], &f[m].times, frames, i - 1);
             const gi_vpl_method *method = f[m].ind.opt.method;
@@ -622,6 +632,8 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
         for (uint32_t c = 0; c < n; c++) printf("  %8.1f %6s", (double)res[c].moved_after / frames, "");
         printf("\n%-28s", "maps rendered/frame after 1st");
         for (uint32_t c = 0; c < n; c++) printf("  %8.1f %6s", (double)res[c].maps_after / frames, "");
+        printf("\n%-28s", "shadow tiles/frame after 1st");
+        for (uint32_t c = 0; c < n; c++) printf("  %8.1f %6u", (double)res[c].tiles_after / frames, res[c].tiles_total);
     } else {
         printf("\n%-28s", "moved VPLs after frame 1");
         for (uint32_t c = 0; c < n; c++) printf("  %8llu %6s", (unsigned long long)res[c].moved_after, "");
@@ -637,6 +649,8 @@ static void bf__print_table(const bf_scene *bs, const pf_scene *scene, const bf_
                                             100.0 * bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_ms);
     printf("\n%-28s", "  maps rendered");
     for (uint32_t c = 0; c < n; c++) printf("  %8u %6s", res[c].first_maps, "");
+    printf("\n%-28s", "  shadow tiles drawn (of)");
+    for (uint32_t c = 0; c < n; c++) printf("  %8u %6u", res[c].first_tiles, res[c].tiles_total);
     printf("\n%-28s", "  ms per map");
     for (uint32_t c = 0; c < n; c++)
         printf("  %8.3f %6s", res[c].first_maps ? bf__stage_ms(&res[c].first, BF_MAPS_STAGE) / res[c].first_maps : 0.0,
@@ -856,9 +870,11 @@ int app_bench_frame(const pf_options *o)
                i ? "," : "", r->scene, r->vpl_budget, r->vpl_count, r->threads, r->pipeline ? "true" : "false",
                r->frame_ms, r->fps, bf__stage_ms(&r->stages, BF_UPDATE_STAGE));
         bf__json_stages(&r->stages);
-        printf(",\"moved_after_first\":%llu,\"maps_after_first\":%llu,\"first_frame_ms\":%.3f,"
+        printf(",\"moved_after_first\":%llu,\"maps_after_first\":%llu,\"shadow_tiles_after_first\":%llu,"
+               "\"shadow_tiles_first\":%u,\"shadow_tiles_total\":%u,\"first_frame_ms\":%.3f,"
                "\"first_frame_maps\":%u,\"first_frame_moved\":%u,\"first_frame_stages_ms\":",
-               (unsigned long long)r->moved_after, (unsigned long long)r->maps_after, r->first_ms, r->first_maps,
+               (unsigned long long)r->moved_after, (unsigned long long)r->maps_after,
+               (unsigned long long)r->tiles_after, r->first_tiles, r->tiles_total, r->first_ms, r->first_maps,
                r->first_moved);
         bf__json_stages(&r->first);
         printf(",\"method_parts_ms\":");

@@ -155,6 +155,10 @@ typedef struct gi_aa {
     gi_taa taa;
 } gi_aa;
 
+/* 1 while the frame's first sample renders (sample 1 of N > 1, else 0):
+ * what is done once a frame, before any sample, goes there. */
+static inline int gi_aa_first_render(const gi_aa *aa) { return aa->sample == 1u % (aa->samples ? aa->samples : 1u); }
+
 struct gi_frame;
 
 /* Point `index` of the pattern: *jx, *jy in [-1/2, 1/2); point 0 is (0, 0). */

@@ -18,6 +18,7 @@
 #include "gi_direct_kernels.h"
 #include "gi_frame.h"
 #include "gi_light.h"
+#include "rs_shadow_lookup.h" /* rs_shadow_lookup_eligible */
 #include "simd.h" /* SIMD_X86 */
 
 /* 1 if the box [lo, hi] lies inside [blo, bhi]. */
@@ -26,7 +27,41 @@ static int gi__box_inside(pf_vec3 lo, pf_vec3 hi, pf_vec3 blo, pf_vec3 bhi)
     return lo.x >= blo.x && lo.y >= blo.y && lo.z >= blo.z && hi.x <= bhi.x && hi.y <= bhi.y && hi.z <= bhi.z;
 }
 
-void gi_stage_shadow_maps(gi_frame *f)
+/* The direct light's row kernels for the frame's SIMD path
+ * (gi_direct_kernels.c, written once over the SIMD vocabulary and compiled
+ * per instruction set; the scalar compile is the reference the others give
+ * the bits of), and what they read and write. */
+static const gi_direct_kernels *gi__direct_kernels(const gi_frame *f)
+{
+    const gi_direct_kernels *k = &gi_direct_kernels_scalar;
+#if SIMD_X86
+    rs_simd simd = f->raster ? rs_context_simd(f->raster) : RS_SIMD_SCALAR;
+    if (simd == RS_SIMD_AVX512) k = &gi_direct_kernels_avx512;
+    if (simd == RS_SIMD_AVX2) k = &gi_direct_kernels_avx2;
+#endif
+    return k;
+}
+
+static gi_direct_io gi__direct_io(const gi_frame *f)
+{
+    const gi_direct_io io = {f->scene,
+                             &f->gbuf,
+                             f->shadows.maps,
+                             f->shadows.count,
+                             f->area_maps.rendered ? &f->area_maps : NULL,
+                             f->raster ? rs_context_resolve_table(f->raster) : NULL,
+                             f->width,
+                             f->direct};
+    return io;
+}
+
+/* Which lights changed since the maps were drawn (the frame's first
+ * sample): a changed light's map takes the light's kind, matrices and
+ * range with none of its tiles valid; static lights keep their tiles,
+ * drawn again where moved geometry can change them (gi_motion.h): the
+ * valid tiles its bounds project to, or, for a directional light whose box
+ * the posed scene left, a new box. */
+static void gi__shadow_lights(gi_frame *f)
 {
     const pf_scene *s = f->scene;
     rs_shadow_desc desc;
@@ -35,7 +70,8 @@ void gi_stage_shadow_maps(gi_frame *f)
     pf_error err;
     gi_motion_stats *ms = &f->motion_stats;
     if (!f->shadows_rendered || f->shadow_lights.count != s->light_count || f->shadows.count != s->light_count) {
-        /* first frame, or lights added/removed: all maps */
+        /* first frame (gi_frame_create's maps), or lights added/removed:
+         * new maps; nothing valid either way */
         if (f->shadows_rendered) {
             rs_shadow_set_free(&f->shadows);
             if (rs_shadow_set_init(&f->shadows, s, &desc, &err) != PF_OK) {
@@ -43,19 +79,15 @@ void gi_stage_shadow_maps(gi_frame *f)
                 return;
             }
         }
-        rs_shadow_set_render(f->raster, &f->shadows, NULL);
+        for (uint32_t i = 0; i < f->shadows.count; i++) f->shadows.maps[i].fresh = 1;
         f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     } else {
-        /* only the lights that changed: their map's kind, matrices and range
-         * follow the light; static lights keep last frame's maps, drawn
-         * again where moved geometry can change them (gi_motion.h): only
-         * the tiles its bounds project to, or, for a directional light
-         * whose box the posed scene left, a new box drawn whole */
         const gi_moved_box *mb = &f->moved_shadows;
         const int left = mb->pending && !gi__box_inside(s->bounds_min, s->bounds_max, f->shadow_bounds_lo,
                                                          f->shadow_bounds_hi);
         for (uint32_t i = 0; i < s->light_count; i++) {
             rs_shadow_map *m = &f->shadows.maps[i];
+            m->fresh = 0; /* set again by rs_shadow_map_update */
             int changed = !gi_light_copy_same(&f->shadow_lights, s, i);
             if (!changed && left && m->kind == RS_SHADOW_ORTHO) changed = 1, ms->shadow_faces_whole++;
             if (!changed) {
@@ -66,18 +98,47 @@ void gi_stage_shadow_maps(gi_frame *f)
             if (rs_shadow_map_update(m, s, i, &desc, &err) != PF_OK) {
                 fprintf(stderr, "softgi: shadow map of light %u: %s\n", i, err.message);
                 memset(m, 0, sizeof *m);
-                continue;
             }
-            rs_shadow_render(f->raster, m, 1, NULL);
         }
         if (left) f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     }
     f->moved_shadows.pending = 0;
     if (!gi_light_copy_take(&f->shadow_lights, s)) {
-        f->shadows_rendered = 0; /* render everything next frame */
+        f->shadows_rendered = 0; /* everything again next frame */
         return;
     }
     f->shadows_rendered = 1;
+}
+
+/* Stage 2a, once per sample (the receivers move with the jitter): the
+ * lights' changes at the frame's first, then the tiles to draw where they
+ * are not valid yet (rs_shadow_render_needed):
+ * - a fresh map (its light new or changed this frame): the tiles this
+ *   sample's lookups read, marked from the G-buffer with the lookup's own
+ *   projection (gi_direct_kernels.c need_row), so a moving light draws only
+ *   what the view needs and a first frame comes sooner;
+ * - a map whose light stayed: every tile, i.e. the rest of it once, after
+ *   which the light costs nothing (no marking, nothing drawn) while it
+ *   stays, whatever the camera does.
+ * A lookup reads valid tiles only. */
+void gi_stage_shadow_maps(gi_frame *f)
+{
+    if (gi_aa_first_render(&f->aa)) gi__shadow_lights(f);
+    if (!f->shadows.maps) return;
+    rs_shadow_need_clear(f->shadows.maps, f->shadows.count);
+    int mark = 0;
+    for (uint32_t l = 0; l < f->shadows.count; l++) {
+        rs_shadow_map *m = &f->shadows.maps[l];
+        if (!m->fresh || !rs_shadow_lookup_eligible(m))
+            rs_shadow_need_all(m);
+        else
+            mark = 1;
+    }
+    if (mark) {
+        const gi_direct_io io = gi__direct_io(f);
+        pf_jobs_parallel_for(f->jobs, gi__direct_kernels(f)->need_row, (void *)&io, f->height, 4);
+    }
+    f->motion_stats.shadow_tiles += rs_shadow_render_needed(f->raster, f->shadows.maps, f->shadows.count, NULL);
 }
 
 void gi_stage_area_shadow_maps(gi_frame *f)
@@ -132,24 +193,9 @@ pf_vec3 gi__direct_area_irradiance(const gi_area_maps *m, pf_vec3 pos, pf_vec3 n
 }
 
 /* Stage 2b: one job item per row, each the row kernel of the frame's SIMD
- * path (gi_direct_kernels.c, written once over the SIMD vocabulary and
- * compiled per instruction set; the scalar compile is the reference the
- * others give the bits of). */
+ * path. */
 void gi_stage_direct_shadowmap(gi_frame *f)
 {
-    const gi_direct_kernels *k = &gi_direct_kernels_scalar;
-#if SIMD_X86
-    rs_simd simd = f->raster ? rs_context_simd(f->raster) : RS_SIMD_SCALAR;
-    if (simd == RS_SIMD_AVX512) k = &gi_direct_kernels_avx512;
-    if (simd == RS_SIMD_AVX2) k = &gi_direct_kernels_avx2;
-#endif
-    const gi_direct_io io = {f->scene,
-                             &f->gbuf,
-                             f->shadows.maps,
-                             f->shadows.count,
-                             f->area_maps.rendered ? &f->area_maps : NULL,
-                             f->raster ? rs_context_resolve_table(f->raster) : NULL,
-                             f->width,
-                             f->direct};
-    pf_jobs_parallel_for(f->jobs, k->row, (void *)&io, f->height, 1);
+    const gi_direct_io io = gi__direct_io(f);
+    pf_jobs_parallel_for(f->jobs, gi__direct_kernels(f)->row, (void *)&io, f->height, 1);
 }

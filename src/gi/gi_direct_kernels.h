@@ -29,6 +29,9 @@ typedef struct gi_direct_kernels {
     /* one row y of io->direct: a pf_jobs parallel-for body over rows, ctx a
      * const gi_direct_io */
     void (*row)(void *io, uint32_t y, uint32_t worker);
+    /* the same row's shadow-map tiles: the lookups `row` will make, marked
+     * in each map's need (rs_shadow_need_lanes) */
+    void (*need_row)(void *io, uint32_t y, uint32_t worker);
 } gi_direct_kernels;
 
 extern const gi_direct_kernels gi_direct_kernels_scalar;

@@ -30,9 +30,9 @@ static const gi_stage_info gi__stages[GI_STAGE_COUNT] = {
                                   "triangle",
                                   B(VISIBILITY), B(GBUFFER), gi_stage_gbuffer_resolve, 1},
     [GI_STAGE_SHADOW_MAPS] = {"shadow maps", 2, "Laine 2007 Sec. 6",
-                              "Direct light's shadow maps: one map per light (a cube for point lights), reused while "
-                              "the light stays",
-                              0, B(SHADOW_MAPS), gi_stage_shadow_maps, 0},
+                              "Direct light's shadow maps: one map per light (a cube for point lights), the tiles the "
+                              "visible receivers read, kept while the light stays",
+                              B(GBUFFER), B(SHADOW_MAPS), gi_stage_shadow_maps, 1},
     [GI_STAGE_AREA_MAPS] = {"area-light maps", 2, "Brabec 2002 paraboloid maps",
                             "Area lights' maps: paraboloid maps of K fixed emitter points, first frame only", 0,
                             B(AREA_MAPS), gi_stage_area_shadow_maps, 0},
@@ -422,10 +422,8 @@ void gi_frame_render_raster(gi_frame *f)
         gi__run(f, GI_STAGE_GBUFFER_RASTER);
         gi__run(f, GI_STAGE_GBUFFER_RESOLVE);
         if (gi__needs_direct(f)) {
-            if (k == 0) { /* the lights' maps do not depend on the camera */
-                gi__run(f, GI_STAGE_SHADOW_MAPS);
-                gi__run(f, GI_STAGE_AREA_MAPS);
-            }
+            gi__run(f, GI_STAGE_SHADOW_MAPS); /* the tiles this sample's receivers read */
+            if (k == 0) gi__run(f, GI_STAGE_AREA_MAPS); /* these do not depend on the camera */
             gi__run(f, GI_STAGE_DIRECT_SHADOWMAP);
         }
         gi__indirect_stages(f, k == 0, k + 1 == N);

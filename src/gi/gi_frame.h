@@ -8,7 +8,8 @@
  *   gi_frame_render_raster (the default):
  *   1. G-buffer            gi_stage_gbuffer_raster     (rs_render: visibility buffer)
  *                          gi_stage_gbuffer_resolve    (rs_gbuffer_resolve: attributes)
- *   2. direct light        gi_stage_shadow_maps        (rs_shadow_render: one map or cube per light)
+ *   2. direct light        gi_stage_shadow_maps        (rs_shadow_render_needed: one map or cube per
+ *                                                       light, the tiles the receivers read)
  *                          gi_stage_area_shadow_maps   (paraboloid maps of K emitter points, once)
  *                          gi_stage_direct_shadowmap   (16-tap PCF, Laine 2007 Sec. 6; area lights
  *                                                       as K fixed cosine emitter points)

@@ -85,6 +85,7 @@ typedef struct gi_motion_stats {
     uint32_t vpl_maps;          /* kept VPLs' maps drawn again in part (rs_para_render_box) */
     uint64_t vpl_texels;        /* texels tested in them */
     uint32_t area_maps;         /* area-light maps drawn again in part, or whole after an emitter moved */
+    uint32_t shadow_tiles;      /* shadow-map tiles drawn for the frame's receivers (rs_shadow_render_needed) */
 } gi_motion_stats;
 
 /* 1 if triangle `prim` moved since the method's last update (m may be NULL:

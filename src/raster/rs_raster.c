@@ -96,6 +96,7 @@ struct rs_scratch {
     rs__chunk *chunks; /* chunk_count */
     rs__list *lists; /* per worker: a tile's triangles for the kernel, grown with the largest tile */
     uint32_t list_count;
+    uint32_t *tile_list, tile_list_cap; /* rs_render_tiles' tiles */
     /* allocation failures since rs_scratch_status last read them: failed
      * chunks and passes counted after each pass, tiles by the job items
      * (relaxed atomics) */
@@ -136,6 +137,11 @@ typedef struct rs__pass_state {
      * for rs_render_rect), and their pixels [rpx0, rpx1] x [rpy0, rpy1] */
     uint32_t rtx0, rty0, rtx1, rty1;
     int64_t rpx0, rpy0, rpx1, rpy1;
+    /* rs_render_tiles: the tiles drawn (bit ty * tiles_x + tx), NULL for a
+     * whole rectangle; and their indices in row order, one per tile job */
+    const uint64_t *tile_mask;
+    const uint32_t *tile_list;
+    uint32_t tile_jobs; /* tiles drawn */
     float gx, gy; /* guard band in NDC units */
     rs_simd simd;
 } rs__pass_state;
@@ -249,6 +255,7 @@ void rs_scratch_destroy(rs_scratch *s)
     free(s->vblock_need);
     for (uint32_t w = 0; w < s->list_count; w++) free(s->lists[w].tris), free(s->lists[w].masked);
     free(s->lists);
+    free(s->tile_list);
     if (s->chunks)
         for (uint32_t c = 0; c < s->chunk_count; c++) rs__chunk_free(&s->chunks[c]);
     free(s->chunks);
@@ -569,6 +576,22 @@ static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
     rs__transform_needed(st, v0, v1);
 }
 
+/* Whether the pixel box [px0, px1] x [py0, py1] (inside the pass's tile
+ * rectangle's bounds, clamped to the target) meets a tile of the pass's
+ * mask (rs_render_tiles). */
+static int rs__mask_meets(const rs__pass_state *st, int64_t px0, int64_t py0, int64_t px1, int64_t py1)
+{
+    int64_t tx0 = px0 / RS_TILE, tx1 = px1 / RS_TILE, ty0 = py0 / RS_TILE, ty1 = py1 / RS_TILE;
+    tx0 = tx0 > st->rtx0 ? tx0 : st->rtx0, tx1 = tx1 < st->rtx1 - 1 ? tx1 : st->rtx1 - 1;
+    ty0 = ty0 > st->rty0 ? ty0 : st->rty0, ty1 = ty1 < st->rty1 - 1 ? ty1 : st->rty1 - 1;
+    for (int64_t ty = ty0; ty <= ty1; ty++)
+        for (int64_t tx = tx0; tx <= tx1; tx++) {
+            uint64_t tile = (uint64_t)ty * st->tiles_x + (uint64_t)tx;
+            if (st->tile_mask[tile / 64] >> (tile % 64) & 1u) return 1;
+        }
+    return 0;
+}
+
 /* ------------------------------------------------------- 2. cluster culling */
 
 /* A cluster is culled when all 8 corners of its box lie outside one clip
@@ -576,9 +599,12 @@ static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
 static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
 {
     const rs_context *ctx = st->ctx;
+    const float W = (float)st->t->width, H = (float)st->t->height;
     for (uint32_t c = c0; c < c1; c++) {
         const rs__cluster *cl = &ctx->clusters[c];
         unsigned all = 63;
+        int behind = 0;
+        float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
         for (int k = 0; k < 8; k++) {
             pf_vec3 p = pf_v3(k & 1 ? cl->hi.x : cl->lo.x, k & 2 ? cl->hi.y : cl->lo.y, k & 4 ? cl->hi.z : cl->lo.z);
             float q[4];
@@ -586,6 +612,22 @@ static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
             unsigned out = (q[0] < -q[3]) | (q[0] > q[3]) << 1 | (q[1] < -q[3]) << 2 | (q[1] > q[3]) << 3 |
                            (q[2] < 0.0f) << 4 | (q[2] > q[3]) << 5;
             all &= out;
+            if (!(q[3] > 0.0f)) {
+                behind = 1;
+                continue;
+            }
+            float sx = (q[0] / q[3] * 0.5f + 0.5f) * W, sy = (0.5f - q[1] / q[3] * 0.5f) * H;
+            x0 = fminf(x0, sx), x1 = fmaxf(x1, sx), y0 = fminf(y0, sy), y1 = fmaxf(y1, sy);
+        }
+        /* rs_render_tiles: a cluster in front of the eye whose projected
+         * box, widened by a pixel (snapping moves a vertex by at most 1/256
+         * pixel), meets none of the pass's tiles is culled too */
+        if (!all && st->tile_mask && !behind && x1 - x0 < 4.0f * W && y1 - y0 < 4.0f * H) {
+            x0 = fmaxf(x0 - 1.0f, 0.0f), y0 = fmaxf(y0 - 1.0f, 0.0f);
+            x1 = fminf(x1 + 1.0f, W - 1.0f), y1 = fminf(y1 + 1.0f, H - 1.0f);
+            if (!(x0 <= x1 && y0 <= y1) ||
+                !rs__mask_meets(st, (int64_t)x0, (int64_t)y0, (int64_t)x1, (int64_t)y1))
+                all = 64;
         }
         st->s->cluster_visible[c] = all == 0;
         if (all) continue;
@@ -726,6 +768,10 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
         ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_rect's tiles */
         return;
     }
+    if (st->tile_mask && !rs__mask_meets(st, px0, py0, px1, py1)) {
+        ch->stats.triangles_culled++; /* meets none of rs_render_tiles' tiles */
+        return;
+    }
     int64_t X[3] = {sv[0].X, sv[1].X, sv[2].X}, Y[3] = {sv[0].Y, sv[1].Y, sv[2].Y};
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]);
     /* y points down on screen: counter-clockwise (front) triangles have area < 0 */
@@ -825,8 +871,11 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
         return;
     }
     for (uint32_t ty = ty0; ty <= ty1; ty++)
-        for (uint32_t tx = tx0; tx <= tx1; tx++)
-            ch->entries[ch->entry_count++] = (uint64_t)(ty * st->tiles_x + tx) << 32 | ti;
+        for (uint32_t tx = tx0; tx <= tx1; tx++) {
+            uint32_t tile = ty * st->tiles_x + tx;
+            if (st->tile_mask && !(st->tile_mask[tile / 64] >> (tile % 64) & 1u)) continue;
+            ch->entries[ch->entry_count++] = (uint64_t)tile << 32 | ti;
+        }
 }
 
 /* A clip-space triangle inside the guard band (clipped or not): snapped
@@ -1090,6 +1139,7 @@ static void rs__setup_job(void *p, uint32_t item, uint32_t worker)
 /* The item-th tile the pass draws (row by row over its tile rectangle). */
 static uint32_t rs__pass_tile(const rs__pass_state *st, uint32_t item)
 {
+    if (st->tile_list) return st->tile_list[item];
     uint32_t w = st->rtx1 - st->rtx0;
     return (st->rty0 + item / w) * st->tiles_x + st->rtx0 + item % w;
 }
@@ -1119,6 +1169,7 @@ static void rs__pass_rect(rs__pass_state *st, uint32_t tx0, uint32_t ty0, uint32
     st->rtx0 = tx0, st->rty0 = ty0, st->rtx1 = tx1, st->rty1 = ty1;
     st->rpx0 = (int64_t)tx0 * RS_TILE, st->rpy0 = (int64_t)ty0 * RS_TILE;
     st->rpx1 = (int64_t)tx1 * RS_TILE - 1, st->rpy1 = (int64_t)ty1 * RS_TILE - 1;
+    st->tile_jobs = (tx1 - tx0) * (ty1 - ty0);
 }
 
 static int rs__begin(rs__pass_state *st, const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t,
@@ -1186,7 +1237,7 @@ static void rs__finish_stats(const rs__pass_state *st, rs_stats *out)
 /* rs_render and rs_render_rect: the pass over the tiles st was limited to. */
 static void rs__render(rs_context *ctx, rs__pass_state *st, rs_stats *stats)
 {
-    uint32_t tiles = (st->rtx1 - st->rtx0) * (st->rty1 - st->rty0);
+    uint32_t tiles = st->tile_jobs;
     pf_jobs *jobs = ctx->jobs;
     if (!rs__lists(ctx->scratch, pf_jobs_thread_count(jobs))) {
         ctx->scratch->failed_pass++; /* nothing drawn (rs_context_status) */
@@ -1222,6 +1273,36 @@ void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *t, uint32_t
     rs__render(ctx, &st, stats);
 }
 
+uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *t, const uint64_t *tiles, rs_stats *stats)
+{
+    rs__pass_state st;
+    if (stats) memset(stats, 0, sizeof *stats);
+    if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return 0;
+    rs_scratch *s = ctx->scratch;
+    uint32_t n = st.tiles_x * st.tiles_y, count = 0;
+    uint32_t tx0 = st.tiles_x, ty0 = st.tiles_y, tx1 = 0, ty1 = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        if (!(tiles[k / 64] >> (k % 64) & 1u)) continue;
+        uint32_t tx = k % st.tiles_x, ty = k / st.tiles_x;
+        tx0 = tx < tx0 ? tx : tx0, tx1 = tx + 1 > tx1 ? tx + 1 : tx1;
+        ty0 = ty < ty0 ? ty : ty0, ty1 = ty + 1 > ty1 ? ty + 1 : ty1;
+        count++;
+    }
+    if (!count) return 0;
+    if (!rs__grow((void **)&s->tile_list, &s->tile_list_cap, count, sizeof(uint32_t))) {
+        s->failed_pass++; /* nothing drawn (rs_context_status) */
+        return 0;
+    }
+    for (uint32_t k = 0, i = 0; k < n; k++)
+        if (tiles[k / 64] >> (k % 64) & 1u) s->tile_list[i++] = k;
+    rs__pass_rect(&st, tx0, ty0, tx1, ty1);
+    st.tile_mask = tiles;
+    st.tile_list = s->tile_list;
+    st.tile_jobs = count;
+    rs__render(ctx, &st, stats);
+    return count;
+}
+
 void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass, rs_target *t, rs_stats *stats)
 {
     rs__pass_state st;
@@ -1242,8 +1323,7 @@ void rs_render_serial(const rs_context *ctx, rs_scratch *s, const rs_pass *pass,
     rs__cull_clusters(&st, 0, ctx->cluster_count);
     rs__transform_needed(&st, 0, ctx->weld_count);
     for (uint32_t c = 0; c < ctx->chunk_count; c++) rs__setup_bin(&st, c);
-    uint32_t tiles = st.tiles_x * st.tiles_y;
-    for (uint32_t k = 0; k < tiles; k++) rs__raster_tile(&st, rs__pass_tile(&st, k), &s->lists[0]);
+    for (uint32_t k = 0; k < st.tile_jobs; k++) rs__raster_tile(&st, rs__pass_tile(&st, k), &s->lists[0]);
     rs__finish_status(&st);
     rs__finish_stats(&st, stats);
 }

@@ -141,6 +141,15 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *target, rs_stats
  * outside those tiles are dropped at setup (counted as culled in stats). */
 void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *target, uint32_t x0, uint32_t y0, uint32_t x1,
                     uint32_t y1, rs_stats *stats);
+/* rs_render limited to the tiles whose bit is set in `tiles` (bit
+ * ty * tiles_x + tx of the target's ceil(width / 64) x ceil(height / 64)
+ * tiles, 64 per word): each is cleared and drawn with the bytes rs_render
+ * gives it, the others keep what they hold, and triangles meeting none of
+ * them are dropped at setup (counted as culled). For drawing only the part
+ * of a shadow map that visible receivers read (rs_shadow_render_needed).
+ * Returns how many tiles were drawn. */
+uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *target, const uint64_t *tiles,
+                         rs_stats *stats);
 
 /* The same for a single-threaded caller that already runs inside a job (used
  * to render many small maps at once, one per job item): no jobs are

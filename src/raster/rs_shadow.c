@@ -121,6 +121,7 @@ static pf_result rs__shadow_map_setup(rs_shadow_map *m, const pf_scene *scene, u
         return pf_error_set(err, PF_ERR_ARGUMENT, "light %u (%s) has no direction", light, L->name);
     m->light = light;
     m->size = size;
+    m->fresh = 1;
     switch (L->type) {
     case PF_LIGHT_SPOT:
         m->kind = L->outer_cone > RS_SHADOW_SPOT_MAX_CONE ? RS_SHADOW_CUBE : RS_SHADOW_SPOT;
@@ -136,12 +137,25 @@ static pf_result rs__shadow_map_setup(rs_shadow_map *m, const pf_scene *scene, u
     return PF_OK;
 }
 
+/* The tile masks' layout for the map's size (rs_shadow.h). */
+static void rs__tiles_layout(rs_shadow_map *m)
+{
+    m->tiles_side = (m->size + RS_TILE - 1) / RS_TILE;
+    m->tile_words = (m->tiles_side * m->tiles_side + 63) / 64;
+}
+
 static pf_result rs__shadow_map_alloc(rs_shadow_map *m, pf_error *err)
 {
+    rs__tiles_layout(m);
+    size_t words = (size_t)m->face_count * m->tile_words;
     m->depth = rs_plane_alloc((size_t)m->face_count * m->size * m->size * sizeof(float));
-    if (!m->depth)
+    m->valid = calloc(words, sizeof(uint64_t));
+    m->need = calloc(words, sizeof(uint64_t));
+    if (!m->depth || !m->valid || !m->need) {
+        rs_shadow_map_free(m);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory for a %ux%ux%u shadow map", m->size, m->size,
                             m->face_count);
+    }
     return PF_OK;
 }
 
@@ -156,20 +170,26 @@ pf_result rs_shadow_map_update(rs_shadow_map *m, const pf_scene *scene, uint32_t
                                pf_error *err)
 {
     float *depth = m->depth;
+    uint64_t *valid = m->valid, *need = m->need;
     uint32_t faces = m->face_count, size = m->size;
     pf_result r = rs__shadow_map_setup(m, scene, light, desc, err);
-    if (r == PF_OK && depth && faces == m->face_count && size == m->size) {
-        m->depth = depth; /* the same planes: rendering writes every texel */
+    if (r == PF_OK && depth && valid && need && faces == m->face_count && size == m->size) {
+        /* the same planes, none of their tiles valid for the new light */
+        m->depth = depth, m->valid = valid, m->need = need;
+        rs__tiles_layout(m);
+        memset(valid, 0, (size_t)faces * m->tile_words * sizeof(uint64_t));
+        memset(need, 0, (size_t)faces * m->tile_words * sizeof(uint64_t));
         return PF_OK;
     }
-    free(depth);
+    free(depth), free(valid), free(need);
     return r == PF_OK ? rs__shadow_map_alloc(m, err) : r;
 }
 
 void rs_shadow_map_free(rs_shadow_map *m)
 {
-    free(m->depth);
+    free(m->depth), free(m->valid), free(m->need);
     m->depth = NULL;
+    m->valid = m->need = NULL;
 }
 
 float *rs_shadow_map_face(const rs_shadow_map *m, uint32_t face)
@@ -204,6 +224,17 @@ void rs_shadow_set_free(rs_shadow_set *set)
 
 /* --------------------------------------------------------------- rendering */
 
+/* Every tile of every face set in the map's mask `bits`. */
+static void rs__mask_all(const rs_shadow_map *m, uint64_t *bits)
+{
+    uint32_t tiles = m->tiles_side * m->tiles_side;
+    for (uint32_t f = 0; f < m->face_count; f++)
+        for (uint32_t w = 0; w < m->tile_words; w++) {
+            uint32_t left = tiles - w * 64;
+            bits[(size_t)f * m->tile_words + w] = left >= 64 ? ~(uint64_t)0 : ((uint64_t)1 << left) - 1;
+        }
+}
+
 static void rs__stats_add(rs_stats *sum, const rs_stats *s)
 {
     sum->clusters_culled += s->clusters_culled;
@@ -233,7 +264,43 @@ void rs_shadow_render(rs_context *ctx, rs_shadow_map *maps, uint32_t count, rs_s
             rs_render(ctx, &pass, &target, &s);
             if (stats) rs__stats_add(stats, &s);
         }
+        if (m->valid) rs__mask_all(m, m->valid);
     }
+}
+
+void rs_shadow_need_clear(rs_shadow_map *maps, uint32_t count)
+{
+    for (uint32_t i = 0; i < count; i++)
+        if (maps[i].need) memset(maps[i].need, 0, (size_t)maps[i].face_count * maps[i].tile_words * sizeof(uint64_t));
+}
+
+void rs_shadow_need_all(rs_shadow_map *m)
+{
+    if (m->need) rs__mask_all(m, m->need);
+}
+
+uint32_t rs_shadow_render_needed(rs_context *ctx, rs_shadow_map *maps, uint32_t count, rs_stats *stats)
+{
+    if (stats) memset(stats, 0, sizeof *stats);
+    uint32_t drawn = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        rs_shadow_map *m = &maps[i];
+        if (!m->depth || !m->valid || !m->need) continue;
+        for (uint32_t f = 0; f < m->face_count; f++) {
+            uint64_t *valid = m->valid + (size_t)f * m->tile_words;
+            const uint64_t *need = m->need + (size_t)f * m->tile_words;
+            uint64_t draw[RS_SHADOW_MASK_WORDS], any = 0;
+            for (uint32_t w = 0; w < m->tile_words; w++) any |= draw[w] = need[w] & ~valid[w];
+            if (!any) continue;
+            rs_pass pass = {.view_proj = m->view_proj[f], .cull = RS_CULL_NONE};
+            rs_target target = {.width = m->size, .height = m->size, .depth = rs_shadow_map_face(m, f)};
+            rs_stats s;
+            drawn += rs_render_tiles(ctx, &pass, &target, draw, &s);
+            if (stats) rs__stats_add(stats, &s);
+            for (uint32_t w = 0; w < m->tile_words; w++) valid[w] |= draw[w];
+        }
+    }
+    return drawn;
 }
 
 /* The pixel rectangle [r[0], r[2]) x [r[1], r[3]) of a size x size face
@@ -279,21 +346,30 @@ uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t cou
     uint32_t faces = 0;
     for (uint32_t i = 0; i < count; i++) {
         rs_shadow_map *m = &maps[i];
-        if (!m->depth) continue;
+        if (!m->depth || !m->valid) continue;
         for (uint32_t f = 0; f < m->face_count; f++) {
             uint32_t r[4];
             if (!rs__box_rect(&m->view_proj[f], m->size, lo, hi, r)) continue;
+            /* the valid tiles that meet the rectangle */
+            uint64_t draw[RS_SHADOW_MASK_WORDS];
+            memset(draw, 0, sizeof(uint64_t) * m->tile_words);
+            const uint64_t *valid = m->valid + (size_t)f * m->tile_words;
+            uint64_t tex = 0;
+            for (uint32_t ty = r[1] / RS_TILE; ty < (r[3] + RS_TILE - 1) / RS_TILE; ty++)
+                for (uint32_t tx = r[0] / RS_TILE; tx < (r[2] + RS_TILE - 1) / RS_TILE; tx++) {
+                    uint32_t t = ty * m->tiles_side + tx;
+                    if (!(valid[t / 64] >> (t % 64) & 1u)) continue;
+                    draw[t / 64] |= (uint64_t)1 << (t % 64);
+                    uint32_t w = m->size - tx * RS_TILE, h = m->size - ty * RS_TILE; /* what it drew: whole tiles */
+                    tex += (uint64_t)(w < RS_TILE ? w : RS_TILE) * (h < RS_TILE ? h : RS_TILE);
+                }
+            if (!tex) continue;
             rs_pass pass = {.view_proj = m->view_proj[f], .cull = RS_CULL_NONE};
             rs_target target = {.width = m->size, .height = m->size, .depth = rs_shadow_map_face(m, f)};
             rs_stats s;
-            rs_render_rect(ctx, &pass, &target, r[0], r[1], r[2], r[3], &s);
+            rs_render_tiles(ctx, &pass, &target, draw, &s);
             if (stats) rs__stats_add(stats, &s);
-            if (texels) { /* what rs_render_rect drew: whole tiles */
-                uint32_t tx0 = r[0] / RS_TILE * RS_TILE, ty0 = r[1] / RS_TILE * RS_TILE;
-                uint32_t tx1 = (r[2] + RS_TILE - 1) / RS_TILE * RS_TILE, ty1 = (r[3] + RS_TILE - 1) / RS_TILE * RS_TILE;
-                tx1 = tx1 < m->size ? tx1 : m->size, ty1 = ty1 < m->size ? ty1 : m->size;
-                *texels += (uint64_t)(tx1 - tx0) * (ty1 - ty0);
-            }
+            if (texels) *texels += tex;
             faces++;
         }
     }

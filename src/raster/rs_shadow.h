@@ -74,6 +74,8 @@
 #define RS_SHADOW_DEFAULT_SIZE 1024u
 #define RS_SHADOW_MIN_SIZE 16u
 #define RS_SHADOW_MAX_FACES 6
+/* Words of a face's tile mask at the largest size (rs_shadow_map.valid). */
+#define RS_SHADOW_MASK_WORDS (((RS_MAX_SIZE + RS_TILE - 1) / RS_TILE * ((RS_MAX_SIZE + RS_TILE - 1) / RS_TILE) + 63) / 64)
 /* Spots with a wider outer cone (radians, half-angle) get a cube map. */
 #define RS_SHADOW_SPOT_MAX_CONE 1.04719755f
 /* Texels of margin around the region a map must cover, so that every PCF tap
@@ -112,6 +114,18 @@ typedef struct rs_shadow_map {
     float znear, zfar;                    /* ortho: depth range of the box; perspective: zfar unused */
     float half_w, half_h;                 /* ortho: half extents of the box */
     float *depth; /* face_count planes of size*size floats, face f at depth + f*size*size */
+    /* Which 64 x 64 tiles (RS_TILE) of each face hold the light's depths
+     * (valid) and which the frame's receivers read (need): bit t of face f
+     * in word f * tile_words + t / 64, tiles row by row (rs_render_tiles).
+     * rs_shadow_render makes every tile valid, rs_shadow_map_update (the
+     * light changed) none; rs_shadow_render_needed draws the needed tiles
+     * that are not valid. A lookup must read valid tiles only. */
+    uint32_t tiles_side, tile_words;
+    uint64_t *valid, *need;
+    /* 1 from rs_shadow_map_init / rs_shadow_map_update (a new or changed
+     * light) until its user clears it: gi_stage_shadow_maps draws a fresh
+     * map's needed tiles only, and a map whose light stayed a frame whole */
+    int fresh;
 } rs_shadow_map;
 
 /* Sets up the map of scene->lights[light] (kind, matrices) and allocates its
@@ -150,13 +164,36 @@ static inline void rs_shadow_set_render(rs_context *ctx, rs_shadow_set *set, rs_
 
 /* rs_shadow_render restricted to what geometry inside the world box
  * [lo, hi] can change (a moved object's bounds before and after it moved):
- * per face, the tiles that meet the box's projection are drawn again
- * (rs_render_rect), faces the box lies outside of are not touched, so each
- * map equals one rendered afresh (tests/test_moving.c). Returns how many
+ * per face, the valid tiles that meet the box's projection are drawn again
+ * (rs_render_tiles; invalid ones wait for rs_shadow_render_needed), faces
+ * the box lies outside of are not touched, so each map's valid tiles equal
+ * one rendered afresh (tests/test_moving.c). Returns how many
  * faces were drawn again; *texels (may be NULL) is increased by the texels
  * they drew. */
 uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t count, pf_vec3 lo, pf_vec3 hi,
                               uint64_t *texels, rs_stats *stats);
+
+/* Receiver-driven rendering (beyond Laine 2007, which renders the whole
+ * cube; after the "only the pages visible receivers touch" idea of
+ * resolution-matched and virtual shadow maps, Lefohn et al. 2007): the
+ * direct-light stage marks in map->need every tile its lookups will read
+ * (rs_shadow_need_lanes, rs_shadow_lookup.h, with the lookup's own
+ * projection) and this draws the needed tiles that are not valid, with the
+ * bytes rs_render gives them, then marks them valid. A light that stays
+ * keeps its tiles while the camera moves; a moving light draws only what
+ * the view needs. Returns the tiles drawn. */
+uint32_t rs_shadow_render_needed(rs_context *ctx, rs_shadow_map *maps, uint32_t count, rs_stats *stats);
+/* Clears every map's need (before a frame marks it). */
+void rs_shadow_need_clear(rs_shadow_map *maps, uint32_t count);
+/* Marks every tile of every face needed (a lookup the marking cannot
+ * follow: a normal offset moves the point). */
+void rs_shadow_need_all(rs_shadow_map *map);
+/* 1 if texel (x, y) of face f lies in a valid tile. */
+static inline int rs_shadow_texel_valid(const rs_shadow_map *m, uint32_t face, uint32_t x, uint32_t y)
+{
+    uint32_t t = y / RS_TILE * m->tiles_side + x / RS_TILE;
+    return m->valid && (int)(m->valid[(size_t)face * m->tile_words + t / 64] >> (t % 64) & 1u);
+}
 
 /* The face of a cube map that world point p projects to (major axis of
  * p - eye; ties to x, then y, then z). */

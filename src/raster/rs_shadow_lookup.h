@@ -36,6 +36,53 @@ static inline simd_f rs__face_val(const float *base, int gather, simd_i face_off
     return simd_gather_f(base, simd_add_i(face_off, simd_set1_i(k)));
 }
 
+/* rs__face: the cube face of the major axis of v = p - eye (ties to x,
+ * then y, then z; a NaN falls through to z like the scalar code); 0 for
+ * the other kinds. */
+static inline simd_i rs__shadow_face_lanes(const rs_shadow_map *m, simd_f v_x, simd_f v_y, simd_f v_z)
+{
+    if (m->kind != RS_SHADOW_CUBE) return simd_set1_i(0);
+    const simd_f zero = simd_zero_f();
+    simd_f ax = simd_abs_f(v_x), ay = simd_abs_f(v_y), az = simd_abs_f(v_z);
+    simd_mask is_x = simd_mask_and(simd_ge_f(ax, ay), simd_ge_f(ax, az));
+    simd_mask is_y = simd_ge_f(ay, az);
+    /* v >= 0 ? 2a : 2a + 1 */
+    simd_i f_x = simd_select_i(simd_ge_f(v_x, zero), simd_set1_i(0), simd_set1_i(1));
+    simd_i f_y = simd_select_i(simd_ge_f(v_y, zero), simd_set1_i(2), simd_set1_i(3));
+    simd_i f_z = simd_select_i(simd_ge_f(v_z, zero), simd_set1_i(4), simd_set1_i(5));
+    return simd_select_i(is_x, f_x, simd_select_i(is_y, f_y, f_z));
+}
+
+/* The clip coordinates c of p by each lane's face matrix (vp: face 0's
+ * when gathering, else the shared face's): c[r] = m[r] x + m[4+r] y +
+ * m[8+r] z + m[12+r], rs_mat4_transform's order. */
+static inline void rs__shadow_clip_lanes(const float *vp, int gather, simd_i off16, simd_f p_x, simd_f p_y,
+                                         simd_f p_z, simd_f c[4])
+{
+    for (int r = 0; r < 4; r++) {
+        simd_f acc = simd_mul_f(rs__face_val(vp, gather, off16, r), p_x);
+        acc = simd_add_f(acc, simd_mul_f(rs__face_val(vp, gather, off16, 4 + r), p_y));
+        acc = simd_add_f(acc, simd_mul_f(rs__face_val(vp, gather, off16, 8 + r), p_z));
+        c[r] = simd_add_f(acc, rs__face_val(vp, gather, off16, 12 + r));
+    }
+}
+
+/* NDC (x, y) to texels (fx, fy), clamped (max(v, lo) drops a NaN as fmaxf
+ * does), and the first texel column and row the lookup reads. */
+static inline void rs__shadow_texel_lanes(const rs_shadow_map *m, simd_f x, simd_f y, simd_f *fx, simd_f *fy,
+                                          simd_i *x0, simd_i *y0)
+{
+    const int pcf = m->desc.filter != RS_SHADOW_PCF1;
+    const float s_s = (float)m->size;
+    const simd_f s = simd_set1_f(s_s);
+    const simd_f half = simd_set1_f(0.5f), lo = simd_set1_f(-8.0f), hi = simd_set1_f(s_s + 8.0f);
+    *fx = simd_min_f(simd_max_f(simd_mul_f(simd_add_f(simd_mul_f(half, x), half), s), lo), hi);
+    *fy = simd_min_f(simd_max_f(simd_mul_f(simd_sub_f(half, simd_mul_f(half, y)), s), lo), hi);
+    const simd_f start = simd_set1_f(1.5f);
+    *x0 = simd_f2i_trunc(simd_floor_f(pcf ? simd_sub_f(*fx, start) : *fx));
+    *y0 = simd_f2i_trunc(simd_floor_f(pcf ? simd_sub_f(*fy, start) : *fy));
+}
+
 /* rs_shadow_visibility of points (p_x, p_y, p_z) with geometric normals
  * (g_x, g_y, g_z) for the lanes of `active`; 0 in the other lanes (whose
  * inputs must still be finite or at least initialised). */
@@ -53,17 +100,7 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
     simd_f v_x = simd_sub_f(p_x, simd_set1_f(m->eye.x));
     simd_f v_y = simd_sub_f(p_y, simd_set1_f(m->eye.y));
     simd_f v_z = simd_sub_f(p_z, simd_set1_f(m->eye.z));
-    simd_i face = izero;
-    if (cube) {
-        simd_f ax = simd_abs_f(v_x), ay = simd_abs_f(v_y), az = simd_abs_f(v_z);
-        simd_mask is_x = simd_mask_and(simd_ge_f(ax, ay), simd_ge_f(ax, az));
-        simd_mask is_y = simd_ge_f(ay, az);
-        /* v >= 0 ? 2a : 2a + 1 */
-        simd_i f_x = simd_select_i(simd_ge_f(v_x, zero), simd_set1_i(0), simd_set1_i(1));
-        simd_i f_y = simd_select_i(simd_ge_f(v_y, zero), simd_set1_i(2), simd_set1_i(3));
-        simd_i f_z = simd_select_i(simd_ge_f(v_z, zero), simd_set1_i(4), simd_set1_i(5));
-        face = simd_select_i(is_x, f_x, simd_select_i(is_y, f_y, f_z));
-    }
+    const simd_i face = rs__shadow_face_lanes(m, v_x, v_y, v_z);
     /* the face's constants: broadcast when the points share a face (the
      * usual case), gathered per lane otherwise */
     const int32_t f0 = simd_lane0_i(face);
@@ -123,14 +160,9 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
     float b_slope = m->desc.bias_slope > 0.0f ? m->desc.bias_slope : RS_SHADOW_BIAS_SLOPE;
     simd_f bias = simd_mul_f(texel, simd_add_f(simd_set1_f(b_const), simd_mul_f(simd_set1_f(b_slope), tan_t)));
 
-    /* project with the face's matrix: c[r] = m[r] x + m[4+r] y + m[8+r] z + m[12+r] */
+    /* project with the face's matrix */
     simd_f c[4];
-    for (int r = 0; r < 4; r++) {
-        simd_f acc = simd_mul_f(rs__face_val(vp, gather, off16, r), p_x);
-        acc = simd_add_f(acc, simd_mul_f(rs__face_val(vp, gather, off16, 4 + r), p_y));
-        acc = simd_add_f(acc, simd_mul_f(rs__face_val(vp, gather, off16, 8 + r), p_z));
-        c[r] = simd_add_f(acc, rs__face_val(vp, gather, off16, 12 + r));
-    }
+    rs__shadow_clip_lanes(vp, gather, off16, p_x, p_y, p_z, c);
     const float s_s = (float)m->size;
     const simd_f s = simd_set1_f(s_s);
     simd_f nr = rs__sdot(n_x, n_y, n_z, rs__face_val(rgt, gather, off3, 0), rs__face_val(rgt, gather, off3, 1),
@@ -168,14 +200,12 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
     }
     simd_f gx = simd_mul_f(k, nr), gy = simd_mul_f(simd_neg_f(k), nu);
 
-    /* NDC to texels, clamped (max(v, lo) drops a NaN as fmaxf does) */
-    const simd_f half = simd_set1_f(0.5f), lo = simd_set1_f(-8.0f), hi = simd_set1_f(s_s + 8.0f);
-    simd_f fx = simd_min_f(simd_max_f(simd_mul_f(simd_add_f(simd_mul_f(half, x), half), s), lo), hi);
-    simd_f fy = simd_min_f(simd_max_f(simd_mul_f(simd_sub_f(half, simd_mul_f(half, y)), s), lo), hi);
+    /* NDC to texels */
+    const simd_f half = simd_set1_f(0.5f);
     const int n = pcf ? 4 : 1;
-    const simd_f start = simd_set1_f(1.5f);
-    simd_i x0 = simd_f2i_trunc(simd_floor_f(pcf ? simd_sub_f(fx, start) : fx));
-    simd_i y0 = simd_f2i_trunc(simd_floor_f(pcf ? simd_sub_f(fy, start) : fy));
+    simd_f fx, fy;
+    simd_i x0, y0;
+    rs__shadow_texel_lanes(m, x, y, &fx, &fy, &x0, &y0);
 
     /* rs__pcf: count the taps whose stored zs is no nearer than the
      * receiver's plane at the tap's texel centre plus the bias */
@@ -225,6 +255,83 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
     if (!ortho) vis = simd_select_f(behind, spot ? zero : one, vis);
     return simd_select_f(active, vis, zero);
 }
+
+/* Marks in m->need the tiles rs_shadow_visibility_lanes reads for the lanes
+ * of `active` (rs_shadow_render_needed then draws them): the same face, the
+ * same projection and the same first texel as the lookup (the helpers
+ * above), the n x n taps' clamped columns and rows, each tile's bit set
+ * with a relaxed atomic OR (other rows mark the same words; the union is
+ * the same for any schedule). Maps with a normal offset are marked whole by
+ * the caller (rs_shadow_need_all). */
+static inline void rs_shadow_need_lanes(const rs_shadow_map *m, simd_f p_x, simd_f p_y, simd_f p_z,
+                                        simd_mask active)
+{
+    const uint32_t act = simd_mask_bits(active);
+    if (!act || !m->need) return;
+    const int cube = m->kind == RS_SHADOW_CUBE, ortho = m->kind == RS_SHADOW_ORTHO;
+    simd_f v_x = simd_sub_f(p_x, simd_set1_f(m->eye.x));
+    simd_f v_y = simd_sub_f(p_y, simd_set1_f(m->eye.y));
+    simd_f v_z = simd_sub_f(p_z, simd_set1_f(m->eye.z));
+    const simd_i face = rs__shadow_face_lanes(m, v_x, v_y, v_z);
+    const int32_t f0 = simd_lane0_i(face);
+    const int gather = cube && simd_mask_bits(simd_eq_i(face, simd_set1_i(f0))) != SIMD_FULL;
+    simd_f c[4];
+    rs__shadow_clip_lanes(m->view_proj[gather ? 0 : f0].m, gather, simd_slli_i(face, 4), p_x, p_y, p_z, c);
+    simd_f x = ortho ? c[0] : simd_div_f(c[0], c[3]), y = ortho ? c[1] : simd_div_f(c[1], c[3]);
+    simd_f fx, fy;
+    simd_i x0, y0;
+    rs__shadow_texel_lanes(m, x, y, &fx, &fy, &x0, &y0);
+    /* the window's clamped first and last texels, their tiles (RS_TILE is
+     * 64: shifts) and the face's first bit in need */
+    const int32_t n = m->desc.filter != RS_SHADOW_PCF1 ? 4 : 1;
+    const simd_i izero = simd_set1_i(0), last = simd_set1_i((int32_t)m->size - 1), n1 = simd_set1_i(n - 1);
+    simd_i xa = simd_min_i(simd_max_i(x0, izero), last), xb = simd_min_i(simd_max_i(simd_add_i(x0, n1), izero), last);
+    simd_i ya = simd_min_i(simd_max_i(y0, izero), last), yb = simd_min_i(simd_max_i(simd_add_i(y0, n1), izero), last);
+    xa = simd_srli_i(xa, 6), xb = simd_srli_i(xb, 6), ya = simd_srli_i(ya, 6), yb = simd_srli_i(yb, 6);
+    const simd_i fk = simd_mullo_i(face, simd_set1_i((int32_t)(m->tile_words * 64)));
+    /* the usual case: the lanes' windows on one face, their tiles' bounding
+     * box at most 2 x 2 tiles (neighbouring pixels, a tile edge between
+     * them): that box, a superset of the windows' tiles */
+    const int32_t k0 = simd_lane0_i(fk);
+    if ((act & 1u) && (simd_mask_bits(simd_eq_i(fk, simd_set1_i(k0))) & act) == act) {
+        const simd_f big = simd_set1_f(1.0e9f), nbig = simd_set1_f(-1.0e9f);
+        /* small integers, exact as floats: the vocabulary's float minimum */
+        float bx0 = simd_hmin_f(simd_select_f(active, simd_i2f(xa), big));
+        float by0 = simd_hmin_f(simd_select_f(active, simd_i2f(ya), big));
+        float bx1 = -simd_hmin_f(simd_select_f(active, simd_neg_f(simd_i2f(xb)), nbig));
+        float by1 = -simd_hmin_f(simd_select_f(active, simd_neg_f(simd_i2f(yb)), nbig));
+        if (bx1 - bx0 <= 1.0f && by1 - by0 <= 1.0f) {
+            for (uint32_t ty = (uint32_t)by0; ty <= (uint32_t)by1; ty++)
+                for (uint32_t tx = (uint32_t)bx0; tx <= (uint32_t)bx1; tx++) {
+                    uint32_t k = (uint32_t)k0 + ty * m->tiles_side + tx;
+                    uint64_t *w = &m->need[k / 64], bit = (uint64_t)1 << (k % 64);
+                    if (!(__atomic_load_n(w, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(w, bit, __ATOMIC_RELAXED);
+                }
+            return;
+        }
+    }
+    int32_t fl[SIMD_W], xal[SIMD_W], xbl[SIMD_W], yal[SIMD_W], ybl[SIMD_W];
+    simd_storeu_i(fl, fk), simd_storeu_i(xal, xa), simd_storeu_i(xbl, xb), simd_storeu_i(yal, ya), simd_storeu_i(ybl, yb);
+    uint32_t prev = UINT32_MAX; /* runs of lanes share a one-tile window */
+    for (int l = 0; l < SIMD_W; l++) {
+        if (!(act >> l & 1u)) continue;
+        if (xal[l] == xbl[l] && yal[l] == ybl[l]) {
+            uint32_t k = (uint32_t)fl[l] + (uint32_t)yal[l] * m->tiles_side + (uint32_t)xal[l];
+            if (k == prev) continue;
+            prev = k;
+        }
+        for (int32_t ty = yal[l]; ty <= ybl[l]; ty++)
+            for (int32_t tx = xal[l]; tx <= xbl[l]; tx++) {
+                uint32_t k = (uint32_t)fl[l] + (uint32_t)ty * m->tiles_side + (uint32_t)tx;
+                uint64_t *w = &m->need[k / 64], bit = (uint64_t)1 << (k % 64);
+                if (!(__atomic_load_n(w, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(w, bit, __ATOMIC_RELAXED);
+            }
+    }
+}
+
+#if RS_TILE != 64
+#error "rs_shadow_need_lanes divides by RS_TILE with shifts by 6"
+#endif
 
 /* Whether a map can take rs_shadow_visibility_lanes (else the scalar lookup
  * point by point): texel indices fit 31 bits, no normal offset. */

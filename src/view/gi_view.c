@@ -30,7 +30,7 @@ static const gi__view_info gi__views[GI_VIEW_COUNT] = {
     [GI_VIEW_ALBEDO] = {"albedo", GI_STAGE_GBUFFER_RESOLVE, "filtered baseColor, linear RGB"},
     [GI_VIEW_PRIM] = {"prim", GI_STAGE_GBUFFER_RASTER, "primitive id: which triangle each pixel sees"},
     [GI_VIEW_SHADOW_MAP] = {"shadow-map", GI_STAGE_SHADOW_MAPS,
-                            "light 0's map, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF"},
+                            "light 0's map, near = bright (cube: +x -x +y / -y +z -z), read with 16-tap PCF; blue checker: tiles no visible receiver reads, not drawn"},
     [GI_VIEW_DIRECT] = {"direct", GI_STAGE_DIRECT_SHADOWMAP, "every light with its shadow test, albedo E / pi"},
     [GI_VIEW_VPLS] = {"vpls", GI_STAGE_VPL_UPDATE,
                       "the VPLs the camera sees, coloured by intensity (hidden ones are not drawn); each re-emits the "
@@ -647,7 +647,9 @@ static void gi__view_indirect_image(const gi_frame *f, const float *src, float e
 }
 
 /* Light 0's shadow map: one face fitted in the image, or a cube's six faces
- * as a 3 x 2 grid (+x -x +y on top, -y +z -z below). */
+ * as a 3 x 2 grid (+x -x +y on top, -y +z -z below); the tiles the frame
+ * did not draw (no visible receiver reads them, gi_stage_shadow_maps) as a
+ * dark blue checker. */
 static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb, gi_view_legend *lg)
 {
     uint32_t W = f->width, H = f->height;
@@ -663,7 +665,8 @@ static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb, gi_view_legend 
     float zmax = 0.0f;
     for (uint32_t face = 0; face < m->face_count && face < 6; face++) {
         const float *d = rs_shadow_map_face(m, face);
-        for (size_t i = 0; i < texels; i++) zmax = fmaxf(zmax, d[i]);
+        for (size_t i = 0; i < texels; i++)
+            if (rs_shadow_texel_valid(m, face, (uint32_t)(i % m->size), (uint32_t)(i / m->size))) zmax = fmaxf(zmax, d[i]);
     }
     for (uint32_t face = 0; face < m->face_count && face < 6; face++) {
         const float *d = rs_shadow_map_face(m, face);
@@ -671,8 +674,13 @@ static void gi__view_shadow_map(const gi_frame *f, uint8_t *rgb, gi_view_legend 
         for (uint32_t y = 0; y < cell; y++)
             for (uint32_t x = 0; x < cell; x++) {
                 uint32_t tx = (uint32_t)((uint64_t)x * m->size / cell), ty = (uint32_t)((uint64_t)y * m->size / cell);
-                float v = zmax > 0.0f ? d[(size_t)ty * m->size + tx] / zmax : 0.0f; /* reversed depth: near = 1 */
                 uint8_t *o = rgb + 3 * ((size_t)(cy + y) * W + cx + x);
+                if (!rs_shadow_texel_valid(m, face, tx, ty)) { /* not drawn: no visible receiver reads it */
+                    o[0] = o[1] = o[2] = (uint8_t)(((tx / 8 + ty / 8) & 1u) ? 40 : 24);
+                    o[2] = (uint8_t)(o[2] + 24);
+                    continue;
+                }
+                float v = zmax > 0.0f ? d[(size_t)ty * m->size + tx] / zmax : 0.0f; /* reversed depth: near = 1 */
                 o[0] = o[1] = o[2] = gi_view_draw_unit(v);
             }
         if (m->face_count == 6) gi__box(rgb, W, H, (int)(cx + cell / 2), (int)(cy + cell / 2), (int)cell / 2, 90, 90, 160);

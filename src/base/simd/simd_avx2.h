@@ -195,9 +195,14 @@ static inline void simd_pack_storeu_i(int32_t *p, simd_pack k, simd_i a)
 {
     _mm256_storeu_si256((__m256i *)p, _mm256_permutevar8x32_epi32(a, k));
 }
+/* eight plain loads, not vpgatherdd: on AMD Zen 2 the microcoded gather cost
+ * the many-light accumulation (one paraboloid code per pixel-VPL pair)
+ * 1-2 ms more at 1024x768 (`bench frame --method iir`, docs/perf.md) */
 static inline simd_i simd_gather_u16(const uint16_t *base, simd_i idx)
 {
-    return _mm256_and_si256(_mm256_i32gather_epi32((const int *)base, idx, 2), _mm256_set1_epi32(0xffff));
+    int32_t i[8];
+    _mm256_storeu_si256((__m256i *)i, idx);
+    return _mm256_setr_epi32(base[i[0]], base[i[1]], base[i[2]], base[i[3]], base[i[4]], base[i[5]], base[i[6]], base[i[7]]);
 }
 
 static inline simd_i simd_min_i(simd_i a, simd_i b) { return _mm256_min_epi32(a, b); }

@@ -70,16 +70,22 @@ static void gi__shadow_lights(gi_frame *f)
     pf_error err;
     gi_motion_stats *ms = &f->motion_stats;
     if (!f->shadows_rendered || f->shadow_lights.count != s->light_count || f->shadows.count != s->light_count) {
-        /* first frame (gi_frame_create's maps), or lights added/removed:
-         * new maps; nothing valid either way */
-        if (f->shadows_rendered) {
+        /* lights added or removed: new maps; the first frame (or the one
+         * after the lights could not be copied): the maps set up afresh for
+         * the lights as they are now; nothing valid either way */
+        if (f->shadows_rendered || f->shadows.count != s->light_count) {
             rs_shadow_set_free(&f->shadows);
             if (rs_shadow_set_init(&f->shadows, s, &desc, &err) != PF_OK) {
                 fprintf(stderr, "softgi: shadow maps: %s\n", err.message);
                 return;
             }
+        } else {
+            for (uint32_t i = 0; i < f->shadows.count; i++)
+                if (rs_shadow_map_update(&f->shadows.maps[i], s, i, &desc, &err) != PF_OK) {
+                    fprintf(stderr, "softgi: shadow map of light %u: %s\n", i, err.message);
+                    memset(&f->shadows.maps[i], 0, sizeof f->shadows.maps[i]);
+                }
         }
-        for (uint32_t i = 0; i < f->shadows.count; i++) f->shadows.maps[i].fresh = 1;
         f->shadow_bounds_lo = s->bounds_min, f->shadow_bounds_hi = s->bounds_max;
     } else {
         const gi_moved_box *mb = &f->moved_shadows;

@@ -612,6 +612,7 @@ static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
             unsigned out = (q[0] < -q[3]) | (q[0] > q[3]) << 1 | (q[1] < -q[3]) << 2 | (q[1] > q[3]) << 3 |
                            (q[2] < 0.0f) << 4 | (q[2] > q[3]) << 5;
             all &= out;
+            if (!st->tile_mask) continue;
             if (!(q[3] > 0.0f)) {
                 behind = 1;
                 continue;

@@ -74,6 +74,27 @@ static inline simd_f gi__load_live(const float *p, int whole, simd_mask live)
     return whole ? simd_loadu_f(p) : simd_maskz_loadu_f(p, live);
 }
 
+/* The n (<= SIMD_W) pixels from index i of the G-buffer: their triangles,
+ * the lanes with a surface (the returned bits) and their positions, zeros
+ * in the other lanes; masked loads only where the group is partial (a
+ * whole group of surfaces, most of them, takes plain loads, the same
+ * values). */
+static inline uint32_t gi__group(const rs_gbuffer *g, size_t i, uint32_t n, simd_i *prims, simd_mask *live_lanes,
+                                 simd_f *px, simd_f *py, simd_f *pz)
+{
+    const simd_mask in_row = simd_mask_from_bits(n == SIMD_W ? SIMD_FULL : (1u << n) - 1u);
+    *prims = n == SIMD_W ? simd_loadu_i((const int32_t *)g->prim + i)
+                         : simd_maskz_loadu_i((const int32_t *)g->prim + i, in_row);
+    *live_lanes = simd_mask_and(in_row, simd_mask_not(simd_eq_i(*prims, simd_set1_i((int32_t)RS_GBUFFER_EMPTY))));
+    const uint32_t live = simd_mask_bits(*live_lanes);
+    if (!live) return 0;
+    const int whole = live == SIMD_FULL;
+    *px = gi__load_live(g->pos_x + i, whole, *live_lanes);
+    *py = gi__load_live(g->pos_y + i, whole, *live_lanes);
+    *pz = gi__load_live(g->pos_z + i, whole, *live_lanes);
+    return live;
+}
+
 /* One row of the direct light (stage 2b): io->direct = irradiance x PCF
  * visibility x albedo / pi, emission added later by compose. */
 static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
@@ -95,19 +116,12 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
          * operations, the same bits), else from the scene */
         float in[6][SIMD_W], ngv[3][SIMD_W], ev[3][SIMD_W];
         const uint32_t n = width - x0 < SIMD_W ? width - x0 : SIMD_W;
-        const simd_mask in_row = simd_mask_from_bits(n == SIMD_W ? SIMD_FULL : (1u << n) - 1u);
-        /* masked loads only where a group is partial: a whole group of
-         * surfaces (most of them) takes plain loads, the same values */
-        const simd_i prims = n == SIMD_W ? simd_loadu_i((const int32_t *)g->prim + row + x0)
-                                         : simd_maskz_loadu_i((const int32_t *)g->prim + row + x0, in_row);
-        const simd_mask live_lanes =
-            simd_mask_and(in_row, simd_mask_not(simd_eq_i(prims, simd_set1_i((int32_t)RS_GBUFFER_EMPTY))));
-        const uint32_t live = simd_mask_bits(live_lanes);
+        simd_i prims;
+        simd_mask live_lanes;
+        simd_f px, py, pz;
+        const uint32_t live = gi__group(g, row + x0, n, &prims, &live_lanes, &px, &py, &pz);
         if (!live) continue;
         const int whole = live == SIMD_FULL;
-        const simd_f px = gi__load_live(g->pos_x + row + x0, whole, live_lanes);
-        const simd_f py = gi__load_live(g->pos_y + row + x0, whole, live_lanes);
-        const simd_f pz = gi__load_live(g->pos_z + row + x0, whole, live_lanes);
         const simd_f nx = gi__load_live(g->nrm_x + row + x0, whole, live_lanes);
         const simd_f ny = gi__load_live(g->nrm_y + row + x0, whole, live_lanes);
         const simd_f nz = gi__load_live(g->nrm_z + row + x0, whole, live_lanes);
@@ -199,17 +213,10 @@ static void gi__need_row(void *ctx, uint32_t y, uint32_t worker)
     const size_t row = (size_t)y * width;
     for (uint32_t x0 = 0; x0 < width; x0 += SIMD_W) {
         const uint32_t n = width - x0 < SIMD_W ? width - x0 : SIMD_W;
-        const simd_mask in_row = simd_mask_from_bits(n == SIMD_W ? SIMD_FULL : (1u << n) - 1u);
-        const simd_i prims = n == SIMD_W ? simd_loadu_i((const int32_t *)g->prim + row + x0)
-                                         : simd_maskz_loadu_i((const int32_t *)g->prim + row + x0, in_row);
-        const simd_mask live_lanes =
-            simd_mask_and(in_row, simd_mask_not(simd_eq_i(prims, simd_set1_i((int32_t)RS_GBUFFER_EMPTY))));
-        const uint32_t live = simd_mask_bits(live_lanes);
-        if (!live) continue;
-        const int whole = live == SIMD_FULL;
-        const simd_f px = gi__load_live(g->pos_x + row + x0, whole, live_lanes);
-        const simd_f py = gi__load_live(g->pos_y + row + x0, whole, live_lanes);
-        const simd_f pz = gi__load_live(g->pos_z + row + x0, whole, live_lanes);
+        simd_i prims;
+        simd_mask live_lanes;
+        simd_f px, py, pz;
+        if (!gi__group(g, row + x0, n, &prims, &live_lanes, &px, &py, &pz)) continue;
         for (uint32_t l = 0; l < s->light_count && l < io->shadow_count; l++) {
             const rs_shadow_map *m = &io->shadows[l];
             if (!m->fresh || !rs_shadow_lookup_eligible(m)) continue; /* marked whole (gi_stage_shadow_maps) */

@@ -134,7 +134,7 @@ typedef struct rs__pass_state {
     rs_target *t;
     uint32_t tiles_x, tiles_y;
     /* the tiles the pass draws: [rtx0, rtx1) x [rty0, rty1) (all of them but
-     * for rs_render_rect), and their pixels [rpx0, rpx1] x [rpy0, rpy1] */
+     * for rs_render_tiles: its tiles' bounds), and their pixels [rpx0, rpx1] x [rpy0, rpy1] */
     uint32_t rtx0, rty0, rtx1, rty1;
     int64_t rpx0, rpy0, rpx1, rpy1;
     /* rs_render_tiles: the tiles drawn (bit ty * tiles_x + tx), NULL for a
@@ -766,7 +766,7 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
     if (px1 > (int64_t)t->width - 1) px1 = (int64_t)t->width - 1;
     if (py1 > (int64_t)t->height - 1) py1 = (int64_t)t->height - 1;
     if (px0 > px1 || py0 > py1 || px1 < st->rpx0 || px0 > st->rpx1 || py1 < st->rpy0 || py0 > st->rpy1) {
-        ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_rect's tiles */
+        ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_tiles' bounds */
         return;
     }
     if (st->tile_mask && !rs__mask_meets(st, px0, py0, px1, py1)) {
@@ -1235,7 +1235,7 @@ static void rs__finish_stats(const rs__pass_state *st, rs_stats *out)
     }
 }
 
-/* rs_render and rs_render_rect: the pass over the tiles st was limited to. */
+/* rs_render and rs_render_tiles: the pass over the tiles st was limited to. */
 static void rs__render(rs_context *ctx, rs__pass_state *st, rs_stats *stats)
 {
     uint32_t tiles = st->tile_jobs;
@@ -1260,18 +1260,6 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *t, rs_stats *sta
 {
     rs__pass_state st;
     if (rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) rs__render(ctx, &st, stats);
-}
-
-void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *t, uint32_t x0, uint32_t y0, uint32_t x1,
-                    uint32_t y1, rs_stats *stats)
-{
-    rs__pass_state st;
-    if (stats) memset(stats, 0, sizeof *stats);
-    if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return;
-    x1 = x1 < t->width ? x1 : t->width, y1 = y1 < t->height ? y1 : t->height;
-    if (x0 >= x1 || y0 >= y1) return;
-    rs__pass_rect(&st, x0 / RS_TILE, y0 / RS_TILE, (x1 + RS_TILE - 1) / RS_TILE, (y1 + RS_TILE - 1) / RS_TILE);
-    rs__render(ctx, &st, stats);
 }
 
 uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *t, const uint64_t *tiles, rs_stats *stats)

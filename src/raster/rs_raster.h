@@ -133,21 +133,14 @@ pf_result rs_context_update(rs_context *ctx, const pf_anim_moved *moved, uint32_
 /* Rasterizes the whole scene into `target` (cleared first), in parallel over
  * the context's jobs, deterministic for any thread count and SIMD path. */
 void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *target, rs_stats *stats);
-/* rs_render limited to the 64 x 64 tiles that meet the pixel rectangle
- * [x0, x1) x [y0, y1) (clamped to the target; empty: nothing): only those
- * tiles are cleared and drawn, each with the bytes rs_render gives it, and
- * the rest of the target keeps what it holds. For re-rendering the part of
- * a map that moved geometry can change (rs_shadow_render_box). Triangles
- * outside those tiles are dropped at setup (counted as culled in stats). */
-void rs_render_rect(rs_context *ctx, const rs_pass *pass, rs_target *target, uint32_t x0, uint32_t y0, uint32_t x1,
-                    uint32_t y1, rs_stats *stats);
 /* rs_render limited to the tiles whose bit is set in `tiles` (bit
  * ty * tiles_x + tx of the target's ceil(width / 64) x ceil(height / 64)
  * tiles, 64 per word): each is cleared and drawn with the bytes rs_render
  * gives it, the others keep what they hold, and triangles meeting none of
  * them are dropped at setup (counted as culled). For drawing only the part
- * of a shadow map that visible receivers read (rs_shadow_render_needed).
- * Returns how many tiles were drawn. */
+ * of a shadow map that visible receivers read (rs_shadow_render_needed) or
+ * that moved geometry can change (rs_shadow_render_box). Returns how many
+ * tiles were drawn. */
 uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *target, const uint64_t *tiles,
                          rs_stats *stats);
 

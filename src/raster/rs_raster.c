@@ -576,6 +576,36 @@ static void rs__vertex_job(void *p, uint32_t item, uint32_t worker)
     rs__transform_needed(st, v0, v1);
 }
 
+int rs_box_rect(const rs_mat4 *vp, uint32_t width, uint32_t height, pf_vec3 lo, pf_vec3 hi, uint32_t r[4])
+{
+    unsigned all = 63;
+    int behind = 0;
+    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY, W = (float)width, H = (float)height;
+    for (int k = 0; k < 8; k++) {
+        pf_vec3 p = pf_v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+        float q[4];
+        rs_mat4_transform(vp, p, q);
+        all &= (unsigned)(q[0] < -q[3]) | (unsigned)(q[0] > q[3]) << 1 | (unsigned)(q[1] < -q[3]) << 2 |
+               (unsigned)(q[1] > q[3]) << 3 | (unsigned)(q[2] < 0.0f) << 4 | (unsigned)(q[2] > q[3]) << 5;
+        if (!(q[3] > 0.0f)) {
+            behind = 1;
+            continue;
+        }
+        float sx = (q[0] / q[3] * 0.5f + 0.5f) * W, sy = (0.5f - q[1] / q[3] * 0.5f) * H;
+        x0 = fminf(x0, sx), x1 = fmaxf(x1, sx), y0 = fminf(y0, sy), y1 = fmaxf(y1, sy);
+    }
+    if (all) return 0;
+    if (behind || !(x1 - x0 < 4.0f * W) || !(y1 - y0 < 4.0f * H)) { /* unbounded, huge or NaN */
+        r[0] = r[1] = 0, r[2] = width, r[3] = height;
+        return 1;
+    }
+    x0 = fmaxf(x0 - 1.0f, 0.0f), y0 = fmaxf(y0 - 1.0f, 0.0f);
+    x1 = fminf(x1 + 2.0f, W), y1 = fminf(y1 + 2.0f, H);
+    if (!(x0 < x1 && y0 < y1)) return 0;
+    r[0] = (uint32_t)x0, r[1] = (uint32_t)y0, r[2] = (uint32_t)x1, r[3] = (uint32_t)y1;
+    return 1;
+}
+
 /* Whether the pixel box [px0, px1] x [py0, py1] (inside the pass's tile
  * rectangle's bounds, clamped to the target) meets a tile of the pass's
  * mask (rs_render_tiles). */
@@ -595,43 +625,20 @@ static int rs__mask_meets(const rs__pass_state *st, int64_t px0, int64_t py0, in
 /* ------------------------------------------------------- 2. cluster culling */
 
 /* A cluster is culled when all 8 corners of its box lie outside one clip
- * plane (x < -w, x > w, y < -w, y > w, z < 0, z > w): conservative. */
+ * plane (x < -w, x > w, y < -w, y > w, z < 0, z > w), or its projected box
+ * (rs_box_rect) misses the target or rs_render_tiles' tiles: conservative. */
 static void rs__cull_clusters(rs__pass_state *st, uint32_t c0, uint32_t c1)
 {
     const rs_context *ctx = st->ctx;
-    const float W = (float)st->t->width, H = (float)st->t->height;
     for (uint32_t c = c0; c < c1; c++) {
         const rs__cluster *cl = &ctx->clusters[c];
-        unsigned all = 63;
-        int behind = 0;
-        float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-        for (int k = 0; k < 8; k++) {
-            pf_vec3 p = pf_v3(k & 1 ? cl->hi.x : cl->lo.x, k & 2 ? cl->hi.y : cl->lo.y, k & 4 ? cl->hi.z : cl->lo.z);
-            float q[4];
-            rs_mat4_transform(&st->pass->view_proj, p, q);
-            unsigned out = (q[0] < -q[3]) | (q[0] > q[3]) << 1 | (q[1] < -q[3]) << 2 | (q[1] > q[3]) << 3 |
-                           (q[2] < 0.0f) << 4 | (q[2] > q[3]) << 5;
-            all &= out;
-            if (!st->tile_mask) continue;
-            if (!(q[3] > 0.0f)) {
-                behind = 1;
-                continue;
-            }
-            float sx = (q[0] / q[3] * 0.5f + 0.5f) * W, sy = (0.5f - q[1] / q[3] * 0.5f) * H;
-            x0 = fminf(x0, sx), x1 = fmaxf(x1, sx), y0 = fminf(y0, sy), y1 = fmaxf(y1, sy);
-        }
-        /* rs_render_tiles: a cluster in front of the eye whose projected
-         * box, widened by a pixel (snapping moves a vertex by at most 1/256
-         * pixel), meets none of the pass's tiles is culled too */
-        if (!all && st->tile_mask && !behind && x1 - x0 < 4.0f * W && y1 - y0 < 4.0f * H) {
-            x0 = fmaxf(x0 - 1.0f, 0.0f), y0 = fmaxf(y0 - 1.0f, 0.0f);
-            x1 = fminf(x1 + 1.0f, W - 1.0f), y1 = fminf(y1 + 1.0f, H - 1.0f);
-            if (!(x0 <= x1 && y0 <= y1) ||
-                !rs__mask_meets(st, (int64_t)x0, (int64_t)y0, (int64_t)x1, (int64_t)y1))
-                all = 64;
-        }
-        st->s->cluster_visible[c] = all == 0;
-        if (all) continue;
+        /* in front of no clip plane's far side, and for rs_render_tiles
+         * meeting one of the pass's tiles */
+        uint32_t r[4];
+        int visible = rs_box_rect(&st->pass->view_proj, st->t->width, st->t->height, cl->lo, cl->hi, r) &&
+                      (!st->tile_mask || rs__mask_meets(st, r[0], r[1], (int64_t)r[2] - 1, (int64_t)r[3] - 1));
+        st->s->cluster_visible[c] = (uint8_t)visible;
+        if (!visible) continue;
         /* its positions' blocks are needed (relaxed atomics: clusters on
          * other threads may mark the same block; the set marked is fixed) */
         for (uint32_t k = ctx->cluster_block_start[c]; k < ctx->cluster_block_start[c + 1]; k++) {

@@ -80,6 +80,14 @@ rs_mat4 rs_mat4_ortho(pf_vec3 eye, pf_vec3 forward, pf_vec3 up, float half_w, fl
 rs_mat4 rs_mat4_camera(const pf_camera *cam, uint32_t width, uint32_t height);
 /* clip = m * (p, 1) */
 void rs_mat4_transform(const rs_mat4 *m, pf_vec3 p, float clip[4]);
+/* The pixel rectangle [r[0], r[2]) x [r[1], r[3]) of a width x height
+ * target through which geometry inside the world box [lo, hi] can be seen
+ * by view_proj: the bounding rectangle of the projected corners widened by
+ * a pixel (snapping moves a vertex by at most 1/512 pixel). 0 when the box
+ * lies outside one of the clip planes (nothing in it reaches the target);
+ * the whole target when a corner is not in front of the eye (the projection
+ * is unbounded). */
+int rs_box_rect(const rs_mat4 *view_proj, uint32_t width, uint32_t height, pf_vec3 lo, pf_vec3 hi, uint32_t r[4]);
 
 typedef enum rs_cull { RS_CULL_NONE = 0, RS_CULL_BACK, RS_CULL_FRONT } rs_cull;
 

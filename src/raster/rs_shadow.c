@@ -303,42 +303,6 @@ uint32_t rs_shadow_render_needed(rs_context *ctx, rs_shadow_map *maps, uint32_t 
     return drawn;
 }
 
-/* The pixel rectangle [r[0], r[2]) x [r[1], r[3]) of a size x size face
- * through which geometry inside the world box [lo, hi] can be seen: the
- * bounding rectangle of the projected corners widened by a pixel (snapping
- * moves a vertex by at most 1/512 pixel). 0 when the box lies outside one
- * of the face's clip planes (nothing in it reaches the face); the whole face
- * when a corner is not in front of the eye (the projection is unbounded). */
-static int rs__box_rect(const rs_mat4 *vp, uint32_t size, pf_vec3 lo, pf_vec3 hi, uint32_t r[4])
-{
-    unsigned all = 63;
-    int behind = 0;
-    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY, n = (float)size;
-    for (int k = 0; k < 8; k++) {
-        pf_vec3 p = pf_v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
-        float q[4];
-        rs_mat4_transform(vp, p, q);
-        all &= (unsigned)(q[0] < -q[3]) | (unsigned)(q[0] > q[3]) << 1 | (unsigned)(q[1] < -q[3]) << 2 |
-               (unsigned)(q[1] > q[3]) << 3 | (unsigned)(q[2] < 0.0f) << 4 | (unsigned)(q[2] > q[3]) << 5;
-        if (!(q[3] > 0.0f)) {
-            behind = 1;
-            continue;
-        }
-        float sx = (q[0] / q[3] * 0.5f + 0.5f) * n, sy = (0.5f - q[1] / q[3] * 0.5f) * n;
-        x0 = fminf(x0, sx), x1 = fmaxf(x1, sx), y0 = fminf(y0, sy), y1 = fmaxf(y1, sy);
-    }
-    if (all) return 0;
-    if (behind || !(x1 - x0 < 4.0f * n) || !(y1 - y0 < 4.0f * n)) { /* unbounded, huge or NaN */
-        r[0] = r[1] = 0, r[2] = r[3] = size;
-        return 1;
-    }
-    x0 = fmaxf(x0 - 1.0f, 0.0f), y0 = fmaxf(y0 - 1.0f, 0.0f);
-    x1 = fminf(x1 + 2.0f, n), y1 = fminf(y1 + 2.0f, n);
-    if (!(x0 < x1 && y0 < y1)) return 0;
-    r[0] = (uint32_t)x0, r[1] = (uint32_t)y0, r[2] = (uint32_t)x1, r[3] = (uint32_t)y1;
-    return 1;
-}
-
 uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t count, pf_vec3 lo, pf_vec3 hi,
                               uint64_t *texels, rs_stats *stats)
 {
@@ -349,7 +313,7 @@ uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t cou
         if (!m->depth || !m->valid) continue;
         for (uint32_t f = 0; f < m->face_count; f++) {
             uint32_t r[4];
-            if (!rs__box_rect(&m->view_proj[f], m->size, lo, hi, r)) continue;
+            if (!rs_box_rect(&m->view_proj[f], m->size, m->size, lo, hi, r)) continue;
             /* the valid tiles that meet the rectangle */
             uint64_t draw[RS_SHADOW_MASK_WORDS];
             memset(draw, 0, sizeof(uint64_t) * m->tile_words);

@@ -268,6 +268,18 @@ void rs_shadow_render(rs_context *ctx, rs_shadow_map *maps, uint32_t count, rs_s
     }
 }
 
+/* rs_render_tiles on face f of m (its tiles `draw`), added to *stats (may
+ * be NULL); the tiles drawn. */
+static uint32_t rs__face_tiles(rs_context *ctx, rs_shadow_map *m, uint32_t f, const uint64_t *draw, rs_stats *stats)
+{
+    rs_pass pass = {.view_proj = m->view_proj[f], .cull = RS_CULL_NONE};
+    rs_target target = {.width = m->size, .height = m->size, .depth = rs_shadow_map_face(m, f)};
+    rs_stats s;
+    uint32_t n = rs_render_tiles(ctx, &pass, &target, draw, &s);
+    if (stats) rs__stats_add(stats, &s);
+    return n;
+}
+
 void rs_shadow_need_clear(rs_shadow_map *maps, uint32_t count)
 {
     for (uint32_t i = 0; i < count; i++)
@@ -292,11 +304,7 @@ uint32_t rs_shadow_render_needed(rs_context *ctx, rs_shadow_map *maps, uint32_t 
             uint64_t draw[RS_SHADOW_MASK_WORDS], any = 0;
             for (uint32_t w = 0; w < m->tile_words; w++) any |= draw[w] = need[w] & ~valid[w];
             if (!any) continue;
-            rs_pass pass = {.view_proj = m->view_proj[f], .cull = RS_CULL_NONE};
-            rs_target target = {.width = m->size, .height = m->size, .depth = rs_shadow_map_face(m, f)};
-            rs_stats s;
-            drawn += rs_render_tiles(ctx, &pass, &target, draw, &s);
-            if (stats) rs__stats_add(stats, &s);
+            drawn += rs__face_tiles(ctx, m, f, draw, stats);
             for (uint32_t w = 0; w < m->tile_words; w++) valid[w] |= draw[w];
         }
     }
@@ -328,11 +336,7 @@ uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t cou
                     tex += (uint64_t)(w < RS_TILE ? w : RS_TILE) * (h < RS_TILE ? h : RS_TILE);
                 }
             if (!tex) continue;
-            rs_pass pass = {.view_proj = m->view_proj[f], .cull = RS_CULL_NONE};
-            rs_target target = {.width = m->size, .height = m->size, .depth = rs_shadow_map_face(m, f)};
-            rs_stats s;
-            rs_render_tiles(ctx, &pass, &target, draw, &s);
-            if (stats) rs__stats_add(stats, &s);
+            rs__face_tiles(ctx, m, f, draw, stats);
             if (texels) *texels += tex;
             faces++;
         }

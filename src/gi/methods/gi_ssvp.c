@@ -102,10 +102,13 @@
  *   (beyond the paper) traces each sample from a member VPL instead of
  *   the centroid, the unbiased second bounce the cluster model
  *   approximates.
- * - The frame's VPL budget (--vpls) caps first + second; with the defaults
- *   (256 + 256) and a smaller budget the two counts are halved to fit
- *   (--vpls 512 gives the paper's configuration); counts given with --param
- *   that exceed the budget are an error.
+ * - The frame's VPL budget (--vpls) caps first + second. Left at their
+ *   defaults, the two counts follow the budget: half each (--vpls 512 gives
+ *   the paper's 256 + 256, the default --vpls 256 128 + 128, and a VPL
+ *   cycle's C x 256 budget C x 128 each, so its C slices are C different
+ *   sets), the whole budget for the first bounce with --bounces 1. A count
+ *   given with --param keeps its value and the other its paper default
+ *   (256); counts that then exceed the budget are an error.
  *
  * VPL ids: first bounce k (the Hammersley index), second bounce
  * 0x80000000 | cluster << 16 | sample. Moved flags compare with the previous
@@ -154,7 +157,8 @@ typedef struct gi__ssvp_state {
     uint32_t last_iterations; /* k-means iterations of the last frame */
     uint32_t maps_rendered;   /* cluster maps rendered in the last frame */
     gi__ssvp_map map[GI__SSVP_MAX_CLUSTERS];
-    /* first-bounce VPLs of this frame (cap = first) */
+    /* first-bounce VPLs of this frame (room for fcap) */
+    uint32_t fcap;
     pf_vec3 *fpos, *fnrm;
     uint32_t *assign;
     float *kscratch;       /* k-means seeding */
@@ -166,6 +170,29 @@ typedef struct gi__ssvp_state {
 } gi__ssvp_state;
 
 /* --------------------------------------------------------------- options */
+
+/* Room for n first-bounce VPLs in fpos, fnrm, assign and kscratch (grown,
+ * never shrunk; a default count follows the frame's budget). 0: out of
+ * memory, the old arrays kept. */
+static int gi__ssvp_first_room(gi__ssvp_state *s, uint32_t n)
+{
+    if (n <= s->fcap) return 1;
+    pf_vec3 *p = realloc(s->fpos, sizeof(pf_vec3) * n);
+    if (p) s->fpos = p;
+    pf_vec3 *q = realloc(s->fnrm, sizeof(pf_vec3) * n);
+    if (q) s->fnrm = q;
+    uint32_t *a = realloc(s->assign, sizeof(uint32_t) * n);
+    if (a) s->assign = a;
+    float *k = realloc(s->kscratch, sizeof(float) * n);
+    if (k) s->kscratch = k;
+    if (!p || !q || !a || !k) return 0;
+    memset(s->fpos + s->fcap, 0, sizeof(pf_vec3) * (n - s->fcap));
+    memset(s->fnrm + s->fcap, 0, sizeof(pf_vec3) * (n - s->fcap));
+    memset(s->assign + s->fcap, 0, sizeof(uint32_t) * (n - s->fcap));
+    memset(s->kscratch + s->fcap, 0, sizeof(float) * (n - s->fcap));
+    s->fcap = n;
+    return 1;
+}
 
 static void gi__ssvp_destroy(void *state)
 {
@@ -224,13 +251,9 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     }
     s->first_set = gi__has(params, "first");
     s->second_set = gi__has(params, "second");
-    s->fpos = calloc(s->first, sizeof(pf_vec3));
-    s->fnrm = calloc(s->first, sizeof(pf_vec3));
-    s->assign = calloc(s->first, sizeof(uint32_t));
-    s->kscratch = calloc(s->first, sizeof(float));
     gi_rsm_set_init(&s->rsm, s->rsm_res);
     s->rsm.area_points = s->area_points;
-    if (!s->fpos || !s->fnrm || !s->assign || !s->kscratch) {
+    if (!gi__ssvp_first_room(s, s->first)) {
         gi__ssvp_destroy(s);
         return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     }
@@ -581,19 +604,23 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
     gi__ssvp_state *s = state;
     out->count = 0;
     uint32_t n1 = s->first, n2 = in->bounces == 1 ? 0 : s->second;
+    if (!s->first_set && !s->second_set) { /* defaults: the budget, half each (256 + 256 at --vpls 512) */
+        uint32_t b = in->budget < 2u * GI__SSVP_MAX_SAMPLES ? in->budget : 2u * GI__SSVP_MAX_SAMPLES;
+        n1 = n2 ? b / 2 : b;
+        if (n1 > GI__SSVP_MAX_SAMPLES) n1 = GI__SSVP_MAX_SAMPLES;
+        if (!n1) n1 = 1;
+        if (n2) n2 = b > n1 ? b - n1 : 0;
+    }
     if (n1 + n2 > in->budget) {
         if (s->first_set || (s->second_set && n2))
             return pf_error_set(err, PF_ERR_ARGUMENT,
                                 "--method ssvp: first=%u + second=%u VPLs exceed the VPL budget --vpls %u", n1, n2,
                                 in->budget);
-        /* defaults: halve to fit (--vpls 512 gives the paper's 256 + 256) */
-        if (n2) {
-            n1 = in->budget / 2 ? in->budget / 2 : 1;
-            n2 = in->budget - n1;
-        } else {
-            n1 = in->budget;
-        }
+        /* left: no second bounce (second=0 or --bounces 1) and the default
+         * first bounce, which fits itself to the budget */
+        n1 = in->budget;
     }
+    if (!gi__ssvp_first_room(s, n1)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     pf_result r = gi_vpl_set_reserve(out, n1 + n2 ? n1 + n2 : 1, err);
     if (r != PF_OK) return r;
     s->maps_rendered = 0;
@@ -642,7 +669,7 @@ static int gi__ssvp_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *r
     for (uint32_t k = 0; k < s->clusters; k++) nf += s->members[k], nonempty += s->members[k] > 0;
     float x, y;
     uint8_t col[3];
-    for (uint32_t i = 0; i < nf && i < s->first; i++) {
+    for (uint32_t i = 0; i < nf && i < s->fcap; i++) {
         if (!c->project(c, s->fpos[i], &x, &y) || !c->visible(c, s->fpos[i])) continue;
         c->palette(s->assign[i], col);
         c->fill(c, rgb, (int)floorf(x) - 1, (int)floorf(y) - 1, 3, 3, col);

@@ -295,12 +295,13 @@ static void test_one_sample_is_today(void **state)
     (void)state;
     /* docs/architecture.md's goldens ("Determinism"): --aa 1 is the image
      * without anti-aliasing (changed since it came only by the paraboloid
-     * maps' receiver-plane test, in the default and --raytrace rows) */
-    expect_hash("render --size 160x120 --isa sse2 --hash -q --aa 1", "hash 938bda8e12a15dde");
+     * maps' receiver-plane test and the filter's tangent-plane test, in the
+     * default and --raytrace rows) */
+    expect_hash("render --size 160x120 --isa sse2 --hash -q --aa 1", "hash a75db235fa702a56");
     expect_hash("render --size 160x120 --isa sse2 --hash -q --aa 1 --direct-only",
                 "hash 65ccd5c418f10077");
     expect_hash("render --size 160x120 --isa sse2 --hash -q --aa 1 --raytrace",
-                "hash 8d923868884c3cdb");
+                "hash f4d2ea7cafc8f099");
 }
 
 /* ---------------------------------------------------------------- 4. determinism */

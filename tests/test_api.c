@@ -143,7 +143,7 @@ static void test_bad_desc(void **state)
         {{.vpls = (1u << 20) + 1}, SOFTGI_ERR_ARGUMENT, "vpls 1048577"},
         {{.bounces = 65}, SOFTGI_ERR_ARGUMENT, "bounces 65"},
         {{.max_memory = 1000}, SOFTGI_ERR_ARGUMENT, "at least 64 MiB"},
-        {{.flags = 64}, SOFTGI_ERR_ARGUMENT, "unknown bits"},
+        {{.flags = 128}, SOFTGI_ERR_ARGUMENT, "unknown bits"},
         {{.flags = SOFTGI_DIRECT_ONLY | SOFTGI_INDIRECT_ONLY}, SOFTGI_ERR_ARGUMENT, "exclude each other"},
         {{.method = "nosuch"}, SOFTGI_ERR_ARGUMENT, "method 'nosuch': softgi knows ir"},
         {{.isa = "avx9"}, SOFTGI_ERR_ARGUMENT, "avx9"},
@@ -178,7 +178,7 @@ static void test_bad_desc(void **state)
         {{.vpl_cycle = 65}, SOFTGI_ERR_ARGUMENT, "vpl_cycle 65"},
         {{.aa = 257}, SOFTGI_ERR_ARGUMENT, "aa 257: must be 1..256"},
         {{.taa = 1}, SOFTGI_ERR_ARGUMENT, "taa 1: must be 2..256"},
-        {{.flags = 64}, SOFTGI_ERR_ARGUMENT, "flags 0x40"},
+        {{.flags = 128}, SOFTGI_ERR_ARGUMENT, "flags 0x80"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         softgi_error err;
@@ -413,6 +413,7 @@ static void test_same_as_cli_frame_options(void **state)
         {{.temporal = 4}, "--temporal 4"},
         {{.temporal = 4, .vpl_cycle = 4}, "--temporal 4 --vpl-cycle 4"},
         {{.flags = SOFTGI_COMPENSATE}, "--compensate on"},
+        {{.flags = SOFTGI_FILTER_DISTANCE}, "--filter-test distance"},
         {{.flags = SOFTGI_PIPELINE, .method = "iir"}, "--pipeline on --method iir"},
         {{.aa = 4}, "--aa 4"},
         {{.aa = 2, .flags = SOFTGI_RAYTRACE}, "--aa 2 --raytrace"},

@@ -56,6 +56,7 @@ typedef struct syn {
     uint32_t w, h;
     rs_gbuffer g;
     float *combined, *scratch, *out;
+    float cap2; /* the box's position test (gi_atrous_io.cap2): 0 Laine's distance test */
 } syn;
 
 static uint32_t hash32(uint32_t x)
@@ -71,6 +72,7 @@ static void syn_make(syn *s, uint32_t w, uint32_t h, int kind, float noise)
 {
     pf_error err;
     s->w = w, s->h = h;
+    s->cap2 = 0.0f;
     assert_int_equal(rs_gbuffer_init(&s->g, w, h, &err), PF_OK);
     size_t px = (size_t)w * h;
     s->combined = calloc(3 * px, sizeof(float));
@@ -106,8 +108,8 @@ static void syn_run(syn *s, uint32_t threads, const gi_indirect_kernels *kt)
 {
     pf_jobs *jobs = pf_jobs_create(threads);
     assert_non_null(jobs);
-    gi_atrous_io io = {s->combined, &s->g, s->w, s->h, 4, 4, 0.05f * 0.05f, 0.8f, {0, 0, 0.02f}, s->scratch, kt,
-                       s->out};
+    gi_atrous_io io = {s->combined, &s->g, s->w, s->h,  4,      4,     0.05f * 0.05f, 0.8f, {0, 0, 0.02f},
+                       s->scratch, kt,   s->out, s->cap2};
     gi_atrous_run(jobs, &io);
     pf_jobs_destroy(jobs);
 }
@@ -160,14 +162,16 @@ static void test_noise_reduced(void **state)
 /* Every path and thread count gives the scalar path's bytes: at 203 x 97
  * (SIMD runs, the overlapping last run, scalar ends) and 21 x 9 (rows too
  * short for a run at the wider holes). */
-static void identical_at(uint32_t w, uint32_t h)
+static void identical_at(uint32_t w, uint32_t h, float cap2)
 {
     syn a;
     syn_make(&a, w, h, 2, 0.6f);
+    a.cap2 = cap2;
     syn_run(&a, 1, NULL);
     const size_t bytes = (size_t)a.w * a.h * 3 * sizeof(float);
     syn b;
     syn_make(&b, w, h, 2, 0.6f);
+    b.cap2 = cap2;
     syn_run(&b, 2, NULL);
     assert_memory_equal(a.out, b.out, bytes);
     pf_isa isa = pf_isa_detect();
@@ -192,17 +196,21 @@ static void identical_at(uint32_t w, uint32_t h)
 static void test_identical(void **state)
 {
     (void)state;
-    identical_at(203, 97);
-    identical_at(21, 9);
+    identical_at(203, 97, 0.0f);
+    identical_at(21, 9, 0.0f);
+    /* the tangent-plane test (the frame's default) */
+    identical_at(203, 97, 16.0f * 0.05f * 0.05f);
+    identical_at(21, 9, 16.0f * 0.05f * 0.05f);
 }
 
-static void render(tu_fx *x, gi_filter_kind filter, rs_simd simd)
+static void render(tu_fx *x, gi_filter_kind filter, int distance_test, rs_simd simd)
 {
     tu_load(&x->scene, CORNELL);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.vpls = 256;
     io.filter = filter;
+    io.filter_distance = distance_test;
     tu_fx_begin(x, 2, simd, 160, 120, &x->scene.cameras[0], &io, 1);
     gi_frame_render_raster(&x->f);
 }
@@ -227,19 +235,29 @@ static double roughness(const tu_fx *x)
 static void test_cornell(void **state)
 {
     (void)state;
-    tu_fx box, at;
-    render(&box, GI_FILTER_BOX, RS_SIMD_SCALAR);
-    render(&at, GI_FILTER_ATROUS, RS_SIMD_SCALAR);
-    double eb = 0, ea = 0;
-    for (size_t i = 0; i < (size_t)160 * 120 * 3; i++) eb += box.f.ind.filtered[i], ea += at.f.ind.filtered[i];
-    double rb = roughness(&box), ra = roughness(&at);
-    print_message("Cornell box, a-trous against box: energy %.4f, roughness %.4f -> %.4f\n", ea / eb, rb, ra);
+    tu_fx box, at, laine;
+    render(&box, GI_FILTER_BOX, 0, RS_SIMD_SCALAR);
+    render(&at, GI_FILTER_ATROUS, 0, RS_SIMD_SCALAR);
+    render(&laine, GI_FILTER_BOX, 1, RS_SIMD_SCALAR);
+    double eb = 0, ea = 0, el = 0;
+    for (size_t i = 0; i < (size_t)160 * 120 * 3; i++)
+        eb += box.f.ind.filtered[i], ea += at.f.ind.filtered[i], el += laine.f.ind.filtered[i];
+    double rb = roughness(&box), ra = roughness(&at), rl = roughness(&laine);
+    print_message("Cornell box: energy a-trous / box %.4f, box / Laine's box %.4f; roughness Laine's box %.4f, "
+                  "box (tangent-plane test) %.4f, a-trous %.4f\n",
+                  ea / eb, eb / el, rl, rb, ra);
     assert_true(fabs(ea / eb - 1.0) < 0.02);
-    assert_true(ra < 0.5 * rb);
+    assert_true(fabs(eb / el - 1.0) < 0.02);
+    /* the plane test keeps the windows whole on the walls and faces seen at a grazing angle, whose stripes
+     * the distance test left; the a-trous levels halve what is left of Laine's box */
+    assert_true(rb < 0.85 * rl);
+    assert_true(ra < 0.5 * rl);
+    assert_true(ra < 0.8 * rb);
+    tu_fx_end(&laine);
     /* the frame's SIMD path gives the same image */
     if (pf_isa_detect() >= PF_ISA_AVX512) {
         tu_fx v;
-        render(&v, GI_FILTER_ATROUS, RS_SIMD_AVX512);
+        render(&v, GI_FILTER_ATROUS, 0, RS_SIMD_AVX512);
         assert_memory_equal(v.f.final, at.f.final, (size_t)160 * 120 * 3 * sizeof(float));
         tu_fx_end(&v);
     }

@@ -184,7 +184,7 @@ static const struct {
     {"--area-points", "4", {0}},       {"--indirect-only", NULL, {0}},   {"--direct-only", NULL, {0}},
     {"--vpls", "8", {0}},              {"--method", "ir", {0}},          {"--bounces", "1", {0}},
     {"--tiles", "2x2", {0}},           {"--no-interleave", NULL, {0}},   {"--clamp", "1", {0}},
-    {"--filter", "box", {0}},          {"--visibility", "raytrace", {0}}, {"--ism-res", "64", {0}},
+    {"--filter", "box", {0}}, {"--filter-test", "distance", {0}},          {"--visibility", "raytrace", {0}}, {"--ism-res", "64", {0}},
     {"--ism-points", "1000", {0}},     {"--ism-bias", "2", {0}},         {"--para-lod", "4", {0}},         {"--param", "a=1", {0}},
     {"--dump-stages", "d", {0}},       {"--dump-format", "exr", {"--dump-stages", "d"}},
     {"--pipeline", "on", {0}},         {"--indirect-scale", "2", {0}}, {"--temporal", "4", {0}},

@@ -32,7 +32,7 @@
  * existed (commit b000459, c0e3866d3f782e79), changed since only by the
  * paraboloid maps' receiver-plane test (2026-12-03, docs/frame.md): a
  * scene with a camera and lights must not change with the defaults. */
-#define GOLDEN_CLI_CORNELL_SSE2 0x938bda8e12a15ddeull
+#define GOLDEN_CLI_CORNELL_SSE2 0xa75db235fa702a56ull
 
 static char g_tmp[256];
 

@@ -94,6 +94,9 @@ const char *softgi_method_names(void);
                                    frame is the same either way, later frames differ */
 #define SOFTGI_COMPENSATE 32u   /* screen-space compensation of the energy the clamp removes
                                    (--compensate on) */
+#define SOFTGI_FILTER_DISTANCE 64u /* the filter's position test as Laine 2007, |p2 - p| < alpha, instead
+                                      of the distance from the pixel's tangent plane
+                                      (--filter-test distance) */
 
 /* softgi_desc.clamp: no bounded geometry term (--clamp 0). */
 #define SOFTGI_CLAMP_OFF (-1.0f)
@@ -121,7 +124,7 @@ typedef struct softgi_desc {
                                   at most 32; copied by softgi_create */
     uint32_t param_count;
     uint32_t flags;         /* SOFTGI_DIRECT_ONLY, SOFTGI_INDIRECT_ONLY, SOFTGI_RAYTRACE, SOFTGI_NO_INTERLEAVE,
-                               SOFTGI_PIPELINE, SOFTGI_COMPENSATE */
+                               SOFTGI_PIPELINE, SOFTGI_COMPENSATE, SOFTGI_FILTER_DISTANCE */
     /* the direct light */
     uint32_t shadow_size;   /* shadow-map texels per side, 16..8192; 0: 1024 (--shadow-size) */
     uint32_t area_strata;   /* ray-traced area lights: N x N samples a pixel, 1..16; 0: 4 (--area-strata) */

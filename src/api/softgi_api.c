@@ -73,7 +73,7 @@ _Static_assert(sizeof(((softgi_error *)0)->message) == sizeof(((pf_error *)0)->m
 #define API__MIN_MEMORY (64ull << 20)
 #define API__FLAGS                                                                                                    \
     (SOFTGI_DIRECT_ONLY | SOFTGI_INDIRECT_ONLY | SOFTGI_RAYTRACE | SOFTGI_NO_INTERLEAVE | SOFTGI_PIPELINE |          \
-     SOFTGI_COMPENSATE)
+     SOFTGI_COMPENSATE | SOFTGI_FILTER_DISTANCE)
 
 struct softgi_context {
     /* options (softgi_create): the description with every pointer into

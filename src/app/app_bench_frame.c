@@ -735,6 +735,7 @@ static pf_result bf__check_options(const pf_options *o, pf_error *err)
         return pf_error_set(err, PF_ERR_ARGUMENT,
                             "bench frame: %s does not apply (it takes --threads, --frames, --scenes, --isa, --vpls, "
                             "--tiles, --method, --param, --visibility, --pipeline, --moving-light, --shadow-size, --filter, "
+                            "--filter-test, "
                             "--aa, --taa)",
                             bad);
     /* the method and its parameters now, before minutes of scene loading */

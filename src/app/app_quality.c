@@ -30,9 +30,11 @@
  * this process with the frame `softgi render` builds (options parsed by
  * pf_cli as render's), among them:
  *   paper:    the method's paper defaults (--vpls VPLs, 4x4 interleaved
- *             tiles, box filter, clamp 400, paraboloid maps with the papers'
+ *             tiles, Laine's box filter with its distance test, --filter-test
+ *             distance, clamp 400, paraboloid maps with the papers'
  *             slope-scaled bias, --visibility paraboloid-slope);
- *   softgi:   today's defaults: the receiver-plane test and --compensate on
+ *   softgi:   today's defaults: the receiver-plane test, the filter's
+ *             tangent-plane test and --compensate on
  *             (the clamp's energy added back; docs/frame.md "Beyond the
  *             papers");
  *   temporal: softgi's setting with --temporal 16 on a static view, frame 15
@@ -259,9 +261,11 @@ static pf_result qu__options(qu__run *run, const qu__config *c, pf_options *o, p
                 qu__push(&v, a->params[i]);
             }
         }
-        if (c->setting == QU_PAPER) { /* the papers' shadow-map test: a slope-scaled bias */
+        if (c->setting == QU_PAPER) { /* the papers' shadow-map test (a slope-scaled bias) and filter test */
             qu__push(&v, "--visibility");
             qu__push(&v, "paraboloid-slope");
+            qu__push(&v, "--filter-test");
+            qu__push(&v, "distance");
         } else {
             qu__push(&v, "--compensate");
             qu__push(&v, "on");
@@ -756,10 +760,12 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
                 "([evaluation.md](../evaluation.md#the-reference-path-tracer-and-the-metrics)), so its own noise "
                 "is the figure given below.\n\n",
                 a->vpls ? a->vpls : "256", spp, proxy_vpls);
-        fprintf(d, "Settings: **paper**: each method's paper defaults (4x4 interleaved tiles, box filter, clamp 400, "
-                   "paraboloid maps with the papers' slope-scaled bias, `--visibility paraboloid-slope`); "
-                   "**softgi**: today's defaults, the same with the maps' receiver-plane test and `--compensate on` "
-                   "([frame.md](../frame.md#paraboloid-lookup-the-receiver-plane-test)); **temporal**: softgi's with "
+        fprintf(d, "Settings: **paper**: each method's paper defaults (4x4 interleaved tiles, Laine's box filter "
+                   "with its distance test `--filter-test distance`, clamp 400, paraboloid maps with the papers' "
+                   "slope-scaled bias, `--visibility paraboloid-slope`); **softgi**: today's defaults, the same with "
+                   "the maps' receiver-plane test ([frame.md](../frame.md#paraboloid-lookup-the-receiver-plane-test)), "
+                   "the filter's tangent-plane test ([frame.md](../frame.md#the-filters-tangent-plane-test)) and "
+                   "`--compensate on`; **temporal**: softgi's with "
                    "`--temporal 16`, frame 15 of 16 identical frames; **atrous**: softgi's with `--filter atrous` "
                    "(Laine's box, then variance-guided a-trous levels); **atrous+temporal**: both; **cycle**: "
                    "temporal's with `--vpl-cycle 16`, a set of 16 x --vpls VPLs, each frame shading one slice of "

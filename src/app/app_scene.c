@@ -70,7 +70,7 @@ pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_
     d->flags = (o->direct_only ? SOFTGI_DIRECT_ONLY : 0u) | (o->indirect_only ? SOFTGI_INDIRECT_ONLY : 0u) |
                (o->raytrace ? SOFTGI_RAYTRACE : 0u) | (o->no_interleave ? SOFTGI_NO_INTERLEAVE : 0u) |
                (o->pipeline == 1 ? SOFTGI_PIPELINE : 0u) /* default off for every command */ |
-               (o->compensate ? SOFTGI_COMPENSATE : 0u);
+               (o->compensate ? SOFTGI_COMPENSATE : 0u) | (o->filter_distance ? SOFTGI_FILTER_DISTANCE : 0u);
     d->shadow_size = o->shadow_size;
     d->area_strata = o->area_strata;
     d->area_points = o->area_points;

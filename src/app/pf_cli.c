@@ -25,7 +25,7 @@ typedef enum pf__opt_id {
     PF__OPT_OUTPUT, PF__OPT_HDR, PF__OPT_SIZE, PF__OPT_THREADS, PF__OPT_ISA, PF__OPT_EXPOSURE, PF__OPT_CAMERA,
     PF__OPT_LIGHT, PF__OPT_SHADOW_SIZE, PF__OPT_MAX_MEMORY, PF__OPT_AREA_STRATA, PF__OPT_AREA_POINTS,
     PF__OPT_INDIRECT_ONLY, PF__OPT_DIRECT_ONLY, PF__OPT_VPLS, PF__OPT_METHOD, PF__OPT_BOUNCES, PF__OPT_TILES,
-    PF__OPT_NO_INTERLEAVE, PF__OPT_CLAMP, PF__OPT_FILTER, PF__OPT_VISIBILITY, PF__OPT_ISM_RES, PF__OPT_ISM_POINTS,
+    PF__OPT_NO_INTERLEAVE, PF__OPT_CLAMP, PF__OPT_FILTER, PF__OPT_FILTER_TEST, PF__OPT_VISIBILITY, PF__OPT_ISM_RES, PF__OPT_ISM_POINTS,
     PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_MOVING_OBJECT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
@@ -124,6 +124,10 @@ static const pf__opt k_options[] = {
     {PF__OPT_FILTER, "--filter", NULL, "box|bilateral|gaussian|atrous|none", FRAME | BF,
      "indirect-light filter (default box, Laine 2007 Fig. 5;\ngaussian: Aranha SSVP Sec. III-D edge-aware Gaussian;\n"
      "atrous: the box, then variance-guided a-trous levels,\nDammertz 2010 and SVGF 2017; docs/frame.md)",
+     NULL},
+    {PF__OPT_FILTER_TEST, "--filter-test", NULL, "plane|distance", FRAME | BF,
+     "the filter's position test: a neighbour's distance from the\npixel's tangent plane under alpha (the default; "
+     "beyond the\npaper), or Laine 2007's |p2 - p| < alpha (distance); docs/frame.md",
      NULL},
     {PF__OPT_VISIBILITY, "--visibility", NULL, "paraboloid|paraboloid-slope|ism|raytrace", FRAME | BF,
      "VPL visibility (default: exact paraboloid maps with the\nreceiver-plane test; paraboloid-slope: the same maps "
@@ -647,6 +651,11 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         if (pf__choice(val, "box|bilateral|gaussian|atrous|none") < 0)
             r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter '%s': expected box, bilateral, gaussian, atrous or none",
                              val);
+        break;
+    case PF__OPT_FILTER_TEST:
+        k = pf__choice(val, "plane|distance");
+        if (k < 0) r = pf_error_set(err, PF_ERR_ARGUMENT, "--filter-test '%s': expected plane or distance", val);
+        o->filter_distance = k == 1;
         break;
     case PF__OPT_VISIBILITY:
         k = pf__choice(val, "paraboloid|ism|raytrace|paraboloid-slope");

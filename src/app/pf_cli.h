@@ -91,6 +91,7 @@ typedef struct pf_options {
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     uint32_t vpl_cycle;      /* --vpl-cycle C: C slices of VPLs shaded in turn (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
+    int filter_distance;     /* --filter-test distance: Laine's |p2 - p| < alpha instead of the plane test */
     int no_light_paths;      /* reference --light-paths off: NEE alone */
     uint32_t aa;             /* --aa N: jittered samples per pixel (0: 1, the pixel centres; gi_aa.h) */
     uint32_t taa;            /* --taa N: temporal anti-aliasing over up to N frames (0: off) */

@@ -42,7 +42,8 @@ static void gi__atrous_box_pixel(const gi_filter_in *in, int x, int y, const gi_
                 float ddx = g->pos_x[j] - px, ddy = g->pos_y[j] - py, ddz = g->pos_z[j] - pz;
                 float d2 = ddx * ddx + ddy * ddy + ddz * ddz;
                 float nd = nx * g->nrm_x[j] + ny * g->nrm_y[j] + nz * g->nrm_z[j];
-                if (!(d2 < in->alpha2 && nd > in->beta)) continue;
+                float dp = ddx * nx + ddy * ny + ddz * nz; /* the SIMD path's order */
+                if (!(gi_filter_near(in, d2, dp * dp) && nd > in->beta)) continue;
                 const float *e = in->combined + 3 * j;
                 float l = gi_atrous_lum(e[0], e[1], e[2]);
                 ar += e[0], ag += e[1], ab += e[2];
@@ -231,7 +232,7 @@ void gi_atrous_run(pf_jobs *jobs, const gi_atrous_io *io)
     gi__atrous_pass ps;
     memset(&ps, 0, sizeof ps);
     ps.io = io;
-    ps.box = (gi_filter_in){io->combined, io->g, io->w, io->h, io->n, io->m, io->alpha2, io->beta};
+    ps.box = (gi_filter_in){io->combined, io->g, io->w, io->h, io->n, io->m, io->alpha2, io->beta, io->cap2};
     ps.lv.g = io->g;
     ps.lv.w = io->w, ps.lv.h = io->h;
     ps.lv.inv_sd = io->scratch + 10 * px;

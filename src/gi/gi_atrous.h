@@ -63,6 +63,8 @@ typedef struct gi_atrous_io {
     float *scratch;
     const struct gi_indirect_kernels *kt; /* the SIMD path's kernels, NULL on the scalar path */
     float *out;              /* FILTERED (or filtered_low), 3 floats a pixel */
+    float cap2;              /* the box's position test: 0 Laine's distance test, > 0 the tangent-plane
+                                test within |p_j - p|^2 < cap2 (gi_filter_in.cap2) */
 } gi_atrous_io;
 
 /* Floats of scratch the filter needs for w x h pixels. */

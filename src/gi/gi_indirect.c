@@ -975,23 +975,27 @@ void gi_stage_compensate(gi_frame *f)
 /* ---------------------------------------------------------- 9. filter */
 
 
-/* The weight of the neighbour at (dx, dy) pixels, squared distance d2 and
- * normal cosine nd; 0 leaves it out.
- *   box (Laine 2007 Fig. 5): 1 where |p2 - p| < alpha and n2 . n > beta;
+/* The weight of the neighbour at (dx, dy) pixels, squared distance d2,
+ * squared distance from the pixel's tangent plane dp2 and normal cosine nd;
+ * 0 leaves it out.
+ *   box (Laine 2007 Fig. 5): 1 where |p2 - p| < alpha (gi_filter_near) and
+ *     n2 . n > beta;
  *   gaussian (Aranha, SSVP Sec. III-D, "an edge-aware gaussian blur"; the
  *     paper gives no kernel): the same edge tests, times a Gaussian of
  *     sigma = max(n, m) / 2 pixels;
  *   bilateral (Hedman 2017 Sec. 4): a Gaussian of sigma = max(n, m) / 2
  *     pixels times a Gaussian in position (sigma = alpha / 2) times
  *     (n2 . n)^8. */
-static float gi__filter_weight(const gi_filter_in *in, gi_filter_kind kind, int dx, int dy, float d2, float nd)
+static float gi__filter_weight(const gi_filter_in *in, gi_filter_kind kind, int dx, int dy, float d2, float dp2,
+                               float nd)
 {
     const int n = (int)in->n, m = (int)in->m;
     const float a2 = in->alpha2, beta = in->beta;
-    if (kind == GI_FILTER_BOX) return d2 < a2 && nd > beta ? 1.0f : 0.0f;
+    if (kind == GI_FILTER_BOX) return gi_filter_near(in, d2, dp2) && nd > beta ? 1.0f : 0.0f;
     if (kind == GI_FILTER_GAUSSIAN) {
         float sg = 0.5f * (float)(n > m ? n : m);
-        return d2 < a2 && nd > beta ? expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg)) : 0.0f;
+        return gi_filter_near(in, d2, dp2) && nd > beta ? expf(-(float)(dx * dx + dy * dy) / (2.0f * sg * sg))
+                                                         : 0.0f;
     }
     if (!(nd > 0.0f)) return 0.0f;
     float ss = 0.5f * (float)(n > m ? n : m), sp2 = 0.25f * a2;
@@ -1051,7 +1055,8 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
                 if (g->prim[j] == RS_GBUFFER_EMPTY) continue;
                 pf_vec3 d = pf_v3_sub(pf_v3(g->pos_x[j], g->pos_y[j], g->pos_z[j]), pos);
                 float nd = nrm.x * g->nrm_x[j] + nrm.y * g->nrm_y[j] + nrm.z * g->nrm_z[j];
-                float w = gi__filter_weight(in, io->kind, dx, dy, pf_v3_dot(d, d), nd);
+                float dp = pf_v3_dot(d, nrm); /* the SIMD path's order: d.x n.x + d.y n.y + d.z n.z */
+                float w = gi__filter_weight(in, io->kind, dx, dy, pf_v3_dot(d, d), dp * dp, nd);
                 if (!(w > 0.0f)) continue;
                 const float *e = in->combined + 3 * j;
                 acc[0] += w * e[0], acc[1] += w * e[1], acc[2] += w * e[2];
@@ -1062,19 +1067,26 @@ static void gi__filter_row(void *p, uint32_t y, uint32_t worker)
     }
 }
 
+/* gi_filter_in.cap2: 0 for Laine's distance test, else the plane test's reach */
+static float gi__filter_cap2(const gi_indirect *ind)
+{
+    return ind->opt.filter_distance ? 0.0f : GI_FILTER_PLANE_CAP * GI_FILTER_PLANE_CAP * ind->alpha * ind->alpha;
+}
+
 void gi_stage_filter(gi_frame *f)
 {
     const gi_indirect *ind = &f->ind;
     if (ind->opt.filter == GI_FILTER_ATROUS) {
         gi_atrous_io a = {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m,
                           ind->alpha * ind->alpha, ind->opt.beta, ind->opt.atrous, ind->atrous_scratch,
-                          gi__kernels(f), ind->scale > 1 ? ind->filtered_low : ind->filtered};
+                          gi__kernels(f), ind->scale > 1 ? ind->filtered_low : ind->filtered, gi__filter_cap2(ind)};
         if (!(a.par.sigma_p > 0.0f)) a.par.sigma_p = 0.25f * ind->alpha;
         gi_atrous_run(f->jobs, &a);
         return;
     }
     const gi__filter_io io = {
-        {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta},
+        {ind->combined, gi__indirect_gbuffer(f), ind->w, ind->h, ind->n, ind->m, ind->alpha * ind->alpha, ind->opt.beta,
+         gi__filter_cap2(ind)},
         ind->opt.filter,
         gi__kernels(f),
         ind->scale > 1 ? ind->filtered_low : ind->filtered};

@@ -89,9 +89,11 @@ static void gi__accumulate(const gi_accumulate_in *in, const float *px_, const f
 }
 
 /* Laine's box test (Fig. 5) of the window pixels j.. against the run's
- * pixels: a surface, |p_j - p|^2 < alpha^2 and n_j . n > beta. */
+ * pixels: a surface, |p_j - p|^2 < alpha^2 and n_j . n > beta; with cap2 > 0
+ * the tangent-plane test in place of the distance one, (n . (p_j - p))^2 <
+ * alpha^2 and |p_j - p|^2 < cap2 (gi_filter_near). */
 static simd_mask gi__laine_take(const rs_gbuffer *g, size_t j, simd_f px, simd_f py, simd_f pz, simd_f nx, simd_f ny,
-                                simd_f nz, simd_f a2, simd_f beta, simd_i empty)
+                                simd_f nz, simd_f a2, simd_f beta, float cap2, simd_i empty)
 {
     simd_mask valid = simd_mask_not(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + j)), empty));
     simd_f ddx = simd_sub_f(simd_loadu_f(g->pos_x + j), px);
@@ -99,7 +101,14 @@ static simd_mask gi__laine_take(const rs_gbuffer *g, size_t j, simd_f px, simd_f
     simd_f ddz = simd_sub_f(simd_loadu_f(g->pos_z + j), pz);
     simd_f d2 = gi__dot3(ddx, ddy, ddz, ddx, ddy, ddz);
     simd_f nd = gi__dot3(nx, ny, nz, simd_loadu_f(g->nrm_x + j), simd_loadu_f(g->nrm_y + j), simd_loadu_f(g->nrm_z + j));
-    return simd_mask_and(valid, simd_mask_and(simd_lt_f(d2, a2), simd_gt_f(nd, beta)));
+    simd_mask near;
+    if (cap2 > 0.0f) {
+        simd_f dp = gi__dot3(ddx, ddy, ddz, nx, ny, nz);
+        near = simd_mask_and(simd_lt_f(simd_mul_f(dp, dp), a2), simd_lt_f(d2, simd_set1_f(cap2)));
+    } else {
+        near = simd_lt_f(d2, a2);
+    }
+    return simd_mask_and(valid, simd_mask_and(near, simd_gt_f(nd, beta)));
 }
 
 static void gi__filter_box(const gi_filter_in *in, int x, int y, float *out)
@@ -118,7 +127,7 @@ static void gi__filter_box(const gi_filter_in *in, int x, int y, float *out)
         if (ty < 0 || ty >= H) continue;
         for (int dx = 0; dx < n; dx++) {
             size_t j = (size_t)ty * in->w + (size_t)(x + dx - n / 2);
-            simd_mask take = gi__laine_take(g, j, px, py, pz, nx, ny, nz, a2, beta, empty);
+            simd_mask take = gi__laine_take(g, j, px, py, pz, nx, ny, nz, a2, beta, in->cap2, empty);
             simd_f er, eg, eb; /* the run's RGB triples, de-interleaved */
             simd_load3_f(in->combined + 3 * j, &er, &eg, &eb);
             ar = simd_add_f(ar, simd_select_f(take, er, zero));
@@ -219,7 +228,7 @@ static void gi__atrous_box(const gi_filter_in *in, int x, int y, const gi_atrous
         if (ty < 0 || ty >= H) continue;
         for (int dx = 0; dx < n; dx++) {
             size_t j = (size_t)ty * in->w + (size_t)(x + dx - n / 2);
-            simd_mask take = gi__laine_take(g, j, px, py, pz, nx, ny, nz, a2, beta, empty);
+            simd_mask take = gi__laine_take(g, j, px, py, pz, nx, ny, nz, a2, beta, in->cap2, empty);
             simd_f er, eg, eb;
             simd_load3_f(in->combined + 3 * j, &er, &eg, &eb);
             simd_f l = gi__dot3(lr, lg, lb, er, eg, eb);

@@ -34,7 +34,24 @@ typedef struct gi_filter_in {
     const rs_gbuffer *g;     /* GBUFFER (the reduced one with --indirect-scale) */
     uint32_t w, h, n, m;     /* the indirect image's size; the tiles (the window is n x m) */
     float alpha2, beta;      /* the tests: |p_j - p|^2 < alpha2, n_j . n > beta */
+    float cap2;              /* 0: that distance test (Laine 2007 Fig. 5); > 0: the tangent-plane test
+                                instead, (n . (p_j - p))^2 < alpha2 and |p_j - p|^2 < cap2
+                                (gi_indirect.h, GI_FILTER_PLANE_CAP) */
 } gi_filter_in;
+
+/* Laine's position test (Fig. 5), |p_j - p|^2 = d2 < alpha^2; or, with
+ * cap2 > 0 (the default, beyond the paper: gi_indirect.h
+ * GI_FILTER_PLANE_CAP), the neighbour's distance from the pixel's tangent
+ * plane, (n . (p_j - p))^2 = dp2 < alpha^2, within |p_j - p|^2 < cap2. On a
+ * surface seen at a grazing angle pixels two apart on screen lie further
+ * apart than alpha along it, so the distance test cut the n x m windows on
+ * such walls and faces and the interleaving's missing groups showed as
+ * stripes; the plane test keeps the surface and still rejects a parallel one
+ * behind it. The SIMD kernels repeat it lane-wise (gi__laine_take). */
+static inline int gi_filter_near(const gi_filter_in *in, float d2, float dp2)
+{
+    return in->cap2 > 0.0f ? dp2 < in->alpha2 && d2 < in->cap2 : d2 < in->alpha2;
+}
 
 /* What the joint upsampling (step 9b, --indirect-scale s > 1) reads: the
  * frame's G-buffer, the reduced one and the reduced irradiance, explicitly. */

@@ -666,6 +666,24 @@ static void expect_create_error(const char *kv, const char *needle)
     if (!strstr(err.message, needle)) fail_msg("--param %s: message '%s' lacks '%s'", kv, err.message, needle);
 }
 
+/* The first- and second-bounce VPLs SSVP makes in the closed box with
+ * these parameters and budget. */
+static void bounce_counts(const char *const *kv, uint32_t nkv, uint32_t budget, uint32_t *n1, uint32_t *n2)
+{
+    ctx c;
+    gi_vpl_set v = {0};
+    closed_box(&c.scene);
+    ctx_begin(&c, 1, kv, nkv, budget);
+    update(&c, &v);
+    *n1 = *n2 = 0;
+    for (uint32_t i = 0; i < v.count; i++) {
+        if (v.v[i].id & 0x80000000u) (*n2)++;
+        else (*n1)++;
+    }
+    gi_vpl_set_free(&v);
+    ctx_end(&c);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -693,47 +711,21 @@ static void test_errors(void **state)
     gi_vpl_set_free(&v);
     ctx_end(&c);
     /* defaults halve to fit a smaller budget */
-    closed_box(&c.scene);
-    ctx_begin(&c, 1, NULL, 0, 256);
-    update(&c, &v);
-    uint32_t n1 = 0, n2 = 0;
-    for (uint32_t i = 0; i < v.count; i++) {
-        if (v.v[i].id & 0x80000000u) n2++;
-        else n1++;
-    }
+    uint32_t n1, n2;
+    bounce_counts(NULL, 0, 256, &n1, &n2);
     assert_int_equal(n1, 128);
     assert_true(n2 > 100 && n2 <= 128);
-    gi_vpl_set_free(&v);
-    ctx_end(&c);
     /* ... and follow a larger one (a VPL cycle's C x 256): half each, not
      * the paper's 256 + 256 (which made a 16-slice cycle 16 slivers of one
      * 512-VPL set) */
-    closed_box(&c.scene);
-    ctx_begin(&c, 1, NULL, 0, 4096);
-    update(&c, &v);
-    n1 = n2 = 0;
-    for (uint32_t i = 0; i < v.count; i++) {
-        if (v.v[i].id & 0x80000000u) n2++;
-        else n1++;
-    }
+    bounce_counts(NULL, 0, 4096, &n1, &n2);
     assert_int_equal(n1, 2048);
     assert_true(n2 > 1900 && n2 <= 2048);
-    gi_vpl_set_free(&v);
-    ctx_end(&c);
     /* one count given: the other keeps its paper default */
-    closed_box(&c.scene);
     const char *kv1[] = {"first=64"};
-    ctx_begin(&c, 1, kv1, 1, 4096);
-    update(&c, &v);
-    n1 = n2 = 0;
-    for (uint32_t i = 0; i < v.count; i++) {
-        if (v.v[i].id & 0x80000000u) n2++;
-        else n1++;
-    }
+    bounce_counts(kv1, 1, 4096, &n1, &n2);
     assert_int_equal(n1, 64);
     assert_true(n2 > 200 && n2 <= 256);
-    gi_vpl_set_free(&v);
-    ctx_end(&c);
     /* the CLI */
     tu_softgi_expect("render --filter blur", 2, "gaussian");
     tu_softgi_expect("render --method ssvp --param clusters=0 --size 32x32 --output /tmp/test-ssvp-x.png", 2,

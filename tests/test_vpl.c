@@ -185,6 +185,38 @@ static void test_split_combine_exact(void **state)
     check_split_combine(1, 1, 33, 17);
 }
 
+/* A 96 x 64 frame of the quads seen from the origin along -z, its
+ * G-buffer drawn and COMBINED set to a 4x4 pattern around base[0] on quad 0
+ * (prims 0, 1) and base[1] on the others, then filtered with alpha_rel
+ * and the filter's position test (distance_test: Laine's). */
+static gi_frame *pattern_filtered(fx *x, const tu_quad *q, uint32_t nq, const float base[2], float alpha_rel,
+                                  int distance_test)
+{
+    tu_make_scene(&x->scene, q, nq);
+    pf_camera cam;
+    pf_error err;
+    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
+    gi_indirect_options io;
+    memset(&io, 0, sizeof io);
+    io.visibility_raytrace = 1;
+    io.alpha_rel = alpha_rel;
+    io.filter_distance = distance_test;
+    fx_begin(x, 2, 96, 64, &cam, &io);
+    gi_frame *f = &x->f;
+    gi_stage_gbuffer_raster(f);
+    gi_stage_gbuffer_resolve(f);
+    /* pattern values with exact binary sums */
+    for (uint32_t y = 0; y < 64; y++)
+        for (uint32_t x0 = 0; x0 < 96; x0++) {
+            size_t i = (size_t)y * 96 + x0;
+            float b = base[f->gbuf.prim[i] < 2 ? 0 : 1];
+            float p = ((x0 % 4) * 4 + (y % 4)) / 8.0f - 0.9375f; /* sums to 0 over a 4x4 block */
+            for (int c = 0; c < 3; c++) f->ind.combined[3 * i + c] = b + p;
+        }
+    gi_stage_filter(f);
+    return f;
+}
+
 /* Two walls facing the camera, the right half 1 m farther: a 4x4 pattern on
  * each is removed completely, and the two walls' values do not mix. */
 static void test_box_filter(void **state)
@@ -195,27 +227,9 @@ static void test_box_filter(void **state)
         {{-1, 0, -3}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
         {{1, 0, -4}, {1, 0, 0}, {0, 2, 0}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f},
     };
-    tu_make_scene(&x.scene, q, 2);
-    pf_camera cam;
-    pf_error err;
-    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
-    gi_indirect_options io;
-    memset(&io, 0, sizeof io);
-    io.visibility_raytrace = 1;
-    io.alpha_rel = 0.05f; /* 5% of the 4.5 m diagonal: well under the 1 m step */
-    fx_begin(&x, 2, 96, 64, &cam, &io);
-    gi_frame *f = &x.f;
-    gi_stage_gbuffer_raster(f);
-    gi_stage_gbuffer_resolve(f);
-    /* pattern values with exact binary sums: mean 1.0 on the near wall, 3.0 far */
-    for (uint32_t y = 0; y < 64; y++)
-        for (uint32_t x0 = 0; x0 < 96; x0++) {
-            size_t i = (size_t)y * 96 + x0;
-            float base = f->gbuf.prim[i] < 2 ? 1.0f : 3.0f;
-            float p = ((x0 % 4) * 4 + (y % 4)) / 8.0f - 0.9375f; /* sums to 0 over a 4x4 block */
-            for (int c = 0; c < 3; c++) f->ind.combined[3 * i + c] = base + p;
-        }
-    gi_stage_filter(f);
+    /* mean 1.0 on the near wall, 3.0 far; alpha 5% of the 4.5 m diagonal: well under the 1 m step */
+    const float base[2] = {1.0f, 3.0f};
+    gi_frame *f = pattern_filtered(&x, q, 2, base, 0.05f, 0);
     int interior = 0;
     for (uint32_t y = 2; y + 2 < 64; y++)
         for (uint32_t x0 = 2; x0 + 2 < 96; x0++) {
@@ -250,26 +264,9 @@ static double grazing_floor_exact(int distance_test)
 {
     fx x;
     tu_quad q = {{0, -0.3f, -6}, {2, 0, 0}, {0, 0, -5}, {1, 1, 1, 1}, PF_ALPHA_OPAQUE, 0.5f};
-    tu_make_scene(&x.scene, &q, 1);
-    pf_camera cam;
-    pf_error err;
-    assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 0, 0), pf_v3(0, 0, -1), pf_radians(40), &err), PF_OK);
-    gi_indirect_options io;
-    memset(&io, 0, sizeof io);
-    io.visibility_raytrace = 1;
-    io.alpha_rel = 0.01f; /* 11 cm: under the spacing of the floor's rows beyond a few metres */
-    io.filter_distance = distance_test;
-    fx_begin(&x, 2, 96, 64, &cam, &io);
-    gi_frame *f = &x.f;
-    gi_stage_gbuffer_raster(f);
-    gi_stage_gbuffer_resolve(f);
-    for (uint32_t y = 0; y < 64; y++)
-        for (uint32_t x0 = 0; x0 < 96; x0++) {
-            size_t i = (size_t)y * 96 + x0;
-            float p = ((x0 % 4) * 4 + (y % 4)) / 8.0f - 0.9375f; /* sums to 0 over a 4x4 block */
-            for (int c = 0; c < 3; c++) f->ind.combined[3 * i + c] = 1.0f + p;
-        }
-    gi_stage_filter(f);
+    const float base[2] = {1.0f, 1.0f};
+    /* alpha 11 cm: under the spacing of the floor's rows beyond a few metres */
+    gi_frame *f = pattern_filtered(&x, &q, 1, base, 0.01f, distance_test);
     const float a = f->ind.alpha;
     int whole = 0, exact = 0, spread = 0;
     for (uint32_t y = 2; y + 2 < 64; y++)

@@ -809,7 +809,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_vpl_raytrace),  cmocka_unit_test(test_one_vpl_paraboloid),
         cmocka_unit_test(test_clamp_bounds),      cmocka_unit_test(test_split_combine_exact),
-        cmocka_unit_test(test_box_filter), cmocka_unit_test(test_box_filter_grazing),        cmocka_unit_test(test_ir_static),
+        cmocka_unit_test(test_box_filter),        cmocka_unit_test(test_box_filter_grazing),
+        cmocka_unit_test(test_ir_static),
         cmocka_unit_test(test_frame_threads_and_golden),   cmocka_unit_test(test_accumulate_simd_identical),
         cmocka_unit_test(test_ir_converges_to_reference), cmocka_unit_test(test_clamped_reference),
         cmocka_unit_test(test_vpl_albedo_rule),

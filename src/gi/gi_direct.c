@@ -18,7 +18,7 @@
 #include "gi_direct_kernels.h"
 #include "gi_frame.h"
 #include "gi_light.h"
-#include "rs_shadow_lookup.h" /* rs_shadow_lookup_eligible */
+#include "rs_shadow_lookup.h" /* rs_shadow_marks_receivers */
 #include "simd.h" /* SIMD_X86 */
 
 /* 1 if the box [lo, hi] lies inside [blo, bhi]. */
@@ -135,10 +135,10 @@ void gi_stage_shadow_maps(gi_frame *f)
     int mark = 0;
     for (uint32_t l = 0; l < f->shadows.count; l++) {
         rs_shadow_map *m = &f->shadows.maps[l];
-        if (!m->fresh || !rs_shadow_lookup_eligible(m))
-            rs_shadow_need_all(m);
-        else
+        if (rs_shadow_marks_receivers(m))
             mark = 1;
+        else
+            rs_shadow_need_all(m);
     }
     if (mark) {
         const gi_direct_io io = gi__direct_io(f);

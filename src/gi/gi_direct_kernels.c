@@ -219,7 +219,7 @@ static void gi__need_row(void *ctx, uint32_t y, uint32_t worker)
         if (!gi__group(g, row + x0, n, &prims, &live_lanes, &px, &py, &pz)) continue;
         for (uint32_t l = 0; l < s->light_count && l < io->shadow_count; l++) {
             const rs_shadow_map *m = &io->shadows[l];
-            if (!m->fresh || !rs_shadow_lookup_eligible(m)) continue; /* marked whole (gi_stage_shadow_maps) */
+            if (!rs_shadow_marks_receivers(m)) continue; /* marked whole (gi_stage_shadow_maps) */
             rs_shadow_need_lanes(m, px, py, pz, live_lanes);
         }
     }

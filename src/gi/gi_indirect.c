@@ -978,8 +978,9 @@ void gi_stage_compensate(gi_frame *f)
 /* The weight of the neighbour at (dx, dy) pixels, squared distance d2,
  * squared distance from the pixel's tangent plane dp2 and normal cosine nd;
  * 0 leaves it out.
- *   box (Laine 2007 Fig. 5): 1 where |p2 - p| < alpha (gi_filter_near) and
- *     n2 . n > beta;
+ *   box (Laine 2007 Fig. 5): 1 where the position test passes
+ *     (gi_filter_near: Laine's |p2 - p| < alpha, or by default the
+ *     tangent-plane test) and n2 . n > beta;
  *   gaussian (Aranha, SSVP Sec. III-D, "an edge-aware gaussian blur"; the
  *     paper gives no kernel): the same edge tests, times a Gaussian of
  *     sigma = max(n, m) / 2 pixels;

@@ -617,7 +617,7 @@ static int rs__mask_meets(const rs__pass_state *st, int64_t px0, int64_t py0, in
     for (int64_t ty = ty0; ty <= ty1; ty++)
         for (int64_t tx = tx0; tx <= tx1; tx++) {
             uint64_t tile = (uint64_t)ty * st->tiles_x + (uint64_t)tx;
-            if (st->tile_mask[tile / 64] >> (tile % 64) & 1u) return 1;
+            if (rs_tile_bit(st->tile_mask, tile)) return 1;
         }
     return 0;
 }
@@ -881,7 +881,7 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
     for (uint32_t ty = ty0; ty <= ty1; ty++)
         for (uint32_t tx = tx0; tx <= tx1; tx++) {
             uint32_t tile = ty * st->tiles_x + tx;
-            if (st->tile_mask && !(st->tile_mask[tile / 64] >> (tile % 64) & 1u)) continue;
+            if (st->tile_mask && !rs_tile_bit(st->tile_mask, tile)) continue;
             ch->entries[ch->entry_count++] = (uint64_t)tile << 32 | ti;
         }
 }
@@ -1276,21 +1276,20 @@ uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *t, con
     if (!rs__begin(&st, ctx, ctx->scratch, pass, t, ctx->simd)) return 0;
     rs_scratch *s = ctx->scratch;
     uint32_t n = st.tiles_x * st.tiles_y, count = 0;
-    uint32_t tx0 = st.tiles_x, ty0 = st.tiles_y, tx1 = 0, ty1 = 0;
-    for (uint32_t k = 0; k < n; k++) {
-        if (!(tiles[k / 64] >> (k % 64) & 1u)) continue;
-        uint32_t tx = k % st.tiles_x, ty = k / st.tiles_x;
-        tx0 = tx < tx0 ? tx : tx0, tx1 = tx + 1 > tx1 ? tx + 1 : tx1;
-        ty0 = ty < ty0 ? ty : ty0, ty1 = ty + 1 > ty1 ? ty + 1 : ty1;
-        count++;
-    }
-    if (!count) return 0;
-    if (!rs__grow((void **)&s->tile_list, &s->tile_list_cap, count, sizeof(uint32_t))) {
+    if (!rs__grow((void **)&s->tile_list, &s->tile_list_cap, n, sizeof(uint32_t))) {
         s->failed_pass++; /* nothing drawn (rs_context_status) */
         return 0;
     }
-    for (uint32_t k = 0, i = 0; k < n; k++)
-        if (tiles[k / 64] >> (k % 64) & 1u) s->tile_list[i++] = k;
+    /* the tiles in row order, and their bounding rectangle */
+    uint32_t tx0 = st.tiles_x, ty0 = st.tiles_y, tx1 = 0, ty1 = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        if (!rs_tile_bit(tiles, k)) continue;
+        uint32_t tx = k % st.tiles_x, ty = k / st.tiles_x;
+        tx0 = tx < tx0 ? tx : tx0, tx1 = tx + 1 > tx1 ? tx + 1 : tx1;
+        ty0 = ty < ty0 ? ty : ty0, ty1 = ty + 1 > ty1 ? ty + 1 : ty1;
+        s->tile_list[count++] = k;
+    }
+    if (!count) return 0;
     rs__pass_rect(&st, tx0, ty0, tx1, ty1);
     st.tile_mask = tiles;
     st.tile_list = s->tile_list;

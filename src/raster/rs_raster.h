@@ -151,6 +151,8 @@ void rs_render(rs_context *ctx, const rs_pass *pass, rs_target *target, rs_stats
  * tiles were drawn. */
 uint32_t rs_render_tiles(rs_context *ctx, const rs_pass *pass, rs_target *target, const uint64_t *tiles,
                          rs_stats *stats);
+/* Bit t of a tile mask in rs_render_tiles' layout (64 tiles a word). */
+static inline int rs_tile_bit(const uint64_t *tiles, uint64_t t) { return (int)(tiles[t / 64] >> (t % 64) & 1u); }
 
 /* The same for a single-threaded caller that already runs inside a job (used
  * to render many small maps at once, one per job item): no jobs are

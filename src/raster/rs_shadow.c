@@ -330,7 +330,7 @@ uint32_t rs_shadow_render_box(rs_context *ctx, rs_shadow_map *maps, uint32_t cou
             for (uint32_t ty = r[1] / RS_TILE; ty < (r[3] + RS_TILE - 1) / RS_TILE; ty++)
                 for (uint32_t tx = r[0] / RS_TILE; tx < (r[2] + RS_TILE - 1) / RS_TILE; tx++) {
                     uint32_t t = ty * m->tiles_side + tx;
-                    if (!(valid[t / 64] >> (t % 64) & 1u)) continue;
+                    if (!rs_tile_bit(valid, t)) continue;
                     draw[t / 64] |= (uint64_t)1 << (t % 64);
                     uint32_t w = m->size - tx * RS_TILE, h = m->size - ty * RS_TILE; /* what it drew: whole tiles */
                     tex += (uint64_t)(w < RS_TILE ? w : RS_TILE) * (h < RS_TILE ? h : RS_TILE);

@@ -192,7 +192,7 @@ void rs_shadow_need_all(rs_shadow_map *map);
 static inline int rs_shadow_texel_valid(const rs_shadow_map *m, uint32_t face, uint32_t x, uint32_t y)
 {
     uint32_t t = y / RS_TILE * m->tiles_side + x / RS_TILE;
-    return m->valid && (int)(m->valid[(size_t)face * m->tile_words + t / 64] >> (t % 64) & 1u);
+    return m->valid && rs_tile_bit(m->valid + (size_t)face * m->tile_words, t);
 }
 
 /* The face of a cube map that world point p projects to (major axis of

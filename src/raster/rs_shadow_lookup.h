@@ -256,6 +256,15 @@ static inline simd_f rs_shadow_visibility_lanes(const rs_shadow_map *m, simd_f p
     return simd_select_f(active, vis, zero);
 }
 
+/* Sets bit k of need with a relaxed atomic OR, skipped when it is set
+ * already (other rows mark the same words; the union is the same for any
+ * schedule). */
+static inline void rs__need_mark(uint64_t *need, uint32_t k)
+{
+    uint64_t *w = &need[k / 64], bit = (uint64_t)1 << (k % 64);
+    if (!(__atomic_load_n(w, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(w, bit, __ATOMIC_RELAXED);
+}
+
 /* Marks in m->need the tiles rs_shadow_visibility_lanes reads for the lanes
  * of `active` (rs_shadow_render_needed then draws them): the same face, the
  * same projection and the same first texel as the lookup (the helpers
@@ -303,9 +312,7 @@ static inline void rs_shadow_need_lanes(const rs_shadow_map *m, simd_f p_x, simd
         if (bx1 - bx0 <= 1.0f && by1 - by0 <= 1.0f) {
             for (uint32_t ty = (uint32_t)by0; ty <= (uint32_t)by1; ty++)
                 for (uint32_t tx = (uint32_t)bx0; tx <= (uint32_t)bx1; tx++) {
-                    uint32_t k = (uint32_t)k0 + ty * m->tiles_side + tx;
-                    uint64_t *w = &m->need[k / 64], bit = (uint64_t)1 << (k % 64);
-                    if (!(__atomic_load_n(w, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(w, bit, __ATOMIC_RELAXED);
+                    rs__need_mark(m->need, (uint32_t)k0 + ty * m->tiles_side + tx);
                 }
             return;
         }
@@ -322,9 +329,7 @@ static inline void rs_shadow_need_lanes(const rs_shadow_map *m, simd_f p_x, simd
         }
         for (int32_t ty = yal[l]; ty <= ybl[l]; ty++)
             for (int32_t tx = xal[l]; tx <= xbl[l]; tx++) {
-                uint32_t k = (uint32_t)fl[l] + (uint32_t)ty * m->tiles_side + (uint32_t)tx;
-                uint64_t *w = &m->need[k / 64], bit = (uint64_t)1 << (k % 64);
-                if (!(__atomic_load_n(w, __ATOMIC_RELAXED) & bit)) __atomic_fetch_or(w, bit, __ATOMIC_RELAXED);
+                rs__need_mark(m->need, (uint32_t)fl[l] + (uint32_t)ty * m->tiles_side + (uint32_t)tx);
             }
     }
 }
@@ -340,5 +345,10 @@ static inline int rs_shadow_lookup_eligible(const rs_shadow_map *m)
     uint64_t texels = (uint64_t)m->face_count * m->size * m->size;
     return m->depth && m->size > 0 && texels < ((uint64_t)1 << 31) && !(m->desc.normal_offset > 0.0f);
 }
+
+/* Whether a frame marks the tiles m's lookups read (rs_shadow_need_lanes):
+ * a fresh map the SIMD lookup serves; every other map is needed whole
+ * (rs_shadow_need_all). */
+static inline int rs_shadow_marks_receivers(const rs_shadow_map *m) { return m->fresh && rs_shadow_lookup_eligible(m); }
 
 #endif

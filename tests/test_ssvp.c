@@ -153,7 +153,7 @@ static void ctx_begin(ctx *c, uint32_t threads, const char *const *kv, uint32_t 
     memset(&p, 0, sizeof p);
     for (uint32_t i = 0; i < nkv; i++) assert_int_equal(gi_params_add(&p, kv[i], &err), PF_OK);
     if (gi_method_ssvp.create(&c->st, &p, &err) != PF_OK) fail_msg("%s", err.message);
-    gi_vpl_inputs in = {&c->scene, c->rt, c->jobs, NULL, 0, budget, 2, NULL, 0, 0, &c->area, NULL, 0};
+    gi_vpl_inputs in = {&c->scene, c->rt, c->jobs, NULL, 0, budget, 2, NULL, 0, 0, &c->area, NULL, 0, 0};
     c->in = in;
 }
 
@@ -418,6 +418,39 @@ static void test_lazy_maps_identical(void **state)
         if (!vpls_equal(&a[fr], &b[fr])) fail_msg("frame %d: lazy maps give other VPLs", fr);
         gi_vpl_set_free(&a[fr]), gi_vpl_set_free(&b[fr]);
     }
+}
+
+/* The default second-bounce origin follows VPL cycling: the paper's
+ * centroid when a frame shades its whole set, the unbiased members under a
+ * cycle (gi_vpl_inputs.cycle > 1); an origin given with --param keeps its
+ * value either way. */
+static void cycle_set(const char *const *kv, uint32_t nkv, uint32_t cycle, gi_vpl_set *out)
+{
+    ctx c;
+    pf_error err;
+    assert_int_equal(pf_gltf_load(&c.scene, CORNELL, NULL, &err), PF_OK);
+    ctx_begin(&c, 1, kv, nkv, 512);
+    c.in.cycle = cycle;
+    update(&c, out);
+    ctx_end(&c);
+}
+
+static void test_origin_follows_cycle(void **state)
+{
+    (void)state;
+    const char *centroid[] = {"origin=centroid"}, *members[] = {"origin=members"};
+    gi_vpl_set d1 = {0}, d4 = {0}, c1 = {0}, c4 = {0}, m1 = {0}, m4 = {0};
+    cycle_set(NULL, 0, 1, &d1), cycle_set(NULL, 0, 4, &d4);
+    cycle_set(centroid, 1, 1, &c1), cycle_set(centroid, 1, 4, &c4);
+    cycle_set(members, 1, 1, &m1), cycle_set(members, 1, 4, &m4);
+    assert_true(d1.count > 300);
+    assert_false(vpls_equal(&c1, &m1)); /* the two origins give other second-bounce VPLs */
+    assert_true(vpls_equal(&d1, &c1));  /* no cycle: the paper's */
+    assert_true(vpls_equal(&d4, &m4));  /* a cycle: members */
+    assert_true(vpls_equal(&c4, &c1));  /* a given origin ignores the cycle */
+    assert_true(vpls_equal(&m4, &m1));
+    gi_vpl_set *all[] = {&d1, &d4, &c1, &c4, &m1, &m4};
+    for (int k = 0; k < 6; k++) gi_vpl_set_free(all[k]);
 }
 
 /* ------------------------------------------ second bounce on the Cornell box */
@@ -739,6 +772,7 @@ int main(void)
         cmocka_unit_test(test_flux_closed_box),   cmocka_unit_test(test_second_flux_cluster_count),
         cmocka_unit_test(test_static_reuse),
         cmocka_unit_test(test_threads_30_frames), cmocka_unit_test(test_lazy_maps_identical),
+        cmocka_unit_test(test_origin_follows_cycle),
         cmocka_unit_test(test_second_bounce_adds_light), cmocka_unit_test(test_second_bounce_vs_reference),
         cmocka_unit_test(test_gaussian_filter),   cmocka_unit_test(test_errors),
     };

@@ -267,8 +267,9 @@ static void gi__motion_seen(gi_motion *m)
 void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    gi_vpl_inputs in = {f->scene,        f->rt,          f->jobs,   &f->camera, ind->frame, ind->opt.vpls,
-                        ind->opt.bounces, &f->gbuf, f->width, f->height, &f->area, &f->motion, gi__simd(f)};
+    gi_vpl_inputs in = {f->scene,         f->rt,    f->jobs,  &f->camera, ind->frame, ind->opt.vpls,
+                        ind->opt.bounces, &f->gbuf, f->width, f->height,  &f->area,   &f->motion,
+                        gi__simd(f),      ind->cycle};
     gi__vpl_update_into(ind, &in, &ind->vpls);
     gi__motion_seen(&f->motion);
     ind->frame++;
@@ -316,7 +317,7 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
                         ind->opt.bounces, gbuffer_ready ? &f->gbuf : NULL,
                         f->width,        f->height,
                         &f->area,        &f->motion,
-                        gi__simd(f)};
+                        gi__simd(f),     ind->cycle};
     ind->pipe_in = in;
     ind->frame++;
     ind->pipe_ms = 0.0;

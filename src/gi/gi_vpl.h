@@ -75,6 +75,11 @@ typedef struct gi_vpl_inputs {
     /* The SIMD kernels a method may use (the frame's rasterizer's path, an
      * rs_simd: 0 scalar, 1 AVX2, 2 AVX-512); every path gives the same bits. */
     uint32_t simd;
+    /* VPL cycling (--vpl-cycle C, gi_indirect.h): the set is shaded one
+     * slice of budget / C a frame and averaged over C frames by the
+     * temporal history; 0 or 1: every frame shades the whole set. A method
+     * may choose its defaults by it (SSVP's second-bounce origin). */
+    uint32_t cycle;
 } gi_vpl_inputs;
 
 /* Method parameters from `--param KEY=VALUE` (repeatable). A method reads

@@ -189,10 +189,33 @@ static inline void rs__band_fast(const rs__tile_ctx *c, const rs__pair *p, int32
     }
 }
 
+/* Stamps lo..hi (rectangle-relative) of band sy, from the band's edge
+ * values at the rectangle's first stamp. */
+static inline void rs__walk32_band(const rs__tile_ctx *c, const rs__pair *p, int32_t sy, int32_t lo, int32_t hi,
+                                   const simd_i erow[3], const int32_t ax[3], const simd_i stepx[3], int fast)
+{
+    if (lo > hi) return;
+    simd_i e[3];
+    for (int k = 0; k < 3; k++)
+        e[k] = simd_add_i(erow[k], simd_set1_i((int32_t)((uint32_t)ax[k] * RS_STAMP_W * (uint32_t)lo)));
+    simd_f zy = rs__zy(c, p, sy);
+    if (fast) {
+        rs__band_fast(c, p, sy, p->sx0 + lo, p->sx0 + hi, e, stepx, zy);
+        return;
+    }
+    for (int32_t sx = p->sx0 + lo; sx <= p->sx0 + hi; sx++) {
+        simd_mask cov = simd_mask_not(simd_negative_i(simd_or_i(simd_or_i(e[0], e[1]), e[2])));
+        for (int k = 0; k < 3; k++) e[k] = simd_add_i(e[k], stepx[k]);
+        /* no branch on coverage: an empty stamp costs less than a
+         * mispredicted branch */
+        rs__stamp(c, p, sx, sy, zy, rs__inside(c, sx, sy, cov));
+    }
+}
+
 /* The stamp walk when every edge value fits 32 bits. */
 static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
 {
-    simd_i erow[3], stepx[3];
+    simd_i erow[3], stepx[3], stepy[3];
     int32_t ax[3], by[3];
     for (int k = 0; k < 3; k++) {
         /* |a|, |b| * RS_SUB * (stamp extent) fit: the values over the
@@ -201,33 +224,26 @@ static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
         erow[k] = simd_add_i(simd_set1_i((int32_t)p->e[k]), simd_add_i(simd_mullo_i(c->col, simd_set1_i(ax[k])),
                                                                         simd_mullo_i(c->row, simd_set1_i(by[k]))));
         stepx[k] = simd_set1_i((int32_t)((uint32_t)ax[k] * RS_STAMP_W));
+        stepy[k] = simd_set1_i((int32_t)((uint32_t)by[k] * RS__SH));
     }
-    /* bands pay off on rectangles at least 3 stamps wide and 2 high */
-    int banded = p->sx1 - p->sx0 >= 2 && p->sy1 > p->sy0;
     const int fast = !p->masked && !c->in->coverage && !c->partial;
-    rs__bands bands;
-    memset(&bands, 0, sizeof bands);
-    if (banded) rs__bands_init(&bands, p, ax, by);
-    for (int32_t sy = p->sy0; sy <= p->sy1; sy++) {
-        int32_t lo = 0, hi = p->sx1 - p->sx0;
-        if (banded) rs__bands_next(&bands, &lo, &hi);
-        if (lo <= hi) {
-            simd_i e[3];
-            for (int k = 0; k < 3; k++)
-                e[k] = simd_add_i(erow[k], simd_set1_i((int32_t)((uint32_t)ax[k] * RS_STAMP_W * (uint32_t)lo)));
-            simd_f zy = rs__zy(c, p, sy);
-            if (fast)
-                rs__band_fast(c, p, sy, p->sx0 + lo, p->sx0 + hi, e, stepx, zy);
-            else
-                for (int32_t sx = p->sx0 + lo; sx <= p->sx0 + hi; sx++) {
-                    simd_mask cov = simd_mask_not(simd_negative_i(simd_or_i(simd_or_i(e[0], e[1]), e[2])));
-                    for (int k = 0; k < 3; k++) e[k] = simd_add_i(e[k], stepx[k]);
-                    /* no branch on coverage: an empty stamp costs less than a
-                     * mispredicted branch */
-                    rs__stamp(c, p, sx, sy, zy, rs__inside(c, sx, sy, cov));
-                }
+    /* bands pay off on rectangles at least 3 stamps wide and 2 high; the
+     * band bounds exist only then (no memset of them for the others: its
+     * rep stos cost more than a small triangle's walk) */
+    if (p->sx1 - p->sx0 >= 2 && p->sy1 > p->sy0) {
+        rs__bands bands;
+        rs__bands_init(&bands, p, ax, by);
+        for (int32_t sy = p->sy0; sy <= p->sy1; sy++) {
+            int32_t lo, hi;
+            rs__bands_next(&bands, &lo, &hi);
+            rs__walk32_band(c, p, sy, lo, hi, erow, ax, stepx, fast);
+            for (int k = 0; k < 3; k++) erow[k] = simd_add_i(erow[k], stepy[k]);
         }
-        for (int k = 0; k < 3; k++) erow[k] = simd_add_i(erow[k], simd_set1_i((int32_t)((uint32_t)by[k] * RS__SH)));
+        return;
+    }
+    for (int32_t sy = p->sy0; sy <= p->sy1; sy++) {
+        rs__walk32_band(c, p, sy, 0, p->sx1 - p->sx0, erow, ax, stepx, fast);
+        for (int k = 0; k < 3; k++) erow[k] = simd_add_i(erow[k], stepy[k]);
     }
 }
 

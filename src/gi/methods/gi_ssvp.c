@@ -101,7 +101,10 @@
  *   the paraboloid map's disc, as the paper does. --param origin=members
  *   (beyond the paper) traces each sample from a member VPL instead of
  *   the centroid, the unbiased second bounce the cluster model
- *   approximates.
+ *   approximates. Left unset, the origin is the paper's centroid in a
+ *   frame that shades its whole set, and members under VPL cycling
+ *   (gi_vpl_inputs.cycle > 1): averaged over a cycle, the unbiased model's
+ *   noise goes and the cluster model's bias stays (docs/ssvp.md).
  * - The frame's VPL budget (--vpls) caps first + second. Left at their
  *   defaults, the two counts follow the budget: half each (--vpls 512 gives
  *   the paper's 256 + 256, the default --vpls 256 128 + 128, and a VPL
@@ -148,8 +151,8 @@ typedef struct gi__ssvp_state {
     /* options */
     uint32_t clusters, first, second, map_res, rsm_res, iters, lazy_maps, area_points;
     uint32_t disc; /* GI__SSVP_DISC_*: how a unit-disc sample picks a cluster map texel */
-    uint32_t origin; /* GI__SSVP_ORIGIN_*: where the second-bounce rays start */
-    int first_set, second_set;
+    uint32_t origin; /* GI__SSVP_ORIGIN_*: where the second-bounce rays start (this update's) */
+    int first_set, second_set, origin_set;
     /* k-means state kept between frames */
     pf_vec3 cpos[GI__SSVP_MAX_CLUSTERS], cnrm[GI__SSVP_MAX_CLUSTERS];
     uint32_t members[GI__SSVP_MAX_CLUSTERS];
@@ -251,6 +254,7 @@ static pf_result gi__ssvp_create(void **state, const gi_params *params, pf_error
     }
     s->first_set = gi__has(params, "first");
     s->second_set = gi__has(params, "second");
+    s->origin_set = gi__has(params, "origin");
     gi_rsm_set_init(&s->rsm, s->rsm_res);
     s->rsm.area_points = s->area_points;
     if (!gi__ssvp_first_room(s, s->first)) {
@@ -620,6 +624,8 @@ static pf_result gi__ssvp_update(void *state, const gi_vpl_inputs *in, gi_vpl_se
          * first bounce, which fits itself to the budget */
         n1 = in->budget;
     }
+    if (!s->origin_set) /* the default origin: the paper's in one frame, the unbiased one under cycling */
+        s->origin = in->cycle > 1 ? GI__SSVP_ORIGIN_MEMBERS : GI__SSVP_ORIGIN_CENTROID;
     if (!gi__ssvp_first_room(s, n1)) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
     pf_result r = gi_vpl_set_reserve(out, n1 + n2 ? n1 + n2 : 1, err);
     if (r != PF_OK) return r;

@@ -72,6 +72,10 @@ typedef struct rs__vtx {
     float rx, ry; /* the unsnapped screen position minus the snapped one, pixels (rs__snap_rest) */
 } rs__vtx;
 #define RS__NO_SNAP INT32_MIN
+/* a bin entry's flag (rs__chunk.sorted): the triangle is alpha-masked */
+#define RS__ENTRY_MASKED 0x80000000u
+_Static_assert((uint64_t)RS_CHUNK * 10 < RS__ENTRY_MASKED, "a chunk's records (clipping makes at most 10 of a triangle) "
+                                                          "are indexed below the flag");
 
 typedef struct rs__cluster {
     pf_vec3 lo, hi;
@@ -754,28 +758,29 @@ static int rs__snap_cv(const rs__pass_state *st, const rs__cv *c, rs__sv *out)
     return 1;
 }
 
-/* Sets up one screen triangle (snapped vertices) and bins it. */
-static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3], uint32_t prim)
+/* The pixel box of a triangle whose snapped coordinates span [minx, maxx]
+ * x [miny, maxy]: the pixels whose centre 256 x + 128 lies inside, clamped
+ * to the target, in b = {px0, px1, py0, py1}. 0 when it holds no pixel
+ * centre or lies outside rs_render_tiles' bounds (the triangle is culled). */
+static inline int rs__pixel_box(const rs__pass_state *st, int64_t minx, int64_t maxx, int64_t miny, int64_t maxy,
+                                int64_t b[4])
 {
     const rs_target *t = st->t;
-    /* the pixel box first: most triangles of a detailed scene cover no pixel
-     * centre, and are rejected here before anything else is computed */
-    int64_t minx = sv[0].X, maxx = sv[0].X, miny = sv[0].Y, maxy = sv[0].Y;
-    for (int k = 1; k < 3; k++) {
-        minx = sv[k].X < minx ? sv[k].X : minx, maxx = sv[k].X > maxx ? sv[k].X : maxx;
-        miny = sv[k].Y < miny ? sv[k].Y : miny, maxy = sv[k].Y > maxy ? sv[k].Y : maxy;
-    }
-    /* pixels whose centre 256 x + 128 lies in [min, max] */
     int64_t px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> RS_SUBPIXEL_BITS, px1 = (maxx - RS_SUB / 2) >> RS_SUBPIXEL_BITS;
     int64_t py0 = (miny - RS_SUB / 2 + RS_SUB - 1) >> RS_SUBPIXEL_BITS, py1 = (maxy - RS_SUB / 2) >> RS_SUBPIXEL_BITS;
     if (px0 < 0) px0 = 0;
     if (py0 < 0) py0 = 0;
     if (px1 > (int64_t)t->width - 1) px1 = (int64_t)t->width - 1;
     if (py1 > (int64_t)t->height - 1) py1 = (int64_t)t->height - 1;
-    if (px0 > px1 || py0 > py1 || px1 < st->rpx0 || px0 > st->rpx1 || py1 < st->rpy0 || py0 > st->rpy1) {
-        ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_tiles' bounds */
-        return;
-    }
+    b[0] = px0, b[1] = px1, b[2] = py0, b[3] = py1;
+    return !(px0 > px1 || py0 > py1 || px1 < st->rpx0 || px0 > st->rpx1 || py1 < st->rpy0 || py0 > st->rpy1);
+}
+
+/* Sets up one screen triangle (snapped vertices) whose pixel box
+ * (rs__pixel_box) holds a pixel centre, and bins it. */
+static void rs__setup_boxed(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3], uint32_t prim, const int64_t b[4])
+{
+    const int64_t px0 = b[0], px1 = b[1], py0 = b[2], py1 = b[3];
     if (st->tile_mask && !rs__mask_meets(st, px0, py0, px1, py1)) {
         ch->stats.triangles_culled++; /* meets none of rs_render_tiles' tiles */
         return;
@@ -878,12 +883,33 @@ static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3],
         ch->failed = 1;
         return;
     }
+    /* the entry: the tile, the record's index and, in RS__ENTRY_MASKED,
+     * whether it is alpha-masked (so gathering a tile's list reads no
+     * record: the kernel's prefetch fetches it) */
+    const uint32_t entry = ti | (r->masked == RS__NOT_MASKED ? 0u : RS__ENTRY_MASKED);
     for (uint32_t ty = ty0; ty <= ty1; ty++)
         for (uint32_t tx = tx0; tx <= tx1; tx++) {
             uint32_t tile = ty * st->tiles_x + tx;
             if (st->tile_mask && !rs_tile_bit(st->tile_mask, tile)) continue;
-            ch->entries[ch->entry_count++] = (uint64_t)tile << 32 | ti;
+            ch->entries[ch->entry_count++] = (uint64_t)tile << 32 | entry;
         }
+}
+
+/* Sets up one screen triangle (snapped vertices) and bins it: the pixel
+ * box first, since most triangles of a detailed scene cover no pixel
+ * centre and are rejected there before anything else is computed. */
+static void rs__setup_tri(rs__pass_state *st, rs__chunk *ch, const rs__sv sv[3], uint32_t prim)
+{
+    int64_t minx = sv[0].X, maxx = sv[0].X, miny = sv[0].Y, maxy = sv[0].Y, b[4];
+    for (int k = 1; k < 3; k++) {
+        minx = sv[k].X < minx ? sv[k].X : minx, maxx = sv[k].X > maxx ? sv[k].X : maxx;
+        miny = sv[k].Y < miny ? sv[k].Y : miny, maxy = sv[k].Y > maxy ? sv[k].Y : maxy;
+    }
+    if (!rs__pixel_box(st, minx, maxx, miny, maxy, b)) {
+        ch->stats.triangles_culled++; /* falls between pixel centres, off screen or outside rs_render_tiles' bounds */
+        return;
+    }
+    rs__setup_boxed(st, ch, sv, prim, b);
 }
 
 /* A clip-space triangle inside the guard band (clipped or not): snapped
@@ -927,18 +953,34 @@ static void rs__setup_bin(rs__pass_state *st, uint32_t chunk)
     memset(&ch->stats, 0, sizeof ch->stats);
     uint32_t t0 = chunk * RS_CHUNK, t1 = t0 + RS_CHUNK < sc->tri_count ? t0 + RS_CHUNK : sc->tri_count;
     const rs__vtx *vtx = st->s->vtx;
+    _Static_assert(RS_CHUNK % RS_CLUSTER == 0, "a chunk is whole clusters");
     for (uint32_t t = t0; t < t1 && !ch->failed; t++) {
-        if (!st->s->cluster_visible[t / RS_CLUSTER]) continue;
+        if (t % RS_CLUSTER == 0 && !st->s->cluster_visible[t / RS_CLUSTER]) { /* a culled cluster: skipped whole */
+            t += RS_CLUSTER - 1;
+            continue;
+        }
         ch->stats.triangles_in++;
         const uint32_t *idx = &st->ctx->weld_idx[3 * t];
         const rs__vtx *c0 = &vtx[idx[0]], *c1 = &vtx[idx[1]], *c2 = &vtx[idx[2]];
         /* vertices inside the frustum are inside every clip plane (the guard
          * band is wider than the frustum): no clipping, snapped already */
         if (c0->X != RS__NO_SNAP && c1->X != RS__NO_SNAP && c2->X != RS__NO_SNAP) {
+            /* rs__setup_tri's pixel box straight from the vertex records,
+             * before any copy: most triangles end here */
+            int32_t x0 = c0->X, x1 = c1->X, x2 = c2->X, y0 = c0->Y, y1 = c1->Y, y2 = c2->Y;
+            int32_t minx = x0 < x1 ? x0 : x1, maxx = x0 > x1 ? x0 : x1, miny = y0 < y1 ? y0 : y1,
+                    maxy = y0 > y1 ? y0 : y1;
+            minx = x2 < minx ? x2 : minx, maxx = x2 > maxx ? x2 : maxx;
+            miny = y2 < miny ? y2 : miny, maxy = y2 > maxy ? y2 : maxy;
+            int64_t b[4];
+            if (!rs__pixel_box(st, minx, maxx, miny, maxy, b)) {
+                ch->stats.triangles_culled++; /* as rs__setup_tri */
+                continue;
+            }
             rs__sv sv[3] = {{c0->X, c0->Y, c0->zs, c0->iw, 0.0f, 0.0f, c0->rx, c0->ry},
                             {c1->X, c1->Y, c1->zs, c1->iw, 1.0f, 0.0f, c1->rx, c1->ry},
                             {c2->X, c2->Y, c2->zs, c2->iw, 0.0f, 1.0f, c2->rx, c2->ry}};
-            rs__setup_tri(st, ch, sv, t);
+            rs__setup_boxed(st, ch, sv, t, b);
             continue;
         }
         rs__cv v[3];
@@ -1099,9 +1141,10 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs__list *list)
         const rs__chunk *ch = &st->s->chunks[c];
         if (ch->tri_count == 0 || ch->failed) continue;
         for (uint32_t e = ch->tile_start[tile]; e < ch->tile_start[tile + 1]; e++, n++) {
-            const rs__tri *t = &ch->tris[ch->sorted[e]];
+            const uint32_t entry = ch->sorted[e];
+            const rs__tri *t = &ch->tris[entry & ~RS__ENTRY_MASKED];
             tris[n] = t;
-            masked[n] = t->masked == RS__NOT_MASKED ? NULL : &ch->masked[t->masked];
+            masked[n] = entry & RS__ENTRY_MASKED ? &ch->masked[t->masked] : NULL;
         }
     }
     rs__tile_in in = {tris, masked, n, tx0, ty0, 0, 0, rs__alpha, st->ctx->scene, depth, tg->prim ? prim : NULL,

@@ -372,28 +372,42 @@ static void rs__triangle(const rs__tile_ctx *c, const rs__tri *t, const void *ma
             p.e[k] = (int32_t)((uint32_t)t->c32[k] + (uint32_t)p.pa[k] * dx + (uint32_t)p.pb[k] * dy);
         }
     } else {
+        /* The 32-bit walks take the edges in pixel units: E = 256 (a x + b
+         * y) + C at pixel centres (x, y relative to the first stamp's first
+         * pixel), so with q = floor(C / 256), E >= 0 <=> a x + b y + q >= 0
+         * (the left side is 256 times an integer plus C - 256 q, which lies in
+         * [0, 256)): the same coverage from values 256 times smaller, so
+         * large triangles (a cube face's walls) take 32-bit lanes too. The
+         * 64-bit walk, for what still does not fit, keeps E itself. */
         int64_t nx = p.sx1 - p.sx0 + 1, ny = p.sy1 - p.sy0 + 1;
         int64_t px0 = (int64_t)ox * RS_SUB + RS_SUB / 2, py0 = (int64_t)oy * RS_SUB + RS_SUB / 2;
+        int64_t full[3];
         for (int k = 0; k < 3; k++) {
             int64_t e = t->a[k] * px0 + t->b[k] * py0 + t->c[k], lo, hi;
             rs__edge_range(t, k, nx * RS_STAMP_W - 1, ny * RS__SH - 1, &lo, &hi);
             if (e + hi < 0) return; /* negative over the whole rectangle */
-            p.pa[k] = (int32_t)((uint32_t)t->a[k] * RS_SUB), p.pb[k] = (int32_t)((uint32_t)t->b[k] * RS_SUB);
-            p.e[k] = e;
+            full[k] = e;
+            p.pa[k] = t->a[k], p.pb[k] = t->b[k];
+            p.e[k] = e >> RS_SUBPIXEL_BITS; /* floor (arithmetic shift) */
             /* the 32-bit walks also step one stamp past the last in x and
              * one band past the last in y */
             int64_t lo1, hi1;
             rs__edge_range(t, k, (nx + 1) * RS_STAMP_W - 1, (ny + 1) * RS__SH - 1, &lo1, &hi1);
             if (e + lo1 >= 0) { /* positive over the rectangle (and the step past it): no test needed */
-                p.e[k] = 0, p.pa[k] = p.pb[k] = 0;
+                full[k] = p.e[k] = 0, p.pa[k] = p.pb[k] = 0;
                 p.dropped |= 1u << k;
                 continue;
             }
+            /* lo1, hi1 are 256 times the pixel-unit range; the steps a, b
+             * times a stamp's extent fit as well */
             int64_t m = (t->a[k] < 0 ? -(int64_t)t->a[k] : t->a[k]) > (t->b[k] < 0 ? -(int64_t)t->b[k] : t->b[k])
                             ? (t->a[k] < 0 ? -(int64_t)t->a[k] : t->a[k])
                             : (t->b[k] < 0 ? -(int64_t)t->b[k] : t->b[k]);
-            if (!(e + lo1 > INT32_MIN && e + hi1 < INT32_MAX) || m >= ((int64_t)1 << 22)) e32 = 0;
+            if (!(p.e[k] + lo1 / RS_SUB > INT32_MIN && p.e[k] + hi1 / RS_SUB < INT32_MAX) || m >= ((int64_t)1 << 26))
+                e32 = 0;
         }
+        if (!e32) /* rs__walk64's exact values */
+            for (int k = 0; k < 3; k++) p.e[k] = full[k];
     }
     /* the depth plane at the tile's first pixel, rounded once */
     double zt = t->zv + t->dzdx_d * ((double)in->x0 + 0.5 - t->xv) + t->dzdy_d * ((double)in->y0 + 0.5 - t->yv);

@@ -1097,6 +1097,25 @@ static void rs__unstamp_row(uint32_t *row, const uint32_t *plane, int32_t y, uin
     for (int s = 0; s < RS_STAMPS_X; s++) memcpy(row + s * RS_STAMP_W, src + (size_t)s * RS_STAMP_W * stamp_h, 16);
 }
 
+/* Tile row y of a plane to the target's n pixels at dst: a whole row of a
+ * vector-aligned target straight from the stamps with non-temporal stores
+ * when this file's vector is one stamp row (4 lanes: the baseline build),
+ * else through rs__unstamp_row and rs__copy_out. The same values. */
+static void rs__row_out(uint32_t *dst, const uint32_t *plane, int32_t y, uint32_t stamp_h, size_t n)
+{
+    if (SIMD_W == RS_STAMP_W && n == RS_TILE && ((uintptr_t)dst & (SIMD_W * 4 - 1)) == 0) {
+        const int32_t *src = (const int32_t *)plane +
+                             (size_t)(y / (int32_t)stamp_h) * RS_STAMPS_X * RS_STAMP_W * stamp_h +
+                             (size_t)(y % (int32_t)stamp_h) * RS_STAMP_W;
+        for (int s = 0; s < RS_STAMPS_X; s++)
+            simd_stream_i((int32_t *)dst + s * RS_STAMP_W, simd_load_i(src + (size_t)s * RS_STAMP_W * stamp_h));
+        return;
+    }
+    _Alignas(64) uint32_t row[RS_TILE];
+    rs__unstamp_row(row, plane, y, stamp_h);
+    rs__copy_out(dst, row, n);
+}
+
 /* Rasterizes one tile: its triangles, gathered from the chunks' bins in
  * drawing order, go to the kernel in one call, into a tile buffer on this
  * thread's stack (L1/L2-resident; cleared there and copied to the target
@@ -1156,12 +1175,8 @@ static void rs__raster_tile(rs__pass_state *st, uint32_t tile, rs__list *list)
     size_t w = (size_t)in.xlim;
     for (int32_t y = 0; y < in.ylim; y++) {
         size_t o = (size_t)(ty0 + y) * tg->width + (size_t)tx0;
-        rs__unstamp_row(row, (const uint32_t *)depth, y, kern->stamp_h);
-        rs__copy_out(tg->depth + o, row, w);
-        if (tg->prim) {
-            rs__unstamp_row(row, prim, y, kern->stamp_h);
-            rs__copy_out(tg->prim + o, row, w);
-        }
+        rs__row_out((uint32_t *)tg->depth + o, (const uint32_t *)depth, y, kern->stamp_h, w);
+        if (tg->prim) rs__row_out(tg->prim + o, prim, y, kern->stamp_h, w);
         if (coverage) {
             rs__unstamp_row(row, coverage, y, kern->stamp_h);
             memcpy(tg->coverage + o, row, sizeof(uint32_t) * w);

@@ -170,13 +170,12 @@ static void test_fill_rule_fans(void **state)
     check_fan(16, 0.0, 0.0, 0.9, 0.0, 64, 64);
 }
 
-/* A jittered grid of 2 triangles per cell covering more than the screen:
- * every pixel exactly once. */
-static void test_fill_rule_grid(void **state)
+/* A jittered grid of n x n cells of 2 triangles covering more than a w x h
+ * screen: every pixel exactly once. */
+static void check_grid(int N, uint32_t w, uint32_t h)
 {
-    (void)state;
-    enum { N = 23 };
-    pf_vec3 v[N + 1][N + 1];
+    pf_vec3 v[24][24];
+    assert_true(N <= 23);
     uint32_t seed = 12345;
     for (int j = 0; j <= N; j++)
         for (int i = 0; i <= N; i++) {
@@ -201,19 +200,39 @@ static void test_fill_rule_grid(void **state)
         }
     pf_scene s;
     scene_from_tris(&s, p, n / 3);
-    raster_fx fx;
-    fx_begin(&fx, &s, 211, 157, 2, RS_SIMD_SCALAR);
-    rs_pass pass = ortho_pass(RS_CULL_NONE);
-    rs_render(fx.ctx, &pass, &fx.t, NULL);
-    for (uint32_t i = 0; i < 211 * 157; i++)
-        if (fx.t.coverage[i] != 1) fail_msg("grid: pixel %u covered %u times", i, fx.t.coverage[i]);
-    /* back-face culling removes exactly the clockwise ones: all are CCW here */
-    pass.cull = RS_CULL_FRONT;
-    rs_render(fx.ctx, &pass, &fx.t, NULL);
-    for (uint32_t i = 0; i < 211 * 157; i++) assert_int_equal(fx.t.coverage[i], 0);
-    fx_end(&fx);
+    /* the scalar path and the best one */
+    const pf_isa best = pf_isa_detect();
+    const rs_simd simds[2] = {RS_SIMD_SCALAR, best >= PF_ISA_AVX512 ? RS_SIMD_AVX512
+                                              : best >= PF_ISA_AVX2  ? RS_SIMD_AVX2
+                                                                     : RS_SIMD_SCALAR};
+    for (int k = 0; k < 2; k++) {
+        raster_fx fx;
+        fx_begin(&fx, &s, w, h, 2, simds[k]);
+        rs_pass pass = ortho_pass(RS_CULL_NONE);
+        rs_render(fx.ctx, &pass, &fx.t, NULL);
+        for (uint32_t i = 0; i < w * h; i++)
+            if (fx.t.coverage[i] != 1)
+                fail_msg("grid %d, %s: pixel %u covered %u times", N, rs_simd_name(simds[k]), i, fx.t.coverage[i]);
+        /* back-face culling removes exactly the clockwise ones: all are CCW here */
+        pass.cull = RS_CULL_FRONT;
+        rs_render(fx.ctx, &pass, &fx.t, NULL);
+        for (uint32_t i = 0; i < w * h; i++) assert_int_equal(fx.t.coverage[i], 0);
+        fx_end(&fx);
+    }
     pf_scene_free(&s);
     free(p);
+}
+
+static void test_fill_rule_grid(void **state)
+{
+    (void)state;
+    check_grid(23, 211, 157);
+    /* cells of 200-400 pixels: triangles whose edge values over a tile do
+     * not fit 32 bits in 1/256 pixel, which the tiles walk in pixel units
+     * (rs_raster_kernels.c rs__triangle): a wrong floor there covers the
+     * centres on a shared edge twice or not at all */
+    check_grid(3, 1024, 768);
+    check_grid(5, 997, 1013);
 }
 
 /* A closed outward icosphere seen in perspective with back faces culled:

@@ -218,8 +218,9 @@ static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
     simd_i erow[3], stepx[3], stepy[3];
     int32_t ax[3], by[3];
     for (int k = 0; k < 3; k++) {
-        /* |a|, |b| * RS_SUB * (stamp extent) fit: the values over the
-         * rectangle, checked, contain these steps */
+        /* the per-pixel steps (256 a, or a where the edges are in pixel
+         * units, rs__triangle) times a stamp's extent fit: the values over
+         * the rectangle, checked, contain these steps */
         ax[k] = p->pa[k], by[k] = p->pb[k];
         erow[k] = simd_add_i(simd_set1_i((int32_t)p->e[k]), simd_add_i(simd_mullo_i(c->col, simd_set1_i(ax[k])),
                                                                         simd_mullo_i(c->row, simd_set1_i(by[k]))));

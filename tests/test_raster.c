@@ -235,6 +235,43 @@ static void test_fill_rule_grid(void **state)
     check_grid(5, 997, 1013);
 }
 
+/* Alpha-masked triangles (alphaMode MASK) take the per-pixel alpha test on
+ * every path: three full-screen quads, the nearest masked out (alpha 0.2 <
+ * 0.5), the next masked but kept (0.8), an opaque one behind; every pixel
+ * must show the kept quad. Fails when a tile forgets which of its
+ * triangles are masked (the bin entries' flag, rs_raster.c). */
+static void test_alpha_mask(void **state)
+{
+    (void)state;
+    const tu_quad q[3] = {
+        {{0, 0, -1}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 0.2f}, PF_ALPHA_MASK, 0.5f}, /* a hole */
+        {{0, 0, -2}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 0.8f}, PF_ALPHA_MASK, 0.5f}, /* kept */
+        {{0, 0, -3}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 1.0f}, PF_ALPHA_OPAQUE, 0.5f},
+    };
+    pf_scene s;
+    tu_make_scene(&s, q, 3);
+    pf_error err;
+    assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
+    const pf_isa best = pf_isa_detect();
+    const rs_simd simds[2] = {RS_SIMD_SCALAR, best >= PF_ISA_AVX512 ? RS_SIMD_AVX512
+                                              : best >= PF_ISA_AVX2  ? RS_SIMD_AVX2
+                                                                     : RS_SIMD_SCALAR};
+    enum { W = 150, H = 70 }; /* several tiles, a partial one at the right */
+    for (int k = 0; k < 2; k++) {
+        raster_fx fx;
+        fx_begin(&fx, &s, W, H, 2, simds[k]);
+        rs_pass pass = ortho_pass(RS_CULL_NONE);
+        rs_render(fx.ctx, &pass, &fx.t, NULL);
+        for (uint32_t i = 0; i < W * H; i++) {
+            uint32_t prim = fx.t.prim[i];
+            if (prim == RS_NO_PRIM || s.tri_material[prim] != 1)
+                fail_msg("%s: pixel %u shows triangle %u, not the kept quad", rs_simd_name(simds[k]), i, prim);
+        }
+        fx_end(&fx);
+    }
+    pf_scene_free(&s);
+}
+
 /* A closed outward icosphere seen in perspective with back faces culled:
  * every pixel inside the silhouette exactly once; without culling, twice. */
 static void test_watertight_sphere(void **state)
@@ -709,7 +746,7 @@ static void test_golden_gbuffer(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fill_rule_fans),     cmocka_unit_test(test_fill_rule_grid),
+        cmocka_unit_test(test_fill_rule_fans),     cmocka_unit_test(test_fill_rule_grid), cmocka_unit_test(test_alpha_mask),
         cmocka_unit_test(test_watertight_sphere),  cmocka_unit_test(test_clipping),
         cmocka_unit_test(test_paths_cornell),      cmocka_unit_test(test_paths_sibenik),
         cmocka_unit_test(test_vs_embree_cornell),  cmocka_unit_test(test_vs_embree_sibenik),

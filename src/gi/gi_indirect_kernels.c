@@ -80,7 +80,12 @@ static void gi__accumulate(const gi_accumulate_in *in, const float *px_, const f
             acc[g][2] = simd_add_f(acc[g][2], simd_select_f(vis, simd_mul_f(ib, G), zero));
         }
     }
-    for (uint32_t g = 0; g < groups; g++) simd_store3_f(e + 3 * (size_t)SIMD_W * g, acc[g][0], acc[g][1], acc[g][2]);
+    for (uint32_t g = 0; g < groups; g++) {
+        float c[3][SIMD_W];
+        for (int ch = 0; ch < 3; ch++) simd_storeu_f(c[ch], acc[g][ch]);
+        for (uint32_t i = 0; i < SIMD_W; i++)
+            for (int ch = 0; ch < 3; ch++) e[3 * (SIMD_W * g + i) + ch] = c[ch][i];
+    }
 }
 
 /* Laine's box test (Fig. 5) of the window pixels j.. against the run's

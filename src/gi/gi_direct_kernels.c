@@ -175,15 +175,9 @@ static void gi__direct_row(void *ctx, uint32_t y, uint32_t worker)
             /* direct = irradiance x albedo / pi, (e a) / pi as the scalar
              * code rounds it; the lanes without a surface hold 0 x 0 */
             const float *alb[3] = {g->alb_r, g->alb_g, g->alb_b};
-            simd_f d[3];
             for (int c = 0; c < 3; c++)
-                d[c] = simd_mul_f(simd_mul_f(e[c], gi__load_live(alb[c] + row + x0, whole, live_lanes)),
-                                  simd_set1_f(PF_INV_PI));
-            if (n == SIMD_W) {
-                simd_store3_f(o, d[0], d[1], d[2]);
-                continue;
-            }
-            for (int c = 0; c < 3; c++) simd_storeu_f(ev[c], d[c]);
+                simd_storeu_f(ev[c], simd_mul_f(simd_mul_f(e[c], gi__load_live(alb[c] + row + x0, whole, live_lanes)),
+                                                simd_set1_f(PF_INV_PI)));
             for (uint32_t i = 0; i < n; i++) o[3 * i] = ev[0][i], o[3 * i + 1] = ev[1][i], o[3 * i + 2] = ev[2][i];
             continue;
         }

@@ -136,15 +136,14 @@ static void gi__filter_box(const gi_filter_in *in, int x, int y, float *out)
             ws = simd_add_f(ws, simd_select_f(take, one, zero));
         }
     }
-    /* a pixel without a surface or without a neighbour that passes keeps
-     * its own value, the others the mean (the scalar code's divisions, lane
-     * by lane; the other lanes' quotients are not kept) */
-    simd_f cr, cg, cb;
-    simd_load3_f(in->combined + 3 * i0, &cr, &cg, &cb);
-    const simd_mask own = simd_mask_or(simd_eq_i(simd_loadu_i((const int32_t *)(g->prim + i0)), empty),
-                                       simd_mask_not(simd_gt_f(ws, zero)));
-    simd_store3_f(out, simd_select_f(own, cr, simd_div_f(ar, ws)), simd_select_f(own, cg, simd_div_f(ag, ws)),
-                  simd_select_f(own, cb, simd_div_f(ab, ws)));
+    float r[SIMD_W], gg[SIMD_W], bb[SIMD_W], w[SIMD_W];
+    simd_storeu_f(r, ar), simd_storeu_f(gg, ag), simd_storeu_f(bb, ab), simd_storeu_f(w, ws);
+    for (int k = 0; k < SIMD_W; k++) {
+        size_t i = i0 + (size_t)k;
+        float *o = out + 3 * (size_t)k;
+        if (g->prim[i] == RS_GBUFFER_EMPTY || !(w[k] > 0.0f)) memcpy(o, in->combined + 3 * i, 3 * sizeof(float));
+        else o[0] = r[k] / w[k], o[1] = gg[k] / w[k], o[2] = bb[k] / w[k];
+    }
 }
 
 /* The joint upsampling's four samples, lane-wise with gi__upsample_row's
@@ -203,8 +202,9 @@ static uint32_t gi__upsample(const gi_upsample_in *in, uint32_t x, uint32_t y, f
         }
     }
     const simd_mask has = simd_gt_f(wsum, zero);
-    simd_store3_f(out, simd_select_f(has, simd_div_f(acc[0], wsum), zero),
-                  simd_select_f(has, simd_div_f(acc[1], wsum), zero), simd_select_f(has, simd_div_f(acc[2], wsum), zero));
+    float o[3][SIMD_W];
+    for (int ch = 0; ch < 3; ch++) simd_storeu_f(o[ch], simd_select_f(has, simd_div_f(acc[ch], wsum), zero));
+    for (uint32_t l = 0; l < SIMD_W; l++) out[3 * l] = o[0][l], out[3 * l + 1] = o[1][l], out[3 * l + 2] = o[2][l];
     return simd_mask_bits(simd_mask_andnot(covered, has));
 }
 

@@ -245,30 +245,6 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
                          _mm256_permutevar8x32_ps(e2, _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 4, 7)), 0xe0);
 }
 
-/* simd_load3_f's inverse: a, b, c interleaved into the 3 SIMD_W floats at p
- * (a0 b0 c0 a1 b1 c1 ...; data movement only). */
-static inline void simd_store3_f(float *p, simd_f a, simd_f b, simd_f c)
-{
-    /* float 3 k + m of the 24 is lane k of member m: each output vector
-     * blends one permutation of each member (0x92: positions 1, 4, 7; 0x24:
-     * positions 2, 5) */
-    const __m256 e0 = _mm256_blend_ps(
-        _mm256_blend_ps(_mm256_permutevar8x32_ps(a, _mm256_setr_epi32(0, 0, 0, 1, 0, 0, 2, 0)),
-                        _mm256_permutevar8x32_ps(b, _mm256_setr_epi32(0, 0, 0, 0, 1, 0, 0, 2)), 0x92),
-        _mm256_permutevar8x32_ps(c, _mm256_setr_epi32(0, 0, 0, 0, 0, 1, 0, 0)), 0x24);
-    const __m256 e1 = _mm256_blend_ps(
-        _mm256_blend_ps(_mm256_permutevar8x32_ps(c, _mm256_setr_epi32(2, 0, 0, 3, 0, 0, 4, 0)),
-                        _mm256_permutevar8x32_ps(a, _mm256_setr_epi32(0, 3, 0, 0, 4, 0, 0, 5)), 0x92),
-        _mm256_permutevar8x32_ps(b, _mm256_setr_epi32(0, 0, 3, 0, 0, 4, 0, 0)), 0x24);
-    const __m256 e2 = _mm256_blend_ps(
-        _mm256_blend_ps(_mm256_permutevar8x32_ps(b, _mm256_setr_epi32(5, 0, 0, 6, 0, 0, 7, 0)),
-                        _mm256_permutevar8x32_ps(c, _mm256_setr_epi32(0, 5, 0, 0, 6, 0, 0, 7)), 0x92),
-        _mm256_permutevar8x32_ps(a, _mm256_setr_epi32(0, 0, 6, 0, 0, 7, 0, 0)), 0x24);
-    _mm256_storeu_ps(p, e0);
-    _mm256_storeu_ps(p + 8, e1);
-    _mm256_storeu_ps(p + 16, e2);
-}
-
 static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
 {
     return _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)p)),

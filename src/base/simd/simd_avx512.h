@@ -188,28 +188,6 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
     }
 }
 
-/* simd_load3_f's inverse: a, b, c interleaved into the 3 SIMD_W floats at p
- * (data movement only). Output float f = 16 j + i of vector j is lane
- * k = f / 3 of member f mod 3: a two-source permute takes a's and b's
- * lanes, a masked permute puts c's in. */
-static inline void simd_store3_f(float *p, simd_f a, simd_f b, simd_f c)
-{
-    const struct {
-        __m512i ab, k;
-        __mmask16 from_c;
-    } t[3] = {
-        {_mm512_setr_epi32(0, 16, 0, 1, 17, 1, 2, 18, 2, 3, 19, 3, 4, 20, 4, 5),
-         _mm512_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4, 5), 0x4924},
-        {_mm512_setr_epi32(21, 5, 6, 22, 6, 7, 23, 7, 8, 24, 8, 9, 25, 9, 10, 26),
-         _mm512_setr_epi32(5, 5, 6, 6, 6, 7, 7, 7, 8, 8, 8, 9, 9, 9, 10, 10), 0x2492},
-        {_mm512_setr_epi32(10, 11, 27, 11, 12, 28, 12, 13, 29, 13, 14, 30, 14, 15, 31, 15),
-         _mm512_setr_epi32(10, 11, 11, 11, 12, 12, 12, 13, 13, 13, 14, 14, 14, 15, 15, 15), 0x9249},
-    };
-    for (int j = 0; j < 3; j++)
-        _mm512_storeu_ps(p + 16 * j,
-                         _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(a, t[j].ab, b), t[j].from_c, t[j].k, c));
-}
-
 static inline simd_i simd_load_rows4_i(const int32_t *p, size_t stride)
 {
     __m512i r = _mm512_castsi128_si512(_mm_loadu_si128((const __m128i *)p));

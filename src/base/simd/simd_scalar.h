@@ -403,12 +403,6 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
 {
     for (int l = 0; l < SIMD_W; l++) a->v[l] = p[3 * l], b->v[l] = p[3 * l + 1], c->v[l] = p[3 * l + 2];
 }
-/* simd_load3_f's inverse: a, b, c interleaved into the 3 SIMD_W floats at p
- * (data movement only). */
-static inline void simd_store3_f(float *p, simd_f a, simd_f b, simd_f c)
-{
-    for (int l = 0; l < SIMD_W; l++) p[3 * l] = a.v[l], p[3 * l + 1] = b.v[l], p[3 * l + 2] = c.v[l];
-}
 /* base[idx] for the lanes of m, 0 elsewhere (reads nothing for the others) */
 static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
 {

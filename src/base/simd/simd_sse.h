@@ -216,13 +216,6 @@ static inline void simd_load3_f(const float *p, simd_f *a, simd_f *b, simd_f *c)
     *b = _mm_setr_ps(p[1], p[4], p[7], p[10]);
     *c = _mm_setr_ps(p[2], p[5], p[8], p[11]);
 }
-/* simd_load3_f's inverse (data movement only). */
-static inline void simd_store3_f(float *p, simd_f a, simd_f b, simd_f c)
-{
-    _mm_storeu_ps(p, _mm_shuffle_ps(_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, a), 0xc4));     /* a0 b0 c0 a1 */
-    _mm_storeu_ps(p + 4, _mm_shuffle_ps(_mm_shuffle_ps(b, c, 0x55), _mm_shuffle_ps(a, b, 0xaa), 0x88)); /* b1 c1 a2 b2 */
-    _mm_storeu_ps(p + 8, _mm_shuffle_ps(_mm_unpackhi_ps(c, a), _mm_unpackhi_ps(b, c), 0xec)); /* c2 a3 b3 c3 */
-}
 static inline simd_f simd_maskz_gather_f(const float *base, simd_i idx, simd_mask m)
 {
     int32_t i[4];

@@ -116,9 +116,16 @@ static inline simd_mask rs__inside(const rs__tile_ctx *c, int32_t sx, int32_t sy
  * bounds x from below on every pixel row, x >= -(e + b y) / a (a < 0: from
  * above), a line in y, so over a band the bound is the line at the band's
  * first or last row, and from band to band it moves by a fixed step: one
- * add per edge and band. In double with a pixel of margin: conservative,
- * the exact test decides. Cuts the empty stamps of a thin or slanted
+ * add per edge and band. In double with a margin (RS__BAND_MARGIN):
+ * conservative, the exact test decides. Cuts the empty stamps of a thin or slanted
  * triangle's bounding rectangle. */
+/* The bounds' margin (pixels) against their rounding: the line bound and
+ * its steps are computed in double from integers below 2^32, so over the
+ * at most RS_TILE / RS__SH bands of a tile its error stays below 2^-16
+ * pixel; 1/64 pixel is ample (a margin of a whole pixel, until 2026-12-03,
+ * visited an extra stamp at a band's end a quarter of the time). */
+#define RS__BAND_MARGIN (1.0 / 64.0)
+
 typedef struct rs__bands {
     double lb[3], dlb[3], rb[3], drb[3]; /* lower / upper x bound of the current band per edge, step per band */
     double xmax;                         /* the rectangle's last pixel column (rectangle-relative) */
@@ -147,8 +154,8 @@ static void rs__bands_init(rs__bands *b, const rs__pair *p, const int32_t ax[3],
 static inline void rs__bands_next(rs__bands *b, int32_t *lo, int32_t *hi)
 {
     double l = b->lb[0] > b->lb[1] ? b->lb[0] : b->lb[1], r = b->rb[0] < b->rb[1] ? b->rb[0] : b->rb[1];
-    l = (l > b->lb[2] ? l : b->lb[2]) - 1.0;
-    r = (r < b->rb[2] ? r : b->rb[2]) + 1.0;
+    l = (l > b->lb[2] ? l : b->lb[2]) - RS__BAND_MARGIN;
+    r = (r < b->rb[2] ? r : b->rb[2]) + RS__BAND_MARGIN;
     for (int k = 0; k < 3; k++) b->lb[k] += b->dlb[k], b->rb[k] += b->drb[k];
     l = l > 0.0 ? l : 0.0;
     r = r < b->xmax ? r : b->xmax;

@@ -235,10 +235,12 @@ static void rs__walk32(const rs__tile_ctx *c, const rs__pair *p)
         stepy[k] = simd_set1_i((int32_t)((uint32_t)by[k] * RS__SH));
     }
     const int fast = !p->masked && !c->in->coverage && !c->partial;
-    /* bands pay off on rectangles at least 3 stamps wide and 2 high; the
-     * band bounds exist only then (no memset of them for the others: its
-     * rep stos cost more than a small triangle's walk) */
-    if (p->sx1 - p->sx0 >= 2 && p->sy1 > p->sy0) {
+    /* bands pay off on rectangles at least 6 stamps wide and 2 high
+     * (measured with `bench raster`: from 2, 4, 5, 6, 7 or 9 stamps on, 5-7
+     * best and alike, docs/perf.md); the band bounds exist only then (no
+     * memset of them for the others: its rep stos cost more than a small
+     * triangle's walk) */
+    if (p->sx1 - p->sx0 >= 5 && p->sy1 > p->sy0) {
         rs__bands bands;
         rs__bands_init(&bands, p, ax, by);
         for (int32_t sy = p->sy0; sy <= p->sy1; sy++) {

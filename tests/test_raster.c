@@ -200,11 +200,7 @@ static void check_grid(int N, uint32_t w, uint32_t h)
         }
     pf_scene s;
     scene_from_tris(&s, p, n / 3);
-    /* the scalar path and the best one */
-    const pf_isa best = pf_isa_detect();
-    const rs_simd simds[2] = {RS_SIMD_SCALAR, best >= PF_ISA_AVX512 ? RS_SIMD_AVX512
-                                              : best >= PF_ISA_AVX2  ? RS_SIMD_AVX2
-                                                                     : RS_SIMD_SCALAR};
+    const rs_simd simds[2] = {RS_SIMD_SCALAR, rs_simd_for_isa(pf_isa_detect())}; /* the scalar and the best path */
     for (int k = 0; k < 2; k++) {
         raster_fx fx;
         fx_begin(&fx, &s, w, h, 2, simds[k]);
@@ -252,10 +248,7 @@ static void test_alpha_mask(void **state)
     tu_make_scene(&s, q, 3);
     pf_error err;
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
-    const pf_isa best = pf_isa_detect();
-    const rs_simd simds[2] = {RS_SIMD_SCALAR, best >= PF_ISA_AVX512 ? RS_SIMD_AVX512
-                                              : best >= PF_ISA_AVX2  ? RS_SIMD_AVX2
-                                                                     : RS_SIMD_SCALAR};
+    const rs_simd simds[2] = {RS_SIMD_SCALAR, rs_simd_for_isa(pf_isa_detect())};
     enum { W = 150, H = 70 }; /* several tiles, a partial one at the right */
     for (int k = 0; k < 2; k++) {
         raster_fx fx;
@@ -746,7 +739,8 @@ static void test_golden_gbuffer(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fill_rule_fans),     cmocka_unit_test(test_fill_rule_grid), cmocka_unit_test(test_alpha_mask),
+        cmocka_unit_test(test_fill_rule_fans),     cmocka_unit_test(test_fill_rule_grid),
+        cmocka_unit_test(test_alpha_mask),
         cmocka_unit_test(test_watertight_sphere),  cmocka_unit_test(test_clipping),
         cmocka_unit_test(test_paths_cornell),      cmocka_unit_test(test_paths_sibenik),
         cmocka_unit_test(test_vs_embree_cornell),  cmocka_unit_test(test_vs_embree_sibenik),

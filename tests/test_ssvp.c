@@ -420,6 +420,17 @@ static void test_lazy_maps_identical(void **state)
     }
 }
 
+/* One update with one thread of the scene in c->scene (which it frees):
+ * the VPLs SSVP makes with these parameters, budget and VPL cycle. */
+static void single_update(ctx *c, const char *const *kv, uint32_t nkv, uint32_t budget, uint32_t cycle,
+                          gi_vpl_set *out)
+{
+    ctx_begin(c, 1, kv, nkv, budget);
+    c->in.cycle = cycle;
+    update(c, out);
+    ctx_end(c);
+}
+
 /* The default second-bounce origin follows VPL cycling: the paper's
  * centroid when a frame shades its whole set, the unbiased members under a
  * cycle (gi_vpl_inputs.cycle > 1); an origin given with --param keeps its
@@ -429,10 +440,7 @@ static void cycle_set(const char *const *kv, uint32_t nkv, uint32_t cycle, gi_vp
     ctx c;
     pf_error err;
     assert_int_equal(pf_gltf_load(&c.scene, CORNELL, NULL, &err), PF_OK);
-    ctx_begin(&c, 1, kv, nkv, 512);
-    c.in.cycle = cycle;
-    update(&c, out);
-    ctx_end(&c);
+    single_update(&c, kv, nkv, 512, cycle, out);
 }
 
 static void test_origin_follows_cycle(void **state)
@@ -706,15 +714,13 @@ static void bounce_counts(const char *const *kv, uint32_t nkv, uint32_t budget, 
     ctx c;
     gi_vpl_set v = {0};
     closed_box(&c.scene);
-    ctx_begin(&c, 1, kv, nkv, budget);
-    update(&c, &v);
+    single_update(&c, kv, nkv, budget, 0, &v);
     *n1 = *n2 = 0;
     for (uint32_t i = 0; i < v.count; i++) {
         if (v.v[i].id & 0x80000000u) (*n2)++;
         else (*n1)++;
     }
     gi_vpl_set_free(&v);
-    ctx_end(&c);
 }
 
 static void test_errors(void **state)

@@ -412,6 +412,7 @@ static void test_same_as_cli_frame_options(void **state)
         {{.indirect_scale = 2}, "--indirect-scale 2"},
         {{.temporal = 4}, "--temporal 4"},
         {{.temporal = 4, .vpl_cycle = 4}, "--temporal 4 --vpl-cycle 4"},
+        {{.temporal = 4, .vpl_cycle = 4, .cycle_maps = 8}, "--temporal 4 --vpl-cycle 4 --cycle-maps 8"},
         {{.flags = SOFTGI_COMPENSATE}, "--compensate on"},
         {{.flags = SOFTGI_FILTER_DISTANCE}, "--filter-test distance"},
         {{.flags = SOFTGI_PIPELINE, .method = "iir"}, "--pipeline on --method iir"},

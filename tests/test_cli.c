@@ -190,6 +190,7 @@ static const struct {
     {"--dump-stages", "d", {0}},       {"--dump-format", "exr", {"--dump-stages", "d"}},
     {"--pipeline", "on", {0}},         {"--indirect-scale", "2", {0}}, {"--temporal", "4", {0}},
     {"--vpl-cycle", "4", {"--temporal", "4"}},
+    {"--cycle-maps", "8", {"--temporal", "4", "--vpl-cycle", "4"}},
     {"--compensate", "on", {0}},       {"--spp", "4", {0}},              {"--reference", NULL, {0}},
     {"--light-paths", "off", {0}},
     {"--track-spp", "4", {"--reference"}}, {"--reuse-frames", NULL, {"--reference", "--track-spp", "4"}},

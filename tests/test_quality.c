@@ -94,7 +94,7 @@ static void test_table(void **state)
     assert_non_null(strstr(t, "cornell, 1 bounce: reference noise 0."));
     assert_non_null(strstr(t, "cornell, 3 bounces: reference noise 0."));
     static const char *const settings[] = {"paper",           "softgi", "temporal", "atrous",
-                                           "atrous+temporal", "cycle",  "cycle32"};
+                                           "atrous+temporal", "cycle",  "cycle32", "progressive"};
     enum { NSET = sizeof settings / sizeof settings[0] };
     double ir[NSET][6], iir[NSET][6];
     for (int k = 0; k < NSET; k++) {
@@ -108,10 +108,10 @@ static void test_table(void **state)
     /* the temporal setting averages the rotating tile groups: closer to the
      * proxy (every VPL at every pixel) than one interleaved frame */
     assert_true(ir[2][1] < ir[0][1]);
-    /* exactly fourteen rows: two methods, seven settings */
+    /* exactly sixteen rows: two methods, eight settings */
     size_t rows = 0;
     for (const char *p = strstr(t, "| cornell | `"); p; p = strstr(p + 1, "| cornell | `")) rows++;
-    assert_int_equal(rows, 14);
+    assert_int_equal(rows, 16);
 
     /* the same settings again: the references and proxies are reused, and
      * the numbers are the same (the frames are deterministic) */

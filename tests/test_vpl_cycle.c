@@ -11,8 +11,14 @@
  * - the same bytes with 1 and 2 threads, and on the SIMD path as on the
  *   scalar one, over frames with a moving light (moved VPLs' maps drawn
  *   when their slice comes);
+ * - the progressive warm-up (cycle_maps B): slice 0's maps in frame 0,
+ *   then B maps a frame drawn ahead, a slice joining the rotation once its
+ *   maps are there, only slices in the rotation shaded, every map drawn
+ *   once, and the history still converging to the whole set; the same
+ *   bytes with 1 and 2 threads and on the SIMD path;
  * - cycling without --temporal, with imperfect shadow maps, or over too
- *   many slices is refused with a clear message. */
+ *   many slices, and the warm-up without cycling, are refused with a clear
+ *   message. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -35,8 +41,8 @@
 #define VPLS 32u
 #define CYCLE 4u
 
-static void begin_piped(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
-                        int no_interleave, int pipeline)
+static void begin_warm(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
+                      int no_interleave, int pipeline, uint32_t cycle_maps)
 {
     tu_load(&x->scene, CORNELL);
     gi_indirect_options io;
@@ -47,7 +53,14 @@ static void begin_piped(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls,
     io.cycle = cycle;
     io.no_interleave = no_interleave;
     io.pipeline = pipeline;
+    io.cycle_maps = cycle_maps;
     tu_fx_begin(x, threads, simd, W, H, &x->scene.cameras[0], &io, 1);
+}
+
+static void begin_piped(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
+                        int no_interleave, int pipeline)
+{
+    begin_warm(x, threads, simd, vpls, cycle, temporal, no_interleave, pipeline, 0);
 }
 
 static void begin(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
@@ -115,17 +128,79 @@ static void test_without_cycling_it_stays_apart(void **state)
     tu_fx_end(&t);
 }
 
-/* The light moves every frame: every VPL moves, and each slice's maps are
- * drawn when its turn comes; 1 and 2 threads, scalar and SIMD, same bytes. */
-static void test_threads_and_simd(void **state)
+/* The progressive warm-up with B maps a frame ahead: the maps each frame
+ * draws, the rotation growing by a slice once its maps are all there, only
+ * slices in it shaded, each map drawn once; and each frame's accumulated
+ * irradiance, before the filter and the history, equals bit for bit the
+ * frame without the warm-up that shades the same slice for the same time
+ * (frame a C + s shades slice s for the a-th time, the groups rotated by
+ * a + s): so a warm-up frame reads no map before it is drawn, weights its
+ * slice as the plain cycle does, and the history converges to the whole
+ * set as test_converges_to_the_whole_set shows for those frames. */
+static void test_progressive_warmup(void **state)
 {
     (void)state;
+    enum { B = 5, ROUNDS = 4 };
+    const size_t px3 = (size_t)W * H * 3;
+    tu_fx plain, t;
+    begin(&plain, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 16, 0);
+    float *want = malloc(ROUNDS * CYCLE * px3 * sizeof(float));
+    assert_non_null(want);
+    for (uint32_t k = 0; k < ROUNDS * CYCLE; k++) {
+        gi_frame_render_raster(&plain.f);
+        memcpy(want + k * px3, plain.f.ind.combined, px3 * sizeof(float));
+    }
+    const uint32_t N = plain.f.ind.vpls.count;
+    tu_fx_end(&plain);
+    begin_warm(&t, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 16, 0, 0, B);
+    /* slice s holds the slots s, s + C, ...: (N - s + C - 1) / C of them */
+    uint32_t maps = 0, want_live = 1, left = (N - 1 + CYCLE - 1) / CYCLE, shaded[CYCLE] = {0}, compared = 0;
+    for (uint32_t k = 0; k < 60; k++) {
+        const uint32_t live = t.f.ind.cycle_live;
+        assert_int_equal(live, want_live);
+        gi_frame_render_raster(&t.f);
+        const uint32_t drawn = t.f.ind.maps_rendered, s = t.f.ind.slice;
+        assert_int_equal(t.f.ind.vpls.count, N);
+        assert_true(s < live); /* only slices in the rotation */
+        assert_int_equal(t.f.ind.cycle_base, shaded[s]);
+        /* frame 0: slice 0's maps; every frame: B of slice `live` ahead,
+         * which joins the rotation once all its maps are there */
+        uint32_t ahead = live < CYCLE ? (left < B ? left : B) : 0;
+        assert_int_equal(drawn, (k == 0 ? (N + CYCLE - 1) / CYCLE : 0) + ahead);
+        assert_int_equal(t.f.ind.maps_ahead, ahead);
+        maps += drawn;
+        left -= ahead;
+        if (live < CYCLE && !left) {
+            want_live = live + 1;
+            if (want_live < CYCLE) left = (N - want_live + CYCLE - 1) / CYCLE;
+        }
+        if (shaded[s] < ROUNDS) {
+            assert_memory_equal(t.f.ind.combined, want + (shaded[s] * CYCLE + s) * px3, px3 * sizeof(float));
+            compared++;
+        }
+        shaded[s]++;
+    }
+    assert_int_equal(want_live, CYCLE);
+    assert_int_equal(maps, N); /* each map drawn once */
+    assert_int_equal(compared, ROUNDS * CYCLE); /* every slice shaded at least ROUNDS times */
+    print_message("warm-up of %u maps a frame: slices shaded %u %u %u %u times in 60 frames, %u frames equal to the "
+                  "plain cycle's\n",
+                  (unsigned)B, shaded[0], shaded[1], shaded[2], shaded[3], compared);
+    free(want);
+    tu_fx_end(&t);
+}
+
+/* The light moves every frame: every VPL moves, and each slice's maps are
+ * drawn when its turn comes; 1 and 2 threads, scalar and SIMD, same bytes;
+ * with and without the progressive warm-up. */
+static void threads_and_simd(uint32_t cycle_maps)
+{
     tu_fx a, b, c;
-    begin(&a, 1, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0);
-    begin(&b, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0);
+    begin_warm(&a, 1, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0, 0, cycle_maps);
+    begin_warm(&b, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 8, 0, 0, cycle_maps);
     pf_isa isa = pf_isa_detect();
     rs_simd best = isa >= PF_ISA_AVX512 ? RS_SIMD_AVX512 : isa >= PF_ISA_AVX2 ? RS_SIMD_AVX2 : RS_SIMD_SCALAR;
-    begin(&c, 2, best, VPLS, CYCLE, 8, 0);
+    begin_warm(&c, 2, best, VPLS, CYCLE, 8, 0, 0, cycle_maps);
     for (int k = 0; k < 6; k++) {
         tu_fx *x[3] = {&a, &b, &c};
         for (int j = 0; j < 3; j++) {
@@ -139,6 +214,13 @@ static void test_threads_and_simd(void **state)
     tu_fx_end(&a);
     tu_fx_end(&b);
     tu_fx_end(&c);
+}
+
+static void test_threads_and_simd(void **state)
+{
+    (void)state;
+    threads_and_simd(0);
+    threads_and_simd(3);
 }
 
 static void refused(const gi_indirect_options *io, const char *says)
@@ -169,6 +251,10 @@ static void test_bad_options(void **state)
     io.cycle = GI_INDIRECT_MAX_CYCLE;
     io.vpls = GI_INDIRECT_MAX_SET / 8;
     refused(&io, "set of more than");
+    memset(&io, 0, sizeof io);
+    io.temporal = 8;
+    io.cycle_maps = 16;
+    refused(&io, "needs --vpl-cycle");
 }
 
 int main(void)
@@ -176,6 +262,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_converges_to_the_whole_set),
         cmocka_unit_test(test_without_cycling_it_stays_apart),
+        cmocka_unit_test(test_progressive_warmup),
         cmocka_unit_test(test_threads_and_simd),
         cmocka_unit_test(test_bad_options),
     };

@@ -145,6 +145,9 @@ typedef struct softgi_desc {
     uint32_t temporal;      /* temporal accumulation over up to N frames, 2..256; 0: off (--temporal) */
     uint32_t vpl_cycle;     /* with temporal: C x vpls VPLs kept, one slice of vpls shaded a frame in turn,
                                2..64; 0: off (--vpl-cycle) */
+    uint32_t cycle_maps;    /* with vpl_cycle: the progressive warm-up, the slices taken into the rotation one
+                               by one, at most cycle_maps maps a frame drawn ahead; 0: every slice from the
+                               first frame (--cycle-maps) */
     /* anti-aliasing */
     uint32_t aa;            /* jittered samples a pixel, averaged, 1..256; 0: 1, the pixel centres (--aa) */
     uint32_t taa;           /* temporal anti-aliasing over up to N frames, 2..256; 0: off (--taa, softgi

@@ -234,6 +234,7 @@ pf_result api_indirect_options(const softgi_desc *d, gi_indirect_options *io, pf
     io->scale = d->indirect_scale;
     io->temporal = d->temporal;
     io->cycle = d->vpl_cycle;
+    io->cycle_maps = d->cycle_maps;
     io->compensate = (d->flags & SOFTGI_COMPENSATE) != 0;
     io->filter_distance = (d->flags & SOFTGI_FILTER_DISTANCE) != 0;
     io->filter = !d->filter || !strcmp(d->filter, "box") ? GI_FILTER_BOX

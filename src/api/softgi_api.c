@@ -211,6 +211,7 @@ static softgi_result api__check_frame_fields(const softgi_desc *d, softgi_error 
     API__RANGE(indirect_scale, 1u, GI_INDIRECT_MAX_SCALE, "automatic: 2 from 1024x768 up, else 1")
     API__RANGE(temporal, 2u, GI_INDIRECT_MAX_TEMPORAL, "off")
     API__RANGE(vpl_cycle, 2u, GI_INDIRECT_MAX_CYCLE, "off")
+    API__RANGE(cycle_maps, 1u, GI_INDIRECT_MAX_SET, "off")
     API__RANGE(aa, 1u, GI_AA_MAX_SAMPLES, "1")
     API__RANGE(taa, 2u, GI_AA_MAX_TAA, "off")
 #undef API__RANGE

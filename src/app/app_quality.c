@@ -83,7 +83,10 @@
 /* paper: the papers' defaults; softgi: + --compensate on; temporal: softgi +
  * --temporal 16; atrous: softgi + --filter atrous; atrous+temporal: both;
  * cycle: temporal + --vpl-cycle 16 (16 slices of --vpls, one a frame);
- * cycle32: --temporal 32 --vpl-cycle 32, frame 31 of 32 */
+ * cycle32: --temporal 32 --vpl-cycle 32, frame 31 of 32; progressive:
+ * cycle32's with --cycle-maps 32 (the progressive warm-up, 32 maps a frame
+ * drawn ahead), the frame where the last slice has been in the rotation for
+ * 32 frames */
 typedef enum qu__setting {
     QU_PAPER,
     QU_SOFTGI,
@@ -92,16 +95,33 @@ typedef enum qu__setting {
     QU_ATROUS_TEMPORAL,
     QU_CYCLE,
     QU_CYCLE32,
+    QU_PROGRESSIVE,
     QU_SETTINGS
 } qu__setting;
 static const char *const k_setting_names[QU_SETTINGS] = {"paper",  "softgi",          "temporal", "atrous",
-                                                         "atrous+temporal", "cycle", "cycle32"};
+                                                         "atrous+temporal", "cycle", "cycle32",
+                                                         "progressive"};
 static int qu__temporal(int k)
 {
-    return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL || k == QU_CYCLE || k == QU_CYCLE32;
+    return k == QU_TEMPORAL || k == QU_ATROUS_TEMPORAL || k == QU_CYCLE || k == QU_CYCLE32 || k == QU_PROGRESSIVE;
 }
-/* frames rendered of a temporal setting (the last one is compared) */
-static uint32_t qu__temporal_frames(int k) { return k == QU_CYCLE32 ? 2u * QU_TEMPORAL_FRAMES : QU_TEMPORAL_FRAMES; }
+#define QU_CYCLE_MAPS 32u
+/* frames rendered of a temporal setting (the last one is compared); the
+ * progressive warm-up takes in a slice of `vpls` every ceil(vpls / 32)
+ * frames, so the last of its 32 slices joins at frame 31 ceil(vpls / 32),
+ * then a history's length of 32 frames */
+static uint32_t qu__temporal_frames(int k, uint32_t vpls)
+{
+    if (k == QU_PROGRESSIVE) return 31u * ((vpls + QU_CYCLE_MAPS - 1) / QU_CYCLE_MAPS) + 32u;
+    return k == QU_CYCLE32 ? 2u * QU_TEMPORAL_FRAMES : QU_TEMPORAL_FRAMES;
+}
+/* SMC's and MIR's update runs over the whole cycled set every frame
+ * (docs/perf.md: 110-1900 ms a frame at 8,192 VPLs), so the long warm-up
+ * of the progressive setting is not measured for them */
+static int qu__skipped(const char *method, int k)
+{
+    return k == QU_PROGRESSIVE && (!strncmp(method, "smc", 3) || !strncmp(method, "mir", 3));
+}
 
 /* The scenes the table knows. */
 typedef struct qu__scene {
@@ -272,15 +292,19 @@ static pf_result qu__options(qu__run *run, const qu__config *c, pf_options *o, p
         }
         if (qu__temporal(c->setting)) {
             qu__push(&v, "--temporal");
-            qu__push(&v, c->setting == QU_CYCLE32 ? "32" : "16");
+            qu__push(&v, c->setting == QU_CYCLE32 || c->setting == QU_PROGRESSIVE ? "32" : "16");
         }
         if (c->setting == QU_ATROUS || c->setting == QU_ATROUS_TEMPORAL) {
             qu__push(&v, "--filter");
             qu__push(&v, "atrous");
         }
-        if (c->setting == QU_CYCLE || c->setting == QU_CYCLE32) {
+        if (c->setting == QU_CYCLE || c->setting == QU_CYCLE32 || c->setting == QU_PROGRESSIVE) {
             qu__push(&v, "--vpl-cycle");
-            qu__push(&v, c->setting == QU_CYCLE32 ? "32" : "16");
+            qu__push(&v, c->setting == QU_CYCLE ? "16" : "32");
+        }
+        if (c->setting == QU_PROGRESSIVE) {
+            qu__push(&v, "--cycle-maps");
+            qu__push(&v, "32");
         }
     }
     if (v.argc >= QU_MAX_ARGS) return pf_error_set(err, PF_ERR_ARGUMENT, "evaluate --quality: too many parameters");
@@ -522,6 +546,7 @@ static int qu__scene_rows(qu__run *run, const qu__scene *s, const char *path, FI
     if (a->size) snprintf(size, sizeof size, "%s", a->size);
     else snprintf(size, sizeof size, "%ux%u", s->width, s->height);
     qu__config base = {.scene = s, .path = path, .size = size, .method = "ir", .vpls = a->vpls ? a->vpls : "256"};
+    const uint32_t vpls = (uint32_t)strtoul(base.vpls, NULL, 10); /* checked by app_quality */
     pf_options o;
     pf_error err;
     pf_result r = qu__options(run, &base, &o, &err);
@@ -578,7 +603,8 @@ static int qu__scene_rows(qu__run *run, const qu__scene *s, const char *path, FI
             qu__result res = {0};
             /* paper and softgi: the first frame's image, and a second frame of the view for the steady
              * state's time; temporal (and atrous+temporal, cycle): frame 15 of 16; cycle32: 31 of 32 */
-            uint32_t frames = qu__temporal(k) ? qu__temporal_frames(k) : 2;
+            if (qu__skipped(method_list[m], k)) continue;
+            uint32_t frames = qu__temporal(k) ? qu__temporal_frames(k, vpls) : 2;
             r = qu__render(run, &c, &su, raster, w, h, frames, qu__temporal(k) ? frames - 1 : 0, &res, &err);
             if (r != PF_OK) {
                 status = app_fail(&err);
@@ -771,7 +797,12 @@ int app_quality(const app_quality_args *a, int argc, char **argv)
                    "temporal's with `--vpl-cycle 16`, a set of 16 x --vpls VPLs, each frame shading one slice of "
                    "--vpls in turn, so frame 15 has averaged them all (the first 16 frames draw each slice's maps, "
                    "a static view draws none after) ([frame.md](../frame.md)); **cycle32**: the same with "
-                   "`--temporal 32 --vpl-cycle 32`, frame 31 of 32 (8,192 VPLs at --vpls 256).\n\n");
+                   "`--temporal 32 --vpl-cycle 32`, frame 31 of 32 (8,192 VPLs at --vpls 256); **progressive**: "
+                   "cycle32's with `--cycle-maps 32`, the progressive warm-up (slice 0's maps in the first frame, "
+                   "then 32 maps a frame drawn ahead, a slice joining the rotation when its maps are there), the "
+                   "frame after the last slice has been in the rotation for 32 frames (frame 279 at --vpls 256; its "
+                   "ms: the first frame / the mean of the warm-up and the frames after it; not measured for smc "
+                   "and mir, whose update runs over the whole cycled set every frame).\n\n");
         fprintf(d, "Columns: MRE = mean relative error per pixel of luminance (`gi_metrics_mean_relative_error`, "
                    "pixels whose ground-truth luminance exceeds 1e-4), against the reference and the proxy; energy = "
                    "sum of luminance over the ground truth's; ms = wall time of the first frame (every VPL's map "

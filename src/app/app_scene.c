@@ -88,6 +88,7 @@ pf_result app_desc(const pf_options *o, uint32_t width, uint32_t height, softgi_
     d->indirect_scale = o->indirect_scale;
     d->temporal = o->temporal;
     d->vpl_cycle = o->vpl_cycle;
+    d->cycle_maps = o->cycle_maps;
     d->aa = o->aa;
     d->taa = o->taa;
     return PF_OK;

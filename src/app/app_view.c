@@ -101,6 +101,8 @@ typedef struct view_app {
     gi_indirect_options io;   /* the indirect state the frame was built with */
     gi_indirect_options want; /* what the keys asked for */
     int indirect_dirty;
+    int progressive;          /* T: temporal accumulation with VPL cycling and the progressive warm-up */
+    int moving;               /* the camera or the grabbed light moved since the last frame */
     uint32_t method_count, method_cursor;
     uint32_t vis_cursor; /* 0 paraboloid, 1 ism, 2 raytrace */
     const gi_vpl_method *methods[VIEW_MAX_METHODS];
@@ -246,6 +248,36 @@ static pf_result view_parse_script(view_app *a, const char *text, pf_error *err)
 
 /* ------------------------------------------------------------ setup */
 
+/* The options the frame's indirect state was made with, as
+ * gi_frame_enable_indirect takes them (ind.opt.vpls counts the whole
+ * cycled set, the options the VPLs of one frame). */
+static gi_indirect_options view_options_of(const gi_frame *f)
+{
+    gi_indirect_options o = f->ind.opt;
+    if (f->ind.cycle > 1) o.vpls /= f->ind.cycle;
+    return o;
+}
+
+/* T's VPL cycling (docs/frame.md "VPL cycling"): 32 slices, fewer where
+ * their paraboloid maps would pass VIEW_CYCLE_BYTES, none for imperfect
+ * shadow maps (remade every frame) and for SMC and MIR, whose update runs
+ * over the whole cycled set every frame (docs/perf.md: 110-1900 ms a
+ * frame at 8,192 VPLs). */
+#define VIEW_CYCLE 32u
+#define VIEW_CYCLE_MAPS 32u
+#define VIEW_CYCLE_BYTES ((uint64_t)256 << 20)
+static uint32_t view_cycle_for(const gi_indirect_options *o)
+{
+    const char *m = o->method ? o->method->name : "ir";
+    if (o->visibility_ism || !strcmp(m, "smc") || !strcmp(m, "mir")) return 0;
+    uint64_t vpls = o->vpls ? o->vpls : 256, res = o->para_res ? o->para_res : RS_PARA_DEFAULT_RES;
+    uint64_t slice = o->visibility_raytrace ? 1 : vpls * res * res * 2u;
+    uint64_t c = VIEW_CYCLE_BYTES / slice;
+    if (c > VIEW_CYCLE) c = VIEW_CYCLE;
+    if (c * vpls > GI_INDIRECT_MAX_SET) c = GI_INDIRECT_MAX_SET / vpls;
+    return c >= 2 ? (uint32_t)c : 0;
+}
+
 /* The method registry, in its order (gi_vpl_method_names). */
 static void view_list_methods(view_app *a)
 {
@@ -290,7 +322,7 @@ static pf_result view_setup(view_app *a, pf_error *err)
     if (r != PF_OK) return r;
     a->frame_ready = 1;
     if (a->frame.indirect) {
-        a->io = a->frame.ind.opt; /* as the command line gave it, with the defaults filled in */
+        a->io = view_options_of(&a->frame); /* as the command line gave it, with the defaults filled in */
         a->want = a->io;
         a->vis_cursor = a->io.visibility_ism ? 1 : a->io.visibility_raytrace ? 2 : 0;
     }
@@ -339,6 +371,7 @@ static int view_size_display(view_app *a, uint32_t w, uint32_t h)
 
 /* ------------------------------------------------------------ state changes */
 
+
 /* Temporal anti-aliasing over `frames` (0: off; gi_aa.h), the frame's
  * --aa samples kept; restarts its history. */
 static void view_set_taa(view_app *a, uint32_t frames)
@@ -357,8 +390,12 @@ static void view_apply_indirect(view_app *a)
     pf_error err;
     gi_indirect_free(&a->frame.ind);
     a->frame.indirect = 0;
+    if (a->progressive) { /* for this method, visibility and VPL count */
+        a->want.cycle = view_cycle_for(&a->want);
+        a->want.cycle_maps = a->want.cycle > 1 ? VIEW_CYCLE_MAPS : 0;
+    }
     if (gi_frame_enable_indirect(&a->frame, &a->want, a->opt->indirect_only, &err) == PF_OK) {
-        a->io = a->frame.ind.opt;
+        a->io = view_options_of(&a->frame);
         a->want = a->io;
         if (a->frame.aa.taa.frames) view_set_taa(a, a->frame.aa.taa.frames); /* a new image: a new history */
         return;
@@ -415,17 +452,22 @@ static void view_cycle_filter(view_app *a)
     a->indirect_dirty = 1;
 }
 
-/* The three optional stages (docs/frame.md): temporal accumulation over 16
- * frames, the indirect light at half resolution, the clamp compensation.
- * T turns the temporal accumulation of the indirect light and the temporal
- * anti-aliasing (docs/aa.md: the samples jittered from frame to frame) on
- * and off together: a still camera then converges to an anti-aliased image
- * with every VPL group seen. */
+/* The three optional stages (docs/frame.md): temporal accumulation, the
+ * indirect light at half resolution, the clamp compensation. T turns on and
+ * off together the temporal accumulation of the indirect light over 32
+ * frames with VPL cycling (view_cycle_for: 32 x --vpls VPLs, one slice a
+ * frame) and its progressive warm-up (VIEW_CYCLE_MAPS maps a frame drawn
+ * ahead, only while the view is still), and the temporal anti-aliasing
+ * over 16 frames (docs/aa.md: the samples jittered from frame to frame):
+ * a still camera then converges to an anti-aliased image of the whole
+ * cycled set. */
 static void view_toggle_temporal(view_app *a)
 {
     int on = !(a->want.temporal || a->frame.aa.taa.frames);
+    a->progressive = on;
     if (a->frame.indirect) {
-        a->want.temporal = on ? 16 : 0;
+        a->want.temporal = on ? 32 : 0;
+        a->want.cycle = a->want.cycle_maps = 0; /* view_apply_indirect: view_cycle_for when on */
         a->indirect_dirty = 1;
     }
     view_set_taa(a, on ? 16 : 0);
@@ -659,7 +701,7 @@ static const char *const view_help[][2] = {
     {"O", "visibility paraboloid, ism, raytrace"},
     {"C", "clamp 400, 1600, 6400, off, 25, 100"},
     {"J", "clamp compensation on / off"},
-    {"T", "temporal accumulation and anti-aliasing, 16 frames, on / off"},
+    {"T", "temporal accumulation (VPL cycling) and anti-aliasing on / off"},
     {"U", "indirect light at half resolution on / off"},
     {"- / =", "exposure -/+ 0.5 stop"},
     {"P / space", "pause: the stage stepper"},
@@ -805,6 +847,7 @@ static void view_handle_motion(view_app *a, const pf_input *in, double dt)
         a->camera.right = pf_v3_normalize(pf_v3_cross(f, pf_v3(0, 1, 0)));
         a->camera.up = pf_v3_cross(a->camera.right, f);
         a->frame_needed = 1;
+        a->moving = 1;
     }
     pf_vec3 move = pf_v3(0, 0, 0);
     if (view_key_down(a, 'W')) move = pf_v3_add(move, a->camera.forward);
@@ -827,6 +870,7 @@ static void view_handle_motion(view_app *a, const pf_input *in, double dt)
         a->camera.eye = pf_v3_add(a->camera.eye, move);
     }
     a->frame_needed = 1;
+    a->moving = 1;
 }
 
 /* One scripted event, through the same paths as the window's. */
@@ -877,6 +921,8 @@ static void view_render_frame(view_app *a)
     if (a->grab_swapped && (!a->frame.indirect || strcmp(a->io.method->name, "iir") != 0))
         a->grab_swapped = 0; /* iir could not start: the frame kept ir */
     a->frame.camera = a->camera;
+    a->frame.ind.ahead_hold = a->moving; /* the warm-up's maps wait for a still view */
+    a->moving = 0;
     double t0 = pf_time_now();
     if (a->opt->raytrace) gi_frame_render_raytraced(&a->frame);
     else gi_frame_render_raster(&a->frame);
@@ -1039,9 +1085,11 @@ static void view_draw_status(view_app *a, view_col *c)
              o->method->name, f->ind.vpls.count, o->vpls, a->vpls_moved, f->ind.maps_rendered, f->ind.n, f->ind.m,
              view_filter_name(o->filter));
     view_block(a, c, line, view_white, 0);
-    snprintf(line, sizeof line, "visibility %s  clamp %s%s  scale %u  temporal %u  aa %u  taa %u  exposure %+.1f   H: help",
-             vis, clamp, o->compensate ? " +comp" : "", f->ind.scale, o->temporal, f->aa.samples, f->aa.taa.frames,
-             (double)a->exposure);
+    char cyc[32] = "";
+    if (f->ind.cycle > 1) snprintf(cyc, sizeof cyc, " cycle %u/%u", f->ind.cycle_live, f->ind.cycle);
+    snprintf(line, sizeof line, "visibility %s  clamp %s%s  scale %u  temporal %u%s  aa %u  taa %u  exposure %+.1f   H: help",
+             vis, clamp, o->compensate ? " +comp" : "", f->ind.scale, o->temporal, cyc, f->aa.samples,
+             f->aa.taa.frames, (double)a->exposure);
     view_block(a, c, line, view_white, 0);
 }
 

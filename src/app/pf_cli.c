@@ -29,7 +29,7 @@ typedef enum pf__opt_id {
     PF__OPT_ISM_POINTS, PF__OPT_ISM_BIAS, PF__OPT_PARAM, PF__OPT_DUMP_STAGES, PF__OPT_DUMP_FORMAT, PF__OPT_PIPELINE, PF__OPT_SPP,
     PF__OPT_REFERENCE, PF__OPT_TRACK_SPP, PF__OPT_REUSE_FRAMES, PF__OPT_RAYTRACE, PF__OPT_HASH, PF__OPT_QUIET,
     PF__OPT_FRAMES, PF__OPT_SCREENSHOT, PF__OPT_SCENES, PF__OPT_MOVING_LIGHT, PF__OPT_MOVING_OBJECT, PF__OPT_PARA_LOD, PF__OPT_HELP, PF__OPT_VERSION,
-    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_VPL_CYCLE, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
+    PF__OPT_INDIRECT_SCALE, PF__OPT_TEMPORAL, PF__OPT_VPL_CYCLE, PF__OPT_CYCLE_MAPS, PF__OPT_COMPENSATE, PF__OPT_QUALITY, PF__OPT_AA, PF__OPT_TAA,
     PF__OPT_TIME, PF__OPT_ANIMATION, PF__OPT_LIGHT_PATHS,
     PF__OPT_COUNT
 } pf__opt_id;
@@ -159,6 +159,10 @@ static const pf__opt k_options[] = {
     {PF__OPT_VPL_CYCLE, "--vpl-cycle", NULL, "C", FRAME | BF,
      "with --temporal: keep C x --vpls VPLs with their maps and shade\none slice of --vpls a frame, so the history "
      "averages\nall of them (2..64; default 0: off; docs/frame.md)",
+     NULL},
+    {PF__OPT_CYCLE_MAPS, "--cycle-maps", NULL, "B", FRAME | BF,
+     "with --vpl-cycle: the progressive warm-up, the slices joining\nthe rotation one by one, B maps a frame "
+     "drawn ahead\n(default 0: every slice from the first frame; docs/frame.md)",
      NULL},
     {PF__OPT_AA, "--aa", NULL, "N", FRAME | BF,
      "anti-aliasing: N jittered samples per pixel (1..256), averaged\nin linear radiance before the tone map "
@@ -694,6 +698,7 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         r = pf__uint(a, val, 0, GI_INDIRECT_MAX_CYCLE, &o->vpl_cycle, err);
         if (r == PF_OK && o->vpl_cycle == 1) o->vpl_cycle = 0; /* one slice: off */
         break;
+    case PF__OPT_CYCLE_MAPS: r = pf__uint(a, val, 0, GI_INDIRECT_MAX_SET, &o->cycle_maps, err); break;
     case PF__OPT_AA: r = pf__uint(a, val, 1, GI_AA_MAX_SAMPLES, &o->aa, err); break;
     case PF__OPT_TAA:
         r = pf__uint(a, val, 0, GI_AA_MAX_TAA, &o->taa, err);

@@ -90,6 +90,7 @@ typedef struct pf_options {
                                 GI_INDIRECT_SCALE_AUTO) */
     uint32_t temporal;       /* --temporal N: temporal accumulation over up to N frames (0: off) */
     uint32_t vpl_cycle;      /* --vpl-cycle C: C slices of VPLs shaded in turn (0: off) */
+    uint32_t cycle_maps;     /* --cycle-maps B: the progressive warm-up, B maps a frame ahead (0: off) */
     int compensate;          /* --compensate on: screen-space clamp compensation */
     int filter_distance;     /* --filter-test distance: Laine's |p2 - p| < alpha instead of the plane test */
     int no_light_paths;      /* reference --light-paths off: NEE alone */

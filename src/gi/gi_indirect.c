@@ -64,7 +64,12 @@ pf_result gi_indirect_init(gi_frame *f, const gi_indirect_options *opt_in, pf_er
     if ((uint64_t)o.vpls * o.cycle > GI_INDIRECT_MAX_SET)
         return pf_error_set(err, PF_ERR_ARGUMENT, "%u VPLs a frame cycled over %u slices: a set of more than %u VPLs",
                             o.vpls, o.cycle, GI_INDIRECT_MAX_SET);
+    if (o.cycle_maps && o.cycle < 2)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "the progressive warm-up (--cycle-maps %u) needs --vpl-cycle C",
+                            o.cycle_maps);
     ind->cycle = o.cycle;
+    /* the progressive warm-up only where there are maps to draw */
+    ind->cycle_live = o.cycle_maps && !o.visibility_raytrace ? 1u : o.cycle;
     o.vpls *= o.cycle; /* from here on the whole set */
     ind->opt = o;
     ind->bias_scale = 1.0f;
@@ -337,12 +342,68 @@ void gi_stage_vpl_update_end(gi_frame *f)
 
 /* ---------------------------------------------------------- 4. VPL shadow maps */
 
-/* VPL cycling: the slice frame k shades, k mod C, k counted as the
- * temporal history counts frames (every anti-aliasing sample of a frame
- * shades the same slice); 0 without cycling. */
-static uint32_t gi__slice(const gi_indirect *ind)
+/* VPL cycling: the slice frame k shades and how often it was shaded
+ * before (ind->slice, ind->cycle_base), k counted as the temporal history
+ * counts frames, so every anti-aliasing sample of a frame shades the same
+ * slice; slice 0 without cycling. With every slice in the rotation from
+ * the start, slice k mod C, shaded k / C times before; during the
+ * progressive warm-up (gi_indirect.h), the slices in the rotation in turn,
+ * chosen once per frame (cycle_key). */
+static void gi__cycle_schedule(gi_indirect *ind)
 {
-    return ind->cycle > 1 ? ind->temporal_frames % ind->cycle : 0u;
+    const uint32_t C = ind->cycle, k = ind->temporal_frames;
+    if (C <= 1) {
+        ind->slice = ind->cycle_base = 0;
+        return;
+    }
+    if (!ind->opt.cycle_maps || ind->opt.visibility_raytrace) {
+        ind->slice = k % C, ind->cycle_base = k / C;
+        return;
+    }
+    if (ind->cycle_key == k + 1u) return; /* chosen for this frame */
+    ind->cycle_key = k + 1u;
+    const uint32_t s = ind->cycle_next < ind->cycle_live ? ind->cycle_next : 0u;
+    ind->slice = s;
+    ind->cycle_base = ind->cycle_shaded[s]++;
+    ind->cycle_next = s + 1u < ind->cycle_live ? s + 1u : 0u;
+}
+
+static uint32_t gi__slice(gi_indirect *ind)
+{
+    gi__cycle_schedule(ind);
+    return ind->slice;
+}
+
+/* The progressive warm-up's step in the maps stage: up to cycle_maps maps
+ * of slice L = cycle_live, the first not in the rotation, added to the
+ * frame's list (from entry todo); returns the new length. */
+static uint32_t gi__maps_ahead(gi_indirect *ind, pf_vec3 *map_pos, pf_vec3 *map_nrm, uint32_t *map_slot,
+                               uint32_t todo)
+{
+    const uint32_t C = ind->cycle, N = ind->vpls.count, L = ind->cycle_live;
+    ind->maps_ahead = 0;
+    if (!ind->opt.cycle_maps || L >= C || ind->ahead_hold) return todo;
+    for (uint32_t i = L; i < N && ind->maps_ahead < ind->opt.cycle_maps; i += C) {
+        if (ind->map_ok[i]) continue;
+        ind->map_ok[i] = 1;
+        map_pos[todo] = ind->vpls.v[i].pos;
+        map_nrm[todo] = ind->vpls.v[i].nrm;
+        map_slot[todo++] = i;
+        ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+        ind->maps_ahead++;
+    }
+    return todo;
+}
+
+/* After the maps are drawn: slice L joins the rotation once every map of
+ * it holds its VPL (the next frame may shade it). */
+static void gi__cycle_admit(gi_indirect *ind)
+{
+    const uint32_t C = ind->cycle, N = ind->vpls.count, L = ind->cycle_live;
+    if (!ind->opt.cycle_maps || L >= C) return;
+    for (uint32_t i = L; i < N; i += C)
+        if (!ind->map_ok[i]) return;
+    ind->cycle_live = L + 1u;
 }
 
 void gi_stage_vpl_shadow_maps(gi_frame *f)
@@ -416,6 +477,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         map_slot[todo++] = i;
         ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
     }
+    todo = gi__maps_ahead(ind, map_pos, map_nrm, map_slot, todo);
     /* Calls of at most GI__MAPS_CHUNK maps, so a listener hears of progress
      * between them (a first frame of 100,000 VPLs takes minutes); the maps
      * are independent, so the pieces change no bits. */
@@ -429,6 +491,7 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
         if (f->progress) f->progress(f->progress_user, gi_stage_get(GI_STAGE_VPL_MAPS)->name, k, todo);
     }
     ind->atlas_slots = N;
+    gi__cycle_admit(ind);
 }
 
 /* ---------------------------------------------------------- 5. split */
@@ -780,14 +843,14 @@ void gi_stage_accumulate(gi_frame *f)
      * accumulation by the sample's pattern index (the TAA's frame included),
      * so each sample sees other groups; 0 for one sample of a plain frame */
     uint64_t rot = ind->opt.temporal ? (uint64_t)ind->temporal_frames * f->aa.samples + f->aa.sample : f->aa.index;
-    /* with VPL cycling, frame k = a C + b shades slice b rotated by a + b,
+    /* with VPL cycling, the frame that shades slice b for the a-th time
+     * (frame k = a C + b without the warm-up) rotates its groups by a + b,
      * so the frames that shade one slice rotate through all its groups */
+    gi__cycle_schedule(ind);
     if (ind->cycle > 1) {
-        uint64_t k = ind->temporal_frames, C = ind->cycle;
-        rot = (k / C + k % C) * f->aa.samples + f->aa.sample;
+        rot = ((uint64_t)ind->cycle_base + ind->slice) * f->aa.samples + f->aa.sample;
     }
     ind->shift = (uint32_t)(rot % T);
-    ind->slice = gi__slice(ind);
     for (uint32_t t = 0; t < T; t++) rows = ind->tile_h[t] > rows ? ind->tile_h[t] : rows;
     const gi__accumulate_io io = {
         {ind->vpls.v, ind->assign, ind->atlas, ind->frames, ind->opt.para_res, ind->range, ind->bias_scale, ind->plane,

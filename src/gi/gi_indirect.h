@@ -44,6 +44,15 @@
  * time. A slot's map is drawn the first time its slice is shaded after the
  * VPL was made or moved (map_ok), so a static scene draws every map once,
  * vpls of them a frame during the first C frames, and none after.
+ * The progressive warm-up (opt.cycle_maps = B > 0; beyond the papers): the
+ * rotation starts with slice 0 alone and takes in slice L (L = 1, 2, ...)
+ * once its maps are drawn, B of them a frame ahead of its first shading;
+ * the frames shade the slices in the rotation in turn. So no frame draws
+ * more than one slice's missing maps plus B (not vpls every frame for C
+ * frames), and a still view's history takes in a new slice every
+ * ceil(vpls / B) frames. A slice's frame is its own unbiased estimate
+ * (weighted C T as above), so the warm-up only weights the early slices
+ * more for a while.
  *
  * The receiving surface's albedo is applied at compose: radiance = albedo /
  * pi * E (Sec. 5.1: "the color of the receiving surface is not taken into
@@ -126,6 +135,9 @@ typedef struct gi_indirect_options {
     uint32_t cycle;              /* 0 or 1: off; C in 2..GI_INDIRECT_MAX_CYCLE: VPL cycling (see above), the
                                     set C x vpls, one slice of vpls shaded a frame; needs temporal and
                                     paraboloid maps or ray-traced visibility */
+    uint32_t cycle_maps;         /* with cycle and paraboloid maps, the progressive warm-up: the most maps a
+                                    frame draws ahead for a slice not yet in the rotation (see above); 0: no
+                                    limit, every slice in the rotation from frame 0 */
 } gi_indirect_options;
 
 /* The tangent-plane test's reach: neighbours within this many alpha of
@@ -190,6 +202,13 @@ typedef struct gi_indirect {
      * or moved, set when the map is drawn) */
     uint32_t cycle, slice;
     uint8_t *map_ok;
+    /* the rotation (gi__cycle_schedule): slices in it (C unless warming up),
+     * the one the next frame shades, how often each was shaded, this
+     * frame's slice's count (the group rotation), the frame it was chosen
+     * for (temporal_frames + 1; 0: none yet), this frame's maps drawn ahead */
+    uint32_t cycle_live, cycle_next, cycle_base, cycle_key, maps_ahead;
+    int ahead_hold;           /* set by the caller: this frame draws no maps ahead (the viewer, while the view moves) */
+    uint32_t cycle_shaded[GI_INDIRECT_MAX_CYCLE];
     /* kept between frames: each slot's tile and the id it had when assigned
      * (a survivor keeps its tile) */
     uint32_t *tile_of, *assigned_id;

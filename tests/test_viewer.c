@@ -50,7 +50,9 @@
 
 #define CORNELL SOFTGI_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 
-#define SIZE "--size 160x120"
+/* --temporal 0: the viewer without its progressive refinement, the frame
+ * `softgi render` makes (harmless to render, whose default it is) */
+#define SIZE "--size 160x120 --temporal 0"
 
 static char g_tmp[256];
 
@@ -120,6 +122,40 @@ static void test_optional_stage_keys(void **state)
         tu_softgi_expect(args, 0, NULL);
         if (!same_file(shot, png)) fail_msg("keys '%s': the screenshot %s differs from %s", cases[k][1], shot, png);
     }
+}
+
+/* The viewer's default is T's progressive refinement (temporal
+ * accumulation with VPL cycling and its warm-up, temporal anti-aliasing):
+ * the same frames as those options given explicitly, and as T pressed on a
+ * viewer started with --temporal 0; not the single frame of render. */
+static void test_progressive_default(void **state)
+{
+    (void)state;
+    if (!have_xvfb()) {
+        print_message("SKIP: xvfb-run is absent: cannot start the viewer\n");
+        return;
+    }
+    const char *runs[][2] = {
+        {"", ""},
+        {"", "--temporal 32 --vpl-cycle 32 --cycle-maps 32 --taa 16"},
+        {"T", "--temporal 0"},
+    };
+    char shot[3][512], cmd[8192], out[16384], png[512], args[1024];
+    for (int k = 0; k < 3; k++) {
+        snprintf(shot[k], sizeof shot[k], "%s/progressive-%d.png", g_tmp, k);
+        snprintf(cmd, sizeof cmd,
+                 "SOFTGI_VIEW_KEYS='%s' xvfb-run -a -s '-screen 0 1280x1024x24' %s view --size 160x120 %s --threads 1 "
+                 "--frames 12 --screenshot %s",
+                 runs[k][0], SOFTGI_BINARY, runs[k][1], shot[k]);
+        int status = tu_run(cmd, out, sizeof out);
+        if (status != 0) fail_msg("%s: exit %d:\n%s", cmd, status, out);
+    }
+    if (!same_file(shot[0], shot[1])) fail_msg("the default viewer %s differs from the explicit options' %s", shot[0], shot[1]);
+    if (!same_file(shot[0], shot[2])) fail_msg("the default viewer %s differs from T pressed: %s", shot[0], shot[2]);
+    snprintf(png, sizeof png, "%s/progressive-render.png", g_tmp);
+    snprintf(args, sizeof args, "render --size 160x120 --threads 2 -q -o %s", png);
+    tu_softgi_expect(args, 0, NULL);
+    if (same_file(shot[0], png)) fail_msg("the default viewer's frame 12 is render's single frame %s", png);
 }
 
 static void test_screenshot_equals_render(void **state)
@@ -710,6 +746,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_screenshot_equals_render),
+        cmocka_unit_test(test_progressive_default),
         cmocka_unit_test(test_dump_every_method),
         cmocka_unit_test(test_viewer_dump_equals_render_dump),
         cmocka_unit_test(test_keys_settings_and_stepper),

@@ -300,6 +300,8 @@ static void view_camera_angles(view_app *a)
 }
 
 /* Scene, Embree, jobs, raster context and frame, as app_render. */
+static void view_toggle_temporal(view_app *a);
+
 static pf_result view_setup(view_app *a, pf_error *err)
 {
     const pf_options *o = a->opt;
@@ -336,6 +338,10 @@ static pf_result view_setup(view_app *a, pf_error *err)
     gi_view_zoom_reset(&a->zoom, a->width, a->height);
     a->image = calloc((size_t)a->width * a->height * 3, 1);
     if (!a->image) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+    /* progressive refinement from the start (T's setting: a still view
+     * converges), unless the command line set the temporal options
+     * (--temporal 0 turns it off) */
+    if (!o->refine_set) view_toggle_temporal(a);
     return PF_OK;
 }
 

@@ -689,18 +689,24 @@ static pf_result pf__apply(pf_options *o, pf__opt_id id, const char *a, const ch
         else r = pf__uint(a, val, 1, GI_INDIRECT_MAX_SCALE, &o->indirect_scale, err);
         break;
     case PF__OPT_TEMPORAL:
+        o->refine_set = 1;
         r = pf__uint(a, val, 0, GI_INDIRECT_MAX_TEMPORAL, &o->temporal, err);
         if (r == PF_OK && o->temporal == 1)
             r = pf_error_set(err, PF_ERR_ARGUMENT, "--temporal '%s': expected 0 (off) or 2..%u frames", val,
                              GI_INDIRECT_MAX_TEMPORAL);
         break;
     case PF__OPT_VPL_CYCLE:
+        o->refine_set = 1;
         r = pf__uint(a, val, 0, GI_INDIRECT_MAX_CYCLE, &o->vpl_cycle, err);
         if (r == PF_OK && o->vpl_cycle == 1) o->vpl_cycle = 0; /* one slice: off */
         break;
-    case PF__OPT_CYCLE_MAPS: r = pf__uint(a, val, 0, GI_INDIRECT_MAX_SET, &o->cycle_maps, err); break;
+    case PF__OPT_CYCLE_MAPS:
+        o->refine_set = 1;
+        r = pf__uint(a, val, 0, GI_INDIRECT_MAX_SET, &o->cycle_maps, err);
+        break;
     case PF__OPT_AA: r = pf__uint(a, val, 1, GI_AA_MAX_SAMPLES, &o->aa, err); break;
     case PF__OPT_TAA:
+        o->refine_set = 1;
         r = pf__uint(a, val, 0, GI_AA_MAX_TAA, &o->taa, err);
         if (r == PF_OK && o->taa == 1)
             r = pf_error_set(err, PF_ERR_ARGUMENT, "--taa '%s': expected 0 (off) or 2..%u frames", val, GI_AA_MAX_TAA);

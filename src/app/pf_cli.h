@@ -72,6 +72,7 @@ typedef struct pf_options {
     uint32_t tiles_n, tiles_m; /* interleaved tiles (0: 4x4) */
     float clamp;             /* bounded geometry term b = clamp / diag^2 (default 400); 0: off */
     int clamp_set;           /* --clamp given */
+    int refine_set;          /* --temporal, --vpl-cycle, --cycle-maps or --taa given (view: no progressive default) */
     const char *method;      /* VPL method (NULL: "ir") */
     uint32_t param_count;    /* --param KEY=VALUE (repeatable): method parameters */
     const char *params[32];

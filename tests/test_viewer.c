@@ -156,6 +156,14 @@ static void test_progressive_default(void **state)
     snprintf(args, sizeof args, "render --size 160x120 --threads 2 -q -o %s", png);
     tu_softgi_expect(args, 0, NULL);
     if (same_file(shot[0], png)) fail_msg("the default viewer's frame 12 is render's single frame %s", png);
+    /* the cycled set's maps within the memory budget: 8 MB a slice of 256
+     * VPLs, so 100 MB holds 8 slices beside the frame (not 16 or 32) */
+    snprintf(cmd, sizeof cmd, "xvfb-run -a -s '-screen 0 1280x1024x24' %s view --size 160x120 --max-memory 100M --frames 2",
+             SOFTGI_BINARY);
+    int status = tu_run(cmd, out, sizeof out);
+    if (status != 0) fail_msg("%s: exit %d:\n%s", cmd, status, out);
+    if (!strstr(out, "progressive refinement: 8 slices of VPLs at most, what the memory budget holds (--max-memory)"))
+        fail_msg("no budgeted slice count:\n%s", out);
 }
 
 static void test_screenshot_equals_render(void **state)

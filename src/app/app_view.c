@@ -60,6 +60,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "api_setup.h"
 #include "app.h"
 #include "gi_dump.h"
 #include "gi_frame.h"
@@ -102,6 +103,7 @@ typedef struct view_app {
     gi_indirect_options want; /* what the keys asked for */
     int indirect_dirty;
     int progressive;          /* T: temporal accumulation with VPL cycling and the progressive warm-up */
+    uint32_t cycle_cap;       /* T's slices at most: what --max-memory (or the machine) holds */
     int moving;               /* the camera or the grabbed light moved since the last frame */
     uint32_t method_count, method_cursor;
     uint32_t vis_cursor; /* 0 paraboloid, 1 ism, 2 raytrace */
@@ -266,7 +268,7 @@ static gi_indirect_options view_options_of(const gi_frame *f)
 #define VIEW_CYCLE 32u
 #define VIEW_CYCLE_MAPS 32u
 #define VIEW_CYCLE_BYTES ((uint64_t)256 << 20)
-static uint32_t view_cycle_for(const gi_indirect_options *o)
+static uint32_t view_cycle_for(const gi_indirect_options *o, uint32_t cap)
 {
     const char *m = o->method ? o->method->name : "ir";
     if (o->visibility_ism || !strcmp(m, "smc") || !strcmp(m, "mir")) return 0;
@@ -275,7 +277,26 @@ static uint32_t view_cycle_for(const gi_indirect_options *o)
     uint64_t c = VIEW_CYCLE_BYTES / slice;
     if (c > VIEW_CYCLE) c = VIEW_CYCLE;
     if (c * vpls > GI_INDIRECT_MAX_SET) c = GI_INDIRECT_MAX_SET / vpls;
+    if (c > cap) c = cap;
     return c >= 2 ? (uint32_t)c : 0;
+}
+
+/* T's slices at most: halved from VIEW_CYCLE until the frame with the
+ * cycled set's maps passes the memory budget (--max-memory, else the
+ * machine's; api_budget_check), 0 when not even two slices do. */
+static uint32_t view_cycle_cap(const view_app *a)
+{
+    pf_options o = *a->opt;
+    o.temporal = 32, o.taa = 16;
+    for (uint32_t c = VIEW_CYCLE; c >= 2; c /= 2) {
+        softgi_desc d;
+        pf_error err;
+        o.vpl_cycle = c;
+        if (app_desc(&o, a->width, a->height, &d, &err) == PF_OK &&
+            api_budget_check(&d, &a->scene, 1, a->frame.indirect, 0, &err) == PF_OK)
+            return c;
+    }
+    return 0;
 }
 
 /* The method registry, in its order (gi_vpl_method_names). */
@@ -341,6 +362,10 @@ static pf_result view_setup(view_app *a, pf_error *err)
     /* progressive refinement from the start (T's setting: a still view
      * converges), unless the command line set the temporal options
      * (--temporal 0 turns it off) */
+    a->cycle_cap = view_cycle_cap(a);
+    if (a->cycle_cap < VIEW_CYCLE && a->frame.indirect)
+        view_message(a, "progressive refinement: %u slices of VPLs at most, what the memory budget holds%s",
+                     a->cycle_cap, o->max_memory ? " (--max-memory)" : "");
     if (!o->refine_set) view_toggle_temporal(a);
     return PF_OK;
 }
@@ -397,7 +422,7 @@ static void view_apply_indirect(view_app *a)
     gi_indirect_free(&a->frame.ind);
     a->frame.indirect = 0;
     if (a->progressive) { /* for this method, visibility and VPL count */
-        a->want.cycle = view_cycle_for(&a->want);
+        a->want.cycle = view_cycle_for(&a->want, a->cycle_cap);
         a->want.cycle_maps = a->want.cycle > 1 ? VIEW_CYCLE_MAPS : 0;
     }
     if (gi_frame_enable_indirect(&a->frame, &a->want, a->opt->indirect_only, &err) == PF_OK) {

@@ -374,6 +374,18 @@ static uint32_t gi__slice(gi_indirect *ind)
     return ind->slice;
 }
 
+/* Slot i's map to be drawn this frame: marked as holding its VPL and
+ * listed (map_pos, map_nrm, map_slot at *todo), its frame made. */
+static void gi__list_map(gi_indirect *ind, uint32_t i, pf_vec3 *map_pos, pf_vec3 *map_nrm, uint32_t *map_slot,
+                         uint32_t *todo)
+{
+    ind->map_ok[i] = 1;
+    map_pos[*todo] = ind->vpls.v[i].pos;
+    map_nrm[*todo] = ind->vpls.v[i].nrm;
+    map_slot[(*todo)++] = i;
+    ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+}
+
 /* The progressive warm-up's step in the maps stage: up to cycle_maps maps
  * of slice L = cycle_live, the first not in the rotation, added to the
  * frame's list (from entry todo); returns the new length. */
@@ -385,11 +397,7 @@ static uint32_t gi__maps_ahead(gi_indirect *ind, pf_vec3 *map_pos, pf_vec3 *map_
     if (!ind->opt.cycle_maps || L >= C || ind->ahead_hold) return todo;
     for (uint32_t i = L; i < N && ind->maps_ahead < ind->opt.cycle_maps; i += C) {
         if (ind->map_ok[i]) continue;
-        ind->map_ok[i] = 1;
-        map_pos[todo] = ind->vpls.v[i].pos;
-        map_nrm[todo] = ind->vpls.v[i].nrm;
-        map_slot[todo++] = i;
-        ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
+        gi__list_map(ind, i, map_pos, map_nrm, map_slot, &todo);
         ind->maps_ahead++;
     }
     return todo;
@@ -469,14 +477,8 @@ void gi_stage_vpl_shadow_maps(gi_frame *f)
      * their maps (pipelined frame 1 shades with frame 0's set again: all
      * of its maps are there). */
     const uint32_t C = ind->cycle;
-    for (uint32_t i = gi__slice(ind); i < N; i += C) {
-        if (ind->map_ok[i]) continue;
-        ind->map_ok[i] = 1;
-        map_pos[todo] = ind->vpls.v[i].pos;
-        map_nrm[todo] = ind->vpls.v[i].nrm;
-        map_slot[todo++] = i;
-        ind->frames[i] = rs_para_frame_make(ind->vpls.v[i].pos, ind->vpls.v[i].nrm);
-    }
+    for (uint32_t i = gi__slice(ind); i < N; i += C)
+        if (!ind->map_ok[i]) gi__list_map(ind, i, map_pos, map_nrm, map_slot, &todo);
     todo = gi__maps_ahead(ind, map_pos, map_nrm, map_slot, todo);
     /* Calls of at most GI__MAPS_CHUNK maps, so a listener hears of progress
      * between them (a first frame of 100,000 VPLs takes minutes); the maps

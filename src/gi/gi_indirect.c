@@ -393,7 +393,6 @@ static uint32_t gi__maps_ahead(gi_indirect *ind, pf_vec3 *map_pos, pf_vec3 *map_
                                uint32_t todo)
 {
     const uint32_t C = ind->cycle, N = ind->vpls.count, L = ind->cycle_live;
-    ind->maps_ahead = 0;
     if (!ind->opt.cycle_maps || L >= C || ind->ahead_hold) return todo;
     for (uint32_t i = L; i < N && ind->maps_ahead < ind->opt.cycle_maps; i += C) {
         if (ind->map_ok[i]) continue;
@@ -417,7 +416,7 @@ static void gi__cycle_admit(gi_indirect *ind)
 void gi_stage_vpl_shadow_maps(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
-    ind->maps_rendered = 0;
+    ind->maps_rendered = ind->maps_ahead = 0;
     if (ind->ism) {
         /* Imperfect shadow maps: every VPL's map is rebuilt every frame, moved
          * or not, since the points are regenerated and reassigned to VPLs at

@@ -126,8 +126,9 @@ static void test_optional_stage_keys(void **state)
 
 /* The viewer's default is T's progressive refinement (temporal
  * accumulation with VPL cycling and its warm-up, temporal anti-aliasing):
- * the same frames as those options given explicitly, and as T pressed on a
- * viewer started with --temporal 0; not the single frame of render. */
+ * the same frames as those options given explicitly, as T pressed on a
+ * viewer started with --temporal 0, and as render --frames 12; not the
+ * single frame of render. */
 static void test_progressive_default(void **state)
 {
     (void)state;
@@ -156,6 +157,11 @@ static void test_progressive_default(void **state)
     snprintf(args, sizeof args, "render --size 160x120 --threads 2 -q -o %s", png);
     tu_softgi_expect(args, 0, NULL);
     if (same_file(shot[0], png)) fail_msg("the default viewer's frame 12 is render's single frame %s", png);
+    /* render --frames 12: the same refinement, the same frame 12 */
+    snprintf(png, sizeof png, "%s/progressive-render12.png", g_tmp);
+    snprintf(args, sizeof args, "render --size 160x120 --threads 2 --frames 12 -q -o %s", png);
+    tu_softgi_expect(args, 0, NULL);
+    if (!same_file(shot[0], png)) fail_msg("render --frames 12 %s differs from the viewer's frame 12 %s", png, shot[0]);
     /* the cycled set's maps within the memory budget: 8 MB a slice of 256
      * VPLs, so 100 MB holds 8 slices beside the frame (not 16 or 32) */
     snprintf(cmd, sizeof cmd, "xvfb-run -a -s '-screen 0 1280x1024x24' %s view --size 160x120 --max-memory 100M --frames 2",

@@ -38,6 +38,12 @@
  * radiance before anything is written; --aa 1 (the default) is the
  * unjittered frame, bit for bit.
  *
+ * --frames N (default 1) renders N frames of the still view and writes the
+ * last (its stages with --dump-stages): with N > 1 and none of --temporal,
+ * --vpl-cycle, --cycle-maps given, softgi view's progressive refinement
+ * (softgi_internal_refine: --temporal 32 --taa 16 and VPL cycling with its
+ * warm-up, app_refine_slices), so the written image is the view's frame N.
+ *
  * --pipeline on|off (default off) is accepted: it
  * changes only multi-frame work (one frame renders bit-identically either
  * way, since frame 0 runs the VPL update in place; gi_indirect.h). */
@@ -150,6 +156,18 @@ static int app__render_frame(const pf_options *o, softgi_context *ctx, app__rend
     if (n->auto_camera) app_note_camera(o, name, &n->camera, n->camera_spec);
     if (n->auto_light) app_note_light(o, name, n->light_spec, n->light_median);
 
+    const uint32_t frames = o->frames ? o->frames : 1;
+    if (frames > 1 && !o->refine_set) { /* the viewer's progressive refinement */
+        uint32_t slices = app_refine_slices(o->method, o->visibility_ism, o->visibility_raytrace, o->vpls, 0), got = 0;
+        if (softgi_internal_refine(ctx, o->direct_only ? 0 : slices, &got, &se) != SOFTGI_OK) return app__fail_api(&se);
+        if (!o->quiet && !o->direct_only) {
+            char cyc[64] = " (no VPL cycling)";
+            if (got) snprintf(cyc, sizeof cyc, ", VPL cycling over %u slices", got);
+            fprintf(stderr, "softgi: %u frames of the still view: temporal accumulation over 32 frames%s, temporal "
+                            "anti-aliasing over 16 (docs/view.md)\n",
+                    frames, cyc);
+        }
+    }
     const uint32_t w = info.width, h = info.height;
     if (!(*rgb = malloc((size_t)w * h * 3 * sizeof **rgb))) {
         pf_error e;
@@ -158,7 +176,8 @@ static int app__render_frame(const pf_options *o, softgi_context *ctx, app__rend
     }
     app_progress_begin(&prog->bar, "render", o->quiet); /* the clock from the frame on */
     softgi_target target = {.rgb = *rgb};
-    softgi_result r = softgi_render(ctx, &target, &se);
+    softgi_result r = SOFTGI_OK;
+    for (uint32_t k = 0; k < frames && r == SOFTGI_OK; k++) r = softgi_render(ctx, &target, &se); /* the last stays */
     app_progress_end(&prog->bar);
     return r == SOFTGI_OK ? 0 : app__fail_api(&se);
 }

@@ -224,6 +224,18 @@ void app_reference_options(const pf_options *o, gi_reference_options *ro)
     ro->no_light_paths = o->no_light_paths;
 }
 
+uint32_t app_refine_slices(const char *method, int ism, int raytrace, uint32_t vpls, uint32_t para_res)
+{
+    const char *m = method ? method : "ir";
+    if (ism || !strcmp(m, "smc") || !strcmp(m, "mir")) return 0;
+    uint64_t n = vpls ? vpls : 256, res = para_res ? para_res : RS_PARA_DEFAULT_RES;
+    uint64_t slice = raytrace ? 1 : n * res * res * 2u;
+    uint64_t c = APP_REFINE_MAP_BYTES / slice;
+    if (c > APP_REFINE_SLICES) c = APP_REFINE_SLICES;
+    if (c * n > GI_INDIRECT_MAX_SET) c = GI_INDIRECT_MAX_SET / n;
+    return c >= 2 ? (uint32_t)c : 0;
+}
+
 pf_result app_indirect_options(const pf_options *o, gi_indirect_options *io, pf_error *err)
 {
     softgi_desc d;

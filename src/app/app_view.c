@@ -260,25 +260,16 @@ static gi_indirect_options view_options_of(const gi_frame *f)
     return o;
 }
 
-/* T's VPL cycling (docs/frame.md "VPL cycling"): 32 slices, fewer where
- * their paraboloid maps would pass VIEW_CYCLE_BYTES, none for imperfect
- * shadow maps (remade every frame) and for SMC and MIR, whose update runs
- * over the whole cycled set every frame (docs/perf.md: 110-1900 ms a
- * frame at 8,192 VPLs). */
-#define VIEW_CYCLE 32u
-#define VIEW_CYCLE_MAPS 32u
-#define VIEW_CYCLE_BYTES ((uint64_t)256 << 20)
+/* T's VPL cycling (docs/frame.md "VPL cycling"): app_refine_slices for
+ * the method, visibility and VPL count, at most `cap` (view_cycle_cap). */
+#define VIEW_CYCLE APP_REFINE_SLICES
+#define VIEW_CYCLE_MAPS APP_REFINE_MAPS
 static uint32_t view_cycle_for(const gi_indirect_options *o, uint32_t cap)
 {
-    const char *m = o->method ? o->method->name : "ir";
-    if (o->visibility_ism || !strcmp(m, "smc") || !strcmp(m, "mir")) return 0;
-    uint64_t vpls = o->vpls ? o->vpls : 256, res = o->para_res ? o->para_res : RS_PARA_DEFAULT_RES;
-    uint64_t slice = o->visibility_raytrace ? 1 : vpls * res * res * 2u;
-    uint64_t c = VIEW_CYCLE_BYTES / slice;
-    if (c > VIEW_CYCLE) c = VIEW_CYCLE;
-    if (c * vpls > GI_INDIRECT_MAX_SET) c = GI_INDIRECT_MAX_SET / vpls;
-    if (c > cap) c = cap;
-    return c >= 2 ? (uint32_t)c : 0;
+    uint32_t c = app_refine_slices(o->method ? o->method->name : NULL, o->visibility_ism, o->visibility_raytrace,
+                                   o->vpls, o->para_res);
+    c = c < cap ? c : cap;
+    return c >= 2 ? c : 0;
 }
 
 /* T's slices at most: halved from VIEW_CYCLE until the frame with the

@@ -193,6 +193,10 @@ static const pf__opt k_options[] = {
      "print a 64-bit hash of the linear output and the ISA used\n(the same on every ISA and processor)", NULL},
     {PF__OPT_QUIET, "--quiet", "-q", NULL, SCENE, "no timing table", NULL},
     {PF__OPT_FRAMES, "--frames", NULL, "N", V, "render N frames, then exit (after --screenshot)", NULL},
+    {PF__OPT_FRAMES, "--frames", NULL, "N", R,
+     "render N frames of the still view and write the last (1..1000,\ndefault 1); N > 1 without --temporal, "
+     "--vpl-cycle or --cycle-maps:\nsoftgi view's progressive refinement (docs/view.md)",
+     NULL},
     {PF__OPT_FRAMES, "--frames", NULL, "N", BR | BF, "repetitions per measurement (default 15)", NULL},
     {PF__OPT_FRAMES, "--frames", NULL, "A:B", S,
      "render only frames A..B-1 (zero-based as frame_NNNN, B excluded;\nA: to the end, N: frame N alone), named as "

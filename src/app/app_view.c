@@ -354,7 +354,7 @@ static pf_result view_setup(view_app *a, pf_error *err)
      * converges), unless the command line set the temporal options
      * (--temporal 0 turns it off) */
     a->cycle_cap = view_cycle_cap(a);
-    if (a->cycle_cap < VIEW_CYCLE && a->frame.indirect)
+    if (a->cycle_cap < VIEW_CYCLE && a->frame.indirect && !o->refine_set)
         view_message(a, "progressive refinement: %u slices of VPLs at most, what the memory budget holds%s",
                      a->cycle_cap, o->max_memory ? " (--max-memory)" : "");
     if (!o->refine_set) view_toggle_temporal(a);
@@ -392,7 +392,6 @@ static int view_size_display(view_app *a, uint32_t w, uint32_t h)
 }
 
 /* ------------------------------------------------------------ state changes */
-
 
 /* Temporal anti-aliasing over `frames` (0: off; gi_aa.h), the frame's
  * --aa samples kept; restarts its history. */

@@ -102,9 +102,12 @@ static void test_parse(void **state)
     assert_false(o.frame_range);
     char *bench_range[] = {"softgi", "bench", "raster", "--frames", "0:3"};
     assert_int_equal(pf_cli_parse(&o, 5, bench_range, &err), PF_ERR_ARGUMENT);
-    char *render[] = {"softgi", "render", "--frames", "0:3"};
+    char *render[] = {"softgi", "render", "--frames", "0:3"}; /* render takes a count (frames of a still view) */
     assert_int_equal(pf_cli_parse(&o, 4, render, &err), PF_ERR_ARGUMENT);
-    assert_non_null(strstr(err.message, "does not apply to render"));
+    assert_non_null(strstr(err.message, "render takes a frame count N (1..1000); ranges A:B are for sequence"));
+    char *render_n[] = {"softgi", "render", "--frames", "3"};
+    assert_int_equal(pf_cli_parse(&o, 4, render_n, &err), PF_OK);
+    assert_int_equal(o.frames, 3);
 }
 
 /* One line of output, and the exit status. */
@@ -149,7 +152,7 @@ static void test_bad_ranges(void **state)
     }
     snprintf(args, sizeof args, "sequence %s --frames", seq);
     expect_one_line(args, 2, "--frames needs a value");
-    expect_one_line("render --frames 0:3", 2, "does not apply to render");
+    expect_one_line("render --frames 0:3", 2, "ranges A:B are for sequence");
     /* evaluate: a range no sequence reaches, and a malformed one */
     snprintf(args, sizeof args, "evaluate --sequences %s --methods ir --out %s/ev-bad --frames 6:", seq, g_tmp);
     expect_one_line(args, 2, "no sequence has these frames");

@@ -813,6 +813,9 @@ static pf_result pf__frames(pf_options *o, const char *spelt, pf_error *err)
         o->frame_range = 1;
         return pf_cli_parse_frame_range(spelt, o->frames_arg, &o->frame_first, &o->frame_end, err);
     }
+    if (strchr(o->frames_arg, ':'))
+        return pf_error_set(err, PF_ERR_ARGUMENT, "%s '%s': %s takes a frame count N (1..1000); ranges A:B are for "
+                            "sequence", spelt, o->frames_arg, o->command);
     return pf__uint(spelt, o->frames_arg, 1, 1000, &o->frames, err);
 }
 

@@ -239,13 +239,8 @@ static void test_fill_rule_grid(void **state)
 static void test_alpha_mask(void **state)
 {
     (void)state;
-    const tu_quad q[3] = {
-        {{0, 0, -1}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 0.2f}, PF_ALPHA_MASK, 0.5f}, /* a hole */
-        {{0, 0, -2}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 0.8f}, PF_ALPHA_MASK, 0.5f}, /* kept */
-        {{0, 0, -3}, {1.5f, 0, 0}, {0, 1.5f, 0}, {1, 1, 1, 1.0f}, PF_ALPHA_OPAQUE, 0.5f},
-    };
     pf_scene s;
-    tu_make_scene(&s, q, 3);
+    tu_make_alpha_stack(&s, 1.5f);
     pf_error err;
     assert_int_equal(pf_scene_validate(&s, &err), PF_OK);
     const rs_simd simds[2] = {RS_SIMD_SCALAR, rs_simd_for_isa(pf_isa_detect())};

@@ -55,6 +55,20 @@ static inline void tu_make_scene(pf_scene *s, const tu_quad *quads, uint32_t cou
     }
 }
 
+/* The alpha-mask stack the rasterizer's and Embree's tests share: three
+ * quads of half extent `half` facing +z at z = -1, -2, -3: alpha-masked
+ * with alpha 0.2 under the cutoff 0.5 (a hole), alpha-masked with 0.8
+ * (kept), opaque. */
+static inline void tu_make_alpha_stack(pf_scene *s, float half)
+{
+    const tu_quad q[3] = {
+        {{0, 0, -1}, {half, 0, 0}, {0, half, 0}, {1, 1, 1, 0.2f}, PF_ALPHA_MASK, 0.5f},   /* a hole */
+        {{0, 0, -2}, {half, 0, 0}, {0, half, 0}, {1, 1, 1, 0.8f}, PF_ALPHA_MASK, 0.5f},   /* kept */
+        {{0, 0, -3}, {half, 0, 0}, {0, half, 0}, {1, 1, 1, 1.0f}, PF_ALPHA_OPAQUE, 0.5f}, /* opaque */
+    };
+    tu_make_scene(s, q, 3);
+}
+
 /* Runs a shell command, captures stdout+stderr into out (NUL-terminated),
  * returns the exit status (or -1). */
 static inline int tu_run(const char *cmd, char *out, size_t size)

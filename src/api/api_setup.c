@@ -204,6 +204,18 @@ pf_result api_budget_check(const softgi_desc *d, const pf_scene *scene, int fram
     return r;
 }
 
+uint32_t api_refine_fit(softgi_desc *d, const pf_scene *scene, int indirect, uint32_t slices)
+{
+    d->temporal = API_REFINE_TEMPORAL, d->taa = API_REFINE_TAA;
+    for (uint32_t s = slices; s >= 2; s /= 2) {
+        d->vpl_cycle = s, d->cycle_maps = API_REFINE_MAPS;
+        pf_error e;
+        if (api_budget_check(d, scene, 1, indirect, 0, &e) == PF_OK) return s;
+    }
+    d->vpl_cycle = d->cycle_maps = 0;
+    return 0;
+}
+
 pf_result api_indirect_options(const softgi_desc *d, gi_indirect_options *io, pf_error *err)
 {
     memset(io, 0, sizeof *io);

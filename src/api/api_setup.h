@@ -13,6 +13,7 @@
  *   api_default_light     pf_defaults_light likewise (its --light text)
  *   api_budget_check      the scene plus the frame (or the path tracer's
  *                         image) against the budget, before allocating
+ *   api_refine_fit        the progressive refinement's slices that fit it
  *   api_indirect_options  the many-light options of a softgi_desc
  *   api_frame_create      gi_frame_create with every option of a softgi_desc
  *
@@ -117,6 +118,20 @@ pf_result api_default_light(const pf_scene *scene, const pf_camera *camera, uint
  * warning on stderr. */
 pf_result api_budget_check(const softgi_desc *d, const pf_scene *scene, int frame, int indirect, int warn,
                            pf_error *err);
+
+/* The progressive refinement of a still view (softgi view's default and
+ * render --frames N, docs/view.md): temporal accumulation and temporal
+ * anti-aliasing over these many frames, VPL cycling over at most
+ * API_REFINE_SLICES slices with API_REFINE_MAPS maps a frame drawn ahead. */
+#define API_REFINE_TEMPORAL 32u
+#define API_REFINE_TAA 16u
+#define API_REFINE_SLICES 32u
+#define API_REFINE_MAPS 32u
+/* Sets d's temporal options to the refinement's, with the largest of
+ * slices, slices / 2, ... (at least 2) whose frame passes the budget
+ * (api_budget_check of d with `indirect`), else no cycling; returns the
+ * slices chosen (0: none). */
+uint32_t api_refine_fit(softgi_desc *d, const pf_scene *scene, int indirect, uint32_t slices);
 
 /* The many-light options of d: the method (NULL: ir), its parameters
  * (pointers into d->params, which must outlive the frame), VPLs, bounces,

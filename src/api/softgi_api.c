@@ -378,20 +378,8 @@ softgi_result softgi_internal_refine(softgi_context *c, uint32_t slices, uint32_
     if (!c || !c->loaded || c->frame_ready)
         return api__error(err, SOFTGI_ERR_ARGUMENT, "softgi_internal_refine: after softgi_load_scene, before the first "
                                                     "frame");
-    softgi_desc d = c->desc;
-    d.temporal = 32, d.taa = 16, d.vpl_cycle = 0, d.cycle_maps = 0;
-    for (uint32_t s = slices; s >= 2; s /= 2) {
-        softgi_desc t = d;
-        t.vpl_cycle = s, t.cycle_maps = 32;
-        pf_error e;
-        if (api_budget_check(&t, &c->scene, 1, 1, 0, &e) == PF_OK) {
-            d = t;
-            break;
-        }
-    }
-    c->desc.temporal = d.temporal, c->desc.taa = d.taa, c->desc.vpl_cycle = d.vpl_cycle,
-    c->desc.cycle_maps = d.cycle_maps;
-    if (cycle) *cycle = d.vpl_cycle;
+    const uint32_t got = api_refine_fit(&c->desc, &c->scene, 1, slices);
+    if (cycle) *cycle = got;
     api__ok(err);
     return SOFTGI_OK;
 }

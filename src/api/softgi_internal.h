@@ -40,11 +40,11 @@ softgi_result softgi_internal_set_scene_lights(softgi_context *ctx, const pf_lig
 void softgi_internal_warn(softgi_context *ctx, int on);
 
 /* The progressive refinement of a still view (the viewer's default, and
- * `softgi render --frames N`; docs/view.md): --temporal 32 --taa 16 and, for
- * slices >= 2, --vpl-cycle C --cycle-maps 32 with C the largest of slices,
- * slices / 2, ... (at least 2) whose frame passes the memory budget
- * (api_budget_check), else no cycling. Only after softgi_load_scene and
- * before the first softgi_render; *cycle gets C (0: none). */
+ * `softgi render --frames N`; docs/view.md): api_refine_fit on the
+ * context's options and scene (--temporal 32 --taa 16 and, for slices >= 2,
+ * VPL cycling over the most slices the memory budget holds). Only after
+ * softgi_load_scene and before the first softgi_render; *cycle gets the
+ * slices (0: none). */
 softgi_result softgi_internal_refine(softgi_context *ctx, uint32_t slices, uint32_t *cycle, softgi_error *err);
 
 #endif

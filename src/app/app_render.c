@@ -50,6 +50,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "api_setup.h"
 #include "app.h"
 #include "app_progress.h"
 #include "gi_dump.h"
@@ -163,9 +164,9 @@ static int app__render_frame(const pf_options *o, softgi_context *ctx, app__rend
         if (!o->quiet && !o->direct_only) {
             char cyc[64] = " (no VPL cycling)";
             if (got) snprintf(cyc, sizeof cyc, ", VPL cycling over %u slices", got);
-            fprintf(stderr, "softgi: %u frames of the still view: temporal accumulation over 32 frames%s, temporal "
-                            "anti-aliasing over 16 (docs/view.md)\n",
-                    frames, cyc);
+            fprintf(stderr, "softgi: %u frames of the still view: temporal accumulation over %u frames%s, temporal "
+                            "anti-aliasing over %u (docs/view.md)\n",
+                    frames, API_REFINE_TEMPORAL, cyc, API_REFINE_TAA);
         }
     }
     const uint32_t w = info.width, h = info.height;

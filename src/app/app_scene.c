@@ -231,7 +231,7 @@ uint32_t app_refine_slices(const char *method, int ism, int raytrace, uint32_t v
     uint64_t n = vpls ? vpls : 256, res = para_res ? para_res : RS_PARA_DEFAULT_RES;
     uint64_t slice = raytrace ? 1 : n * res * res * 2u;
     uint64_t c = APP_REFINE_MAP_BYTES / slice;
-    if (c > APP_REFINE_SLICES) c = APP_REFINE_SLICES;
+    if (c > API_REFINE_SLICES) c = API_REFINE_SLICES;
     if (c * n > GI_INDIRECT_MAX_SET) c = GI_INDIRECT_MAX_SET / n;
     return c >= 2 ? (uint32_t)c : 0;
 }

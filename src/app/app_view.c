@@ -262,8 +262,6 @@ static gi_indirect_options view_options_of(const gi_frame *f)
 
 /* T's VPL cycling (docs/frame.md "VPL cycling"): app_refine_slices for
  * the method, visibility and VPL count, at most `cap` (view_cycle_cap). */
-#define VIEW_CYCLE APP_REFINE_SLICES
-#define VIEW_CYCLE_MAPS APP_REFINE_MAPS
 static uint32_t view_cycle_for(const gi_indirect_options *o, uint32_t cap)
 {
     uint32_t c = app_refine_slices(o->method ? o->method->name : NULL, o->visibility_ism, o->visibility_raytrace,
@@ -272,22 +270,14 @@ static uint32_t view_cycle_for(const gi_indirect_options *o, uint32_t cap)
     return c >= 2 ? c : 0;
 }
 
-/* T's slices at most: halved from VIEW_CYCLE until the frame with the
- * cycled set's maps passes the memory budget (--max-memory, else the
- * machine's; api_budget_check), 0 when not even two slices do. */
+/* T's slices at most: what the memory budget holds (--max-memory, else the
+ * machine's; api_refine_fit), 0 when not even two slices fit. */
 static uint32_t view_cycle_cap(const view_app *a)
 {
-    pf_options o = *a->opt;
-    o.temporal = 32, o.taa = 16;
-    for (uint32_t c = VIEW_CYCLE; c >= 2; c /= 2) {
-        softgi_desc d;
-        pf_error err;
-        o.vpl_cycle = c;
-        if (app_desc(&o, a->width, a->height, &d, &err) == PF_OK &&
-            api_budget_check(&d, &a->scene, 1, a->frame.indirect, 0, &err) == PF_OK)
-            return c;
-    }
-    return 0;
+    softgi_desc d;
+    pf_error err;
+    if (app_desc(a->opt, a->width, a->height, &d, &err) != PF_OK) return 0;
+    return api_refine_fit(&d, &a->scene, a->frame.indirect, API_REFINE_SLICES);
 }
 
 /* The method registry, in its order (gi_vpl_method_names). */
@@ -354,7 +344,7 @@ static pf_result view_setup(view_app *a, pf_error *err)
      * converges), unless the command line set the temporal options
      * (--temporal 0 turns it off) */
     a->cycle_cap = view_cycle_cap(a);
-    if (a->cycle_cap < VIEW_CYCLE && a->frame.indirect && !o->refine_set)
+    if (a->cycle_cap < API_REFINE_SLICES && a->frame.indirect && !o->refine_set)
         view_message(a, "progressive refinement: %u slices of VPLs at most, what the memory budget holds%s",
                      a->cycle_cap, o->max_memory ? " (--max-memory)" : "");
     if (!o->refine_set) view_toggle_temporal(a);
@@ -413,7 +403,7 @@ static void view_apply_indirect(view_app *a)
     a->frame.indirect = 0;
     if (a->progressive) { /* for this method, visibility and VPL count */
         a->want.cycle = view_cycle_for(&a->want, a->cycle_cap);
-        a->want.cycle_maps = a->want.cycle > 1 ? VIEW_CYCLE_MAPS : 0;
+        a->want.cycle_maps = a->want.cycle > 1 ? API_REFINE_MAPS : 0;
     }
     if (gi_frame_enable_indirect(&a->frame, &a->want, a->opt->indirect_only, &err) == PF_OK) {
         a->io = view_options_of(&a->frame);
@@ -477,7 +467,7 @@ static void view_cycle_filter(view_app *a)
  * indirect light at half resolution, the clamp compensation. T turns on and
  * off together the temporal accumulation of the indirect light over 32
  * frames with VPL cycling (view_cycle_for: 32 x --vpls VPLs, one slice a
- * frame) and its progressive warm-up (VIEW_CYCLE_MAPS maps a frame drawn
+ * frame) and its progressive warm-up (API_REFINE_MAPS maps a frame drawn
  * ahead, only while the view is still), and the temporal anti-aliasing
  * over 16 frames (docs/aa.md: the samples jittered from frame to frame):
  * a still camera then converges to an anti-aliased image of the whole
@@ -487,11 +477,11 @@ static void view_toggle_temporal(view_app *a)
     int on = !(a->want.temporal || a->frame.aa.taa.frames);
     a->progressive = on;
     if (a->frame.indirect) {
-        a->want.temporal = on ? 32 : 0;
+        a->want.temporal = on ? API_REFINE_TEMPORAL : 0;
         a->want.cycle = a->want.cycle_maps = 0; /* view_apply_indirect: view_cycle_for when on */
         a->indirect_dirty = 1;
     }
-    view_set_taa(a, on ? 16 : 0);
+    view_set_taa(a, on ? API_REFINE_TAA : 0);
 }
 
 static void view_toggle_scale(view_app *a)

@@ -380,7 +380,7 @@ static void test_validity_occluder(void **state)
     assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
     gi_area_lights area = {0};
     gi_vpl_set a = {0}, b = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     run_frames(st, &in, &a, 0, 3);
     print_message("lit VPLs %u of %u slots (half the sphere leaves the scene)\n", lit_count(&a), a.count);
     assert_true(lit_count(&a) > 60);
@@ -431,7 +431,7 @@ static void static_light(uint32_t recalc_min)
     assert_int_equal(gi_method_iir.create(&st, &p, &err), PF_OK);
     gi_area_lights area = {0};
     gi_vpl_set a = {0}, b = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, &s.cameras[0], 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, &s.cameras[0], 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     run_frames(st, &in, &a, 0, 1);
     uint32_t lit0 = lit_count(&a);
     assert_true(lit0 > 200);
@@ -606,7 +606,7 @@ static void test_two_lights_power(void **state)
     assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
     gi_area_lights area = {0};
     gi_vpl_set v = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     run_frames(st, &in, &v, 0, 2);
     double flux[3] = {0, 0, 0};
     uint32_t n = 0, near_spot = 0;
@@ -653,7 +653,7 @@ static void test_spot_cone_validity(void **state)
     assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
     gi_area_lights area = {0};
     gi_vpl_set a = {0}, b = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 128, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 128, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     run_frames(st, &in, &a, 0, 2);
     s.lights[0].direction = pf_v3_normalize(pf_v3(0.25f, -1, 0)); /* turn by 14 degrees */
     run_frames(st, &in, &b, 2, 1);
@@ -703,7 +703,7 @@ static void test_directional_power(void **state)
     assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
     gi_area_lights area = {0};
     gi_vpl_set v = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 1024, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 1024, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     run_frames(st, &in, &v, 0, 2);
     double flux = 0.0;
     uint32_t n = 0;
@@ -736,7 +736,7 @@ static void test_area_light_power(void **state)
     void *st;
     assert_int_equal(gi_method_iir.create(&st, NULL, &err), PF_OK);
     gi_vpl_set v = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, NULL, 0, 256, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     for (uint32_t f = 0; f < 3; f++) {
         run_frames(st, &in, &v, f, 1);
         double sum[3] = {0, 0, 0};

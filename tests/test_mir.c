@@ -214,7 +214,7 @@ static void test_bad_input(void **state)
     gi_area_lights area = {0};
     pf_camera cam;
     assert_int_equal(pf_camera_look_at(&cam, pf_v3(0, 1, 0.01f), pf_v3(0, 0, 0), pf_radians(60), &err), PF_OK);
-    gi_vpl_inputs in = {&s, rt, NULL, &cam, 0, 16, 3, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, &cam, 0, 16, 3, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     gi_vpl_set out = {0};
     assert_int_equal(m->update(st, &in, &out, &err), PF_ERR_ARGUMENT);
     assert_non_null(strstr(err.message, "G-buffer"));

@@ -18,7 +18,8 @@
  *   and ISMs) and TCAS, whose VPL sets do not depend on earlier frames,
  *   while drawing only part of its shadow-map faces and VPL maps again;
  * - every method's VPLs lie on the posed surfaces after each move (VPLs on
- *   the moved box move with it or are removed, none floats where it was);
+ *   the moved box move with it or are removed, none floats where it was),
+ *   SMC's also as 4 cycled chains (those not shaded drop theirs at once);
  * - bad ranges are errors. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -548,8 +549,11 @@ static double tri_dist2(pf_vec3 P, pf_vec3 A, pf_vec3 B, pf_vec3 C)
 static void test_vpls_on_posed_surfaces(void **state)
 {
     (void)state;
-    static const char *const methods[] = {"ir", "iir", "smc", "invtm", "tcas", "ssvp", "mir"};
+    /* the last: SMC's chains under VPL cycling, whose chains not shaded
+     * must drop their VPLs on moved triangles too (gi_smc.c "VPL cycling") */
+    static const char *const methods[] = {"ir", "iir", "smc", "invtm", "tcas", "ssvp", "mir", "smc"};
     for (size_t mi = 0; mi < sizeof methods / sizeof methods[0]; mi++) {
+        const int chains = mi == 7;
         loaded l;
         load(&l);
         pf_jobs *jobs = pf_jobs_create(2);
@@ -557,14 +561,15 @@ static void test_vpls_on_posed_surfaces(void **state)
         memset(&io, 0, sizeof io);
         io.method = gi_vpl_method_find(methods[mi]);
         assert_non_null(io.method);
-        io.vpls = 64;
+        io.vpls = 64; /* with chains, 4 x 64 */
+        io.cycle = chains ? 4 : 0, io.temporal = chains ? 4 : 0;
         io.clamp = -1.0f;
         io.para_res = 32;
         io.bounces = 1;
         if (!strcmp(methods[mi], "smc")) { /* a short warm-up: the test is about the poses */
-            static const char *const kv[] = {"warmup=4"};
+            static const char *const kv[] = {"warmup=4", "chain_warmup=4"};
             pf_error pe;
-            assert_int_equal(gi_params_add(&io.params, kv[0], &pe), PF_OK);
+            assert_int_equal(gi_params_add(&io.params, kv[chains], &pe), PF_OK);
         }
         pf_error e;
         int32_t clip;
@@ -596,15 +601,15 @@ static void test_vpls_on_posed_surfaces(void **state)
                     best = d < best ? d : best;
                 }
                 if (best > 1e-6)
-                    fail_msg("%s, pose %d: VPL %u (id %u) at (%g, %g, %g) is %g m off the posed surfaces", methods[mi],
-                             k, i, v->id, (double)v->pos.x, (double)v->pos.y, (double)v->pos.z, sqrt(best));
+                    fail_msg("%s%s, pose %d: VPL %u (id %u) at (%g, %g, %g) is %g m off the posed surfaces",
+                             methods[mi], chains ? ", 4 chains" : "", k, i, v->id, (double)v->pos.x, (double)v->pos.y, (double)v->pos.z, sqrt(best));
                 checked++;
                 near_box += v->pos.x >= lo.x && v->pos.x <= hi.x && v->pos.y >= lo.y && v->pos.y <= hi.y &&
                             v->pos.z >= lo.z && v->pos.z <= hi.z;
             }
         }
-        print_message("%s: %u VPLs over 5 poses of the moving box on posed surfaces (%u within the moved bounds)\n",
-                      methods[mi], checked, near_box);
+        print_message("%s%s: %u VPLs over 5 poses of the moving box on posed surfaces (%u within the moved bounds)\n",
+                      methods[mi], chains ? ", 4 chains" : "", checked, near_box);
         assert_true(checked > 0);
         frame_set_free(&x);
         pf_jobs_destroy(jobs);

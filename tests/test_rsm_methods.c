@@ -612,7 +612,7 @@ static uint64_t method_frames(const gi_vpl_method *method, const char *param, ui
         gi_stage_gbuffer_raster(&x.f);
         gi_stage_gbuffer_resolve(&x.f);
         gi_vpl_inputs in = {&x.scene, x.rt,        x.jobs,    &x.f.camera, frame, 128, 1, &x.f.gbuf, 64, 48,
-                            &x.f.area, NULL, g_simd, 0};
+                            &x.f.area, NULL, g_simd, 0, 0, 0};
         assert_int_equal(method->update(st, &in, &set, &err), PF_OK);
         assert_int_equal(set.count, 128);
         for (uint32_t i = 0; i < set.count; i++) {
@@ -904,7 +904,7 @@ static uint64_t area_frames(const gi_vpl_method *m, uint32_t threads, uint32_t *
         gi_stage_gbuffer_raster(&x.f);
         gi_stage_gbuffer_resolve(&x.f);
         gi_vpl_inputs in = {&x.scene, x.rt,      x.jobs, &x.f.camera, frame, 128, 2, &x.f.gbuf,
-                            48,       36,        &x.f.area, NULL,    0,     0};
+                            48,       36,        &x.f.area, NULL,    0,     0, 0, 0};
         assert_int_equal(m->update(st, &in, &set, &err), PF_OK);
         assert_true(set.count > 0);
         double total = 0.0;
@@ -977,7 +977,7 @@ static void test_bad_params(void **state)
         assert_int_equal(ms[k]->create(&st, NULL, &err), PF_OK);
         gi_vpl_set set = {0};
         gi_area_lights area = {0};
-        gi_vpl_inputs in = {&s, NULL, NULL, &s.cameras[0], 0, 16, 1, NULL, 0, 0, &area, NULL, 0, 0};
+        gi_vpl_inputs in = {&s, NULL, NULL, &s.cameras[0], 0, 16, 1, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
         assert_int_equal(ms[k]->update(st, &in, &set, &err), PF_ERR_ARGUMENT);
         assert_non_null(strstr(err.message, "G-buffer"));
         ms[k]->destroy(st);

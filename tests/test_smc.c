@@ -504,7 +504,8 @@ static void test_corridor_hidden_room(void **state)
 /* 30 frames with the camera and the light moving, on 1 and 2 threads:
  * every frame's VPL set is identical. Also: slots are stable (a VPL whose
  * id was in slot i stays in slot i), `moved` is set exactly for new ids. */
-static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *out, uint32_t *counts)
+static void run_frames_cycled(uint32_t threads, rs_simd simd, pf_isa isa, uint32_t cycle, gi_vpl *out,
+                              uint32_t *counts)
 {
     fx x;
     fx_load(&x, CORNELL);
@@ -513,8 +514,9 @@ static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
     io.method = gi_vpl_method_find("smc");
-    io.vpls = 128;
+    io.vpls = 128 / cycle;
     io.visibility_raytrace = 1;
+    if (cycle > 1) io.cycle = cycle, io.temporal = cycle; /* the chains (gi_smc.c "VPL cycling") */
     pf_error err;
     for (const char *const *p = params; *p; p++) assert_int_equal(gi_params_add(&io.params, *p, &err), PF_OK);
     tu_fx_desc d = {0};
@@ -526,6 +528,7 @@ static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *
         pf_vec3 eye = pf_v3_add(cam.eye, pf_v3(0.004f * (float)fr, 0.0f, 0.0f));
         assert_int_equal(pf_camera_look_at(&x.f.camera, eye, pf_v3(0.278f, 0.27f, 0.28f), cam.yfov, &err), PF_OK);
         x.scene.lights[0].position.x = 0.278f + 0.003f * (float)fr;
+        x.f.ind.temporal_frames = (uint32_t)fr; /* the frame's slice: fr mod cycle */
         fx_update(&x);
         counts[fr] = x.f.ind.vpls.count;
         assert_true(counts[fr] <= 128);
@@ -540,28 +543,129 @@ static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *
     fx_end(&x);
 }
 
-static void run_frames(uint32_t threads, gi_vpl *out, uint32_t *counts)
+static void run_frames_with(uint32_t threads, rs_simd simd, pf_isa isa, gi_vpl *out, uint32_t *counts)
 {
-    run_frames_with(threads, RS_SIMD_SCALAR, PF_ISA_SSE2, out, counts);
+    run_frames_cycled(threads, simd, isa, 1, out, counts);
 }
 
+/* With 1 chain, and with 4 chains of 32 VPLs cycled (one iterated a frame). */
 static void test_deterministic_threads(void **state)
 {
     (void)state;
     static gi_vpl a[30 * 128], b[30 * 128];
     uint32_t ca[30], cb[30];
-    memset(a, 0, sizeof a), memset(b, 0, sizeof b);
-    run_frames(1, a, ca);
-    run_frames(2, b, cb);
-    uint32_t changed = 0;
-    for (int fr = 0; fr < 30; fr++) {
-        assert_int_equal(ca[fr], cb[fr]);
-        if (memcmp(a + fr * 128, b + fr * 128, sizeof(gi_vpl) * ca[fr]))
-            fail_msg("frame %d: the VPL sets differ between 1 and 2 threads", fr);
-        for (uint32_t i = 0; fr > 0 && i < ca[fr]; i++) changed += a[fr * 128 + i].moved;
+    for (uint32_t cycle = 1; cycle <= 4; cycle += 3) {
+        memset(a, 0, sizeof a), memset(b, 0, sizeof b);
+        run_frames_cycled(1, RS_SIMD_SCALAR, PF_ISA_SSE2, cycle, a, ca);
+        run_frames_cycled(2, RS_SIMD_SCALAR, PF_ISA_SSE2, cycle, b, cb);
+        uint32_t changed = 0;
+        for (int fr = 0; fr < 30; fr++) {
+            assert_int_equal(ca[fr], cb[fr]);
+            if (memcmp(a + fr * 128, b + fr * 128, sizeof(gi_vpl) * ca[fr]))
+                fail_msg("%u chain(s), frame %d: the VPL sets differ between 1 and 2 threads", cycle, fr);
+            for (uint32_t i = 0; fr > 0 && i < ca[fr]; i++) changed += a[fr * 128 + i].moved;
+        }
+        /* the light moves: the set adapts, but at most M_max per frame (one chain's) */
+        assert_true(changed > 0 && changed <= 29u * 16u);
     }
-    /* the light moves: the set adapts, but at most M_max per frame */
-    assert_true(changed > 0 && changed <= 29u * 16u);
+}
+
+/* The chains of VPL cycling (gi_smc.c "VPL cycling"), driven through the
+ * method with the slice and live counts a frame gives: C = 4 chains of 32
+ * VPLs on the Cornell box (static camera and light).
+ * - the first update with live = 2 makes chains 0 and 1 only: slices 2
+ *   and 3 are empty (id NONE, no intensity); each made chain fills its
+ *   slots (c + 4 j), its ids are c mod 4 and unique;
+ * - the chains are independent: no VPL of chain 1 sits where one of chain
+ *   0 does (the same streams would give the same positions);
+ * - an update with slice s changes chain s's slots only, the others keep
+ *   their bits with moved = 0, and moved marks exactly chain s's new ids;
+ *   live = 3 then makes chain 2 (all its slots moved) as well;
+ * - each chain carries 1 / C of the light: C times a chain's intensity sum
+ *   is within 25% of one chain (cycle=whole's single chain of 32 VPLs with
+ *   the same budget per frame; measured: see the message). */
+static double chain_sum(const gi_vpl_set *v, uint32_t C, uint32_t c)
+{
+    double s = 0.0;
+    for (uint32_t i = c; i < v->count; i += C) s += v->v[i].intensity.x + v->v[i].intensity.y + v->v[i].intensity.z;
+    return s;
+}
+
+static void test_chains(void **state)
+{
+    (void)state;
+    enum { C = 4, I = 32, N = C * I };
+    fx x;
+    fx_load(&x, CORNELL);
+    fx_begin(&x, 2, 48, 48, &x.scene.cameras[0], 16, NULL);
+    gi_stage_gbuffer_raster(&x.f);
+    gi_stage_gbuffer_resolve(&x.f);
+    const gi_vpl_method *m = gi_vpl_method_find("smc");
+    pf_error err;
+    gi_params p;
+    memset(&p, 0, sizeof p);
+    assert_int_equal(gi_params_add(&p, "spp=8", &err), PF_OK);
+    void *st = NULL, *one = NULL;
+    assert_int_equal(m->create(&st, &p, &err), PF_OK);
+    assert_int_equal(m->create(&one, &p, &err), PF_OK);
+    gi_vpl_inputs in = {&x.scene, x.rt, x.jobs, &x.f.camera, 0, N, 3, &x.f.gbuf, 48, 48, &x.f.area, NULL, 0, C, 0, 2};
+    gi_vpl_set set, prev, single;
+    memset(&set, 0, sizeof set), memset(&prev, 0, sizeof prev), memset(&single, 0, sizeof single);
+    assert_int_equal(gi_vpl_set_reserve(&prev, N, &err), PF_OK);
+    assert_int_equal(m->update(st, &in, &set, &err), PF_OK);
+    assert_int_equal(set.count, N);
+    for (uint32_t i = 0; i < N; i++) {
+        const gi_vpl *v = &set.v[i];
+        if (i % C >= 2) {
+            assert_int_equal(v->id, 0xffffffffu);
+            assert_true(v->intensity.x == 0.0f && v->intensity.y == 0.0f && v->intensity.z == 0.0f);
+            continue;
+        }
+        assert_int_equal(v->id % C, i % C);
+        assert_true(v->moved);
+        assert_true(v->intensity.x + v->intensity.y + v->intensity.z > 0.0f);
+        for (uint32_t k = 0; k < i; k++) assert_true(set.v[k].id != v->id);
+    }
+    uint32_t same = 0;
+    for (uint32_t j = 0; j < I; j++)
+        for (uint32_t k = 0; k < I; k++) same += !memcmp(&set.v[C * j].pos, &set.v[C * k + 1].pos, sizeof(pf_vec3));
+    assert_int_equal(same, 0);
+    uint32_t new_ids = 0;
+    for (uint32_t fr = 1; fr <= 9; fr++) {
+        memcpy(prev.v, set.v, sizeof *set.v * N);
+        in.frame = fr, in.slice = fr % 2, in.live = fr < 5 ? 2 : 3;
+        assert_int_equal(m->update(st, &in, &set, &err), PF_OK);
+        assert_int_equal(set.count, N);
+        for (uint32_t i = 0; i < N; i++) {
+            const gi_vpl *a = &set.v[i], *b = &prev.v[i];
+            const uint32_t c = i % C;
+            if (c == in.slice) {
+                assert_int_equal(a->moved, a->id != b->id);
+                new_ids += a->moved;
+            } else if (c == 2 && fr == 5) {
+                assert_true(a->moved);
+                assert_int_equal(a->id % C, 2);
+            } else {
+                assert_false(a->moved);
+                gi_vpl keep = *b;
+                keep.moved = 0;
+                assert_memory_equal(a, &keep, sizeof keep);
+            }
+        }
+    }
+    assert_true(new_ids <= 9u * 16u);
+    gi_vpl_inputs in1 = in;
+    in1.budget = I, in1.cycle = 0, in1.slice = in1.live = 0;
+    assert_int_equal(m->update(one, &in1, &single, &err), PF_OK);
+    const double s1 = chain_sum(&single, 1, 0);
+    for (uint32_t c = 0; c < 3; c++) {
+        const double r = C * chain_sum(&set, C, c) / s1;
+        print_message("chain %u of %u: %u x its intensity / one chain's = %.3f\n", c, C, C, r);
+        assert_true(r > 0.75 && r < 1.25);
+    }
+    gi_vpl_set_free(&set), gi_vpl_set_free(&prev), gi_vpl_set_free(&single);
+    m->destroy(st), m->destroy(one);
+    fx_end(&x);
 }
 
 /* The same 30 frames on the scalar paths with 1 thread (the rasterizer's
@@ -711,7 +815,8 @@ static void test_bad_input(void **state)
     (void)state;
     const gi_vpl_method *m = gi_vpl_method_find("smc");
     assert_non_null(m);
-    const char *bad[] = {"Mmax=0", "V=x", "spp=0", "spp=100000", "ratio=-1", "k=65", "warmup=0", "nope=1"};
+    const char *bad[] = {"Mmax=0", "V=x",         "spp=0",          "spp=100000", "ratio=-1",
+                         "k=65",   "warmup=0",    "chain_warmup=0", "cycle=some", "nope=1"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         gi_params p;
         memset(&p, 0, sizeof p);
@@ -756,7 +861,7 @@ int main(void)
         cmocka_unit_test(test_static_converges),      cmocka_unit_test(test_corridor_hidden_room),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_units_furnace),
         cmocka_unit_test(test_no_drift),              cmocka_unit_test(test_units_cornell),
-        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_bad_input),             cmocka_unit_test(test_chains),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -153,7 +153,7 @@ static void ctx_begin(ctx *c, uint32_t threads, const char *const *kv, uint32_t 
     memset(&p, 0, sizeof p);
     for (uint32_t i = 0; i < nkv; i++) assert_int_equal(gi_params_add(&p, kv[i], &err), PF_OK);
     if (gi_method_ssvp.create(&c->st, &p, &err) != PF_OK) fail_msg("%s", err.message);
-    gi_vpl_inputs in = {&c->scene, c->rt, c->jobs, NULL, 0, budget, 2, NULL, 0, 0, &c->area, NULL, 0, 0};
+    gi_vpl_inputs in = {&c->scene, c->rt, c->jobs, NULL, 0, budget, 2, NULL, 0, 0, &c->area, NULL, 0, 0, 0, 0};
     c->in = in;
 }
 

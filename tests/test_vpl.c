@@ -318,7 +318,7 @@ static void test_ir_static(void **state)
     assert_int_equal(gi_method_ir.create(&st, NULL, &err), PF_OK);
     gi_vpl_set a = {0}, b = {0};
     gi_area_lights area = {0};
-    gi_vpl_inputs in = {&s, rt, NULL, &s.cameras[0], 0, 256, 3, NULL, 0, 0, &area, NULL, 0, 0};
+    gi_vpl_inputs in = {&s, rt, NULL, &s.cameras[0], 0, 256, 3, NULL, 0, 0, &area, NULL, 0, 0, 0, 0};
     assert_int_equal(gi_method_ir.update(st, &in, &a, &err), PF_OK);
     in.frame = 1;
     assert_int_equal(gi_method_ir.update(st, &in, &b, &err), PF_OK);

@@ -16,6 +16,11 @@
  *   maps are there, only slices in the rotation shaded, every map drawn
  *   once, and the history still converging to the whole set; the same
  *   bytes with 1 and 2 threads and on the SIMD path;
+ * - SMC's chains (gi_smc.c "VPL cycling") follow the frames' slices: with
+ *   the progressive warm-up, pipelined or not, a frame's set differs from
+ *   the last one only in the slice it shades and in chains made for the
+ *   first time, slices past the rotation (and the one drawn ahead, and
+ *   pipelined one more) stay empty, and the shaded slice's chain changes;
  * - cycling without --temporal, with imperfect shadow maps, or over too
  *   many slices, and the warm-up without cycling, are refused with a clear
  *   message. */
@@ -41,12 +46,16 @@
 #define VPLS 32u
 #define CYCLE 4u
 
-static void begin_warm(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
-                      int no_interleave, int pipeline, uint32_t cycle_maps)
+static void begin_method(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
+                         int no_interleave, int pipeline, uint32_t cycle_maps, const char *method,
+                         const char *const *params)
 {
     tu_load(&x->scene, CORNELL);
     gi_indirect_options io;
     memset(&io, 0, sizeof io);
+    pf_error err;
+    if (method) io.method = gi_vpl_method_find(method);
+    for (const char *const *p = params; p && *p; p++) assert_int_equal(gi_params_add(&io.params, *p, &err), PF_OK);
     io.vpls = vpls;
     io.filter = GI_FILTER_NONE;
     io.temporal = temporal;
@@ -55,6 +64,12 @@ static void begin_warm(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, 
     io.pipeline = pipeline;
     io.cycle_maps = cycle_maps;
     tu_fx_begin(x, threads, simd, W, H, &x->scene.cameras[0], &io, 1);
+}
+
+static void begin_warm(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
+                       int no_interleave, int pipeline, uint32_t cycle_maps)
+{
+    begin_method(x, threads, simd, vpls, cycle, temporal, no_interleave, pipeline, cycle_maps, NULL, NULL);
 }
 
 static void begin_piped(tu_fx *x, uint32_t threads, rs_simd simd, uint32_t vpls, uint32_t cycle, uint32_t temporal,
@@ -190,6 +205,55 @@ static void test_progressive_warmup(void **state)
     tu_fx_end(&t);
 }
 
+static void chains_follow(int pipeline)
+{
+    static const char *const params[] = {"spp=4", "chain_warmup=2", NULL};
+    tu_fx t;
+    begin_method(&t, 2, RS_SIMD_SCALAR, VPLS, CYCLE, 16, 0, pipeline, 8, "smc", params);
+    const uint32_t N = VPLS * CYCLE;
+    gi_vpl *prev = calloc(N, sizeof *prev);
+    assert_non_null(prev);
+    uint32_t changed_frames = 0, made = 0;
+    for (uint32_t k = 0; k < 40; k++) {
+        const uint32_t live = t.f.ind.cycle_live;
+        gi_frame_render_raster(&t.f);
+        const gi_vpl *v = t.f.ind.vpls.v;
+        const uint32_t s = t.f.ind.slice;
+        assert_int_equal(t.f.ind.vpls.count, N);
+        uint32_t in_slice = 0;
+        for (uint32_t i = 0; i < N; i++) {
+            const uint32_t c = i % CYCLE;
+            if (c >= live + 1u + (pipeline ? 1u : 0u)) assert_int_equal(v[i].id, 0xffffffffu); /* not made yet */
+            gi_vpl a = v[i], b = prev[i];
+            a.moved = b.moved = 0; /* cleared in the slots an update leaves */
+            if (k == 0 || !memcmp(&a, &b, sizeof a)) continue;
+            if (c == s) {
+                in_slice++;
+                continue;
+            }
+            /* another slice changes only when its chain is made */
+            assert_int_equal(prev[i].id, 0xffffffffu);
+            made++;
+        }
+        changed_frames += in_slice > 0;
+        memcpy(prev, v, N * sizeof *v);
+    }
+    print_message("smc chains%s: the shaded slice changed in %u of 39 frames, %u slots of new chains\n",
+                  pipeline ? ", pipelined" : "", changed_frames, made);
+    assert_true(changed_frames >= 30);
+    assert_true(made >= VPLS); /* at least one chain made after frame 0 */
+    assert_int_equal(t.f.ind.cycle_live, CYCLE);
+    free(prev);
+    tu_fx_end(&t);
+}
+
+static void test_smc_chains_follow_the_slice(void **state)
+{
+    (void)state;
+    chains_follow(0);
+    chains_follow(1);
+}
+
 /* The light moves every frame: every VPL moves, and each slice's maps are
  * drawn when its turn comes; 1 and 2 threads, scalar and SIMD, same bytes;
  * with and without the progressive warm-up. */
@@ -264,6 +328,7 @@ int main(void)
         cmocka_unit_test(test_without_cycling_it_stays_apart),
         cmocka_unit_test(test_progressive_warmup),
         cmocka_unit_test(test_threads_and_simd),
+        cmocka_unit_test(test_smc_chains_follow_the_slice),
         cmocka_unit_test(test_bad_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

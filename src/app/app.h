@@ -102,9 +102,10 @@ pf_result app_budget_check(const pf_options *o, const pf_scene *scene, uint32_t 
 /* The progressive refinement's VPL slices (softgi view's default and
  * render --frames N, docs/view.md): API_REFINE_SLICES, fewer where their 16-bit maps of
  * para_res^2 (0: the default 128) would pass 256 MB or the set
- * GI_INDIRECT_MAX_SET VPLs, 0 (the temporal history alone) for SMC and MIR,
- * whose update runs over the whole cycled set every frame, and for imperfect
- * shadow maps, which cycling refuses (at most API_REFINE_SLICES). The memory
+ * GI_INDIRECT_MAX_SET VPLs, 0 (the temporal history alone) for MIR, whose
+ * update runs over the whole cycled set every frame (SMC's runs over one
+ * chain, gi_smc.c "VPL cycling"), and for imperfect shadow maps, which
+ * cycling refuses (at most API_REFINE_SLICES). The memory
  * budget comes after (api_refine_fit). */
 #define APP_REFINE_MAP_BYTES ((uint64_t)256 << 20)
 uint32_t app_refine_slices(const char *method, int ism, int raytrace, uint32_t vpls, uint32_t para_res);

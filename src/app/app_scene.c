@@ -227,7 +227,7 @@ void app_reference_options(const pf_options *o, gi_reference_options *ro)
 uint32_t app_refine_slices(const char *method, int ism, int raytrace, uint32_t vpls, uint32_t para_res)
 {
     const char *m = method ? method : "ir";
-    if (ism || !strcmp(m, "smc") || !strcmp(m, "mir")) return 0;
+    if (ism || !strcmp(m, "mir")) return 0;
     uint64_t n = vpls ? vpls : 256, res = para_res ? para_res : RS_PARA_DEFAULT_RES;
     uint64_t slice = raytrace ? 1 : n * res * res * 2u;
     uint64_t c = APP_REFINE_MAP_BYTES / slice;

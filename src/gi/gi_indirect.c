@@ -269,12 +269,15 @@ static void gi__motion_seen(gi_motion *m)
     m->emitters = 0;
 }
 
+static void gi__cycle_inputs(gi_indirect *ind, int ahead, gi_vpl_inputs *in);
+
 void gi_stage_vpl_update(gi_frame *f)
 {
     gi_indirect *ind = &f->ind;
     gi_vpl_inputs in = {f->scene,         f->rt,    f->jobs,  &f->camera, ind->frame, ind->opt.vpls,
                         ind->opt.bounces, &f->gbuf, f->width, f->height,  &f->area,   &f->motion,
-                        gi__simd(f),      ind->cycle};
+                        gi__simd(f),      ind->cycle,     0,          0};
+    gi__cycle_inputs(ind, 0, &in);
     gi__vpl_update_into(ind, &in, &ind->vpls);
     gi__motion_seen(&f->motion);
     ind->frame++;
@@ -322,7 +325,9 @@ void gi_stage_vpl_update_begin(gi_frame *f, int gbuffer_ready)
                         ind->opt.bounces, gbuffer_ready ? &f->gbuf : NULL,
                         f->width,        f->height,
                         &f->area,        &f->motion,
-                        gi__simd(f),     ind->cycle};
+                        gi__simd(f),     ind->cycle,
+                        0,               0};
+    gi__cycle_inputs(ind, 1, &in);
     ind->pipe_in = in;
     ind->frame++;
     ind->pipe_ms = 0.0;
@@ -372,6 +377,27 @@ static uint32_t gi__slice(gi_indirect *ind)
 {
     gi__cycle_schedule(ind);
     return ind->slice;
+}
+
+/* What a VPL update is told of the cycle (gi_vpl_inputs.slice, live): for
+ * this frame's set (ahead = 0) or, pipelined, the next frame's (ahead = 1):
+ * the slice that frame shades and the slices it may touch, those in the
+ * rotation and the one drawn ahead (during the warm-up; one more for the
+ * next frame, whose rotation this frame's maps may grow). */
+static void gi__cycle_inputs(gi_indirect *ind, int ahead, gi_vpl_inputs *in)
+{
+    const uint32_t C = ind->cycle;
+    in->slice = in->live = 0;
+    if (C <= 1) return;
+    gi__cycle_schedule(ind);
+    if (!ind->opt.cycle_maps || ind->opt.visibility_raytrace) {
+        in->slice = ahead ? (ind->temporal_frames + 1u) % C : ind->slice;
+        in->live = C;
+        return;
+    }
+    in->slice = ahead ? ind->cycle_next : ind->slice; /* cycle_next < cycle_live, or 0 */
+    uint32_t live = ind->cycle_live + 1u + (ahead ? 1u : 0u);
+    in->live = live < C ? live : C;
 }
 
 /* Slot i's map to be drawn this frame: marked as holding its VPL and

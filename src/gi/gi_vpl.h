@@ -80,6 +80,13 @@ typedef struct gi_vpl_inputs {
      * temporal history; 0 or 1: every frame shades the whole set. A method
      * may choose its defaults by it (SSVP's second-bounce origin). */
     uint32_t cycle;
+    /* With cycling: the slice (0 .. cycle - 1; slot i is in slice i mod
+     * cycle) that the first frame to shade this update's set shades, and
+     * how many slices, 0 .. live - 1, that frame may shade or draw maps
+     * for (the progressive warm-up's rotation and the slice drawn ahead;
+     * 0: all). A method may spend its update on that slice (SMC's chains)
+     * and leave the slots of slices >= live empty for now. */
+    uint32_t slice, live;
 } gi_vpl_inputs;
 
 /* Method parameters from `--param KEY=VALUE` (repeatable). A method reads

@@ -119,7 +119,35 @@
  *                  paths binned into its cell (photons, beyond the paper,
  *                  "photons" below) or its radiosity estimate times its
  *                  cell's area (point)
- *   photons=16     light paths per VPL for flux=photons */
+ *   photons=16     light paths per VPL for flux=photons
+ *   cycle=chains   with VPL cycling (--vpl-cycle C): chains (beyond the
+ *                  paper, below) or whole (one chain over the whole set)
+ *   chain_warmup=8 with cycle=chains: each chain's iterations before its
+ *                  first frame (below)
+ *
+ * VPL cycling (gi_vpl_inputs.cycle = C >= 2, beyond the paper). The frame
+ * keeps C x --vpls VPLs and shades one slice of --vpls a frame, slot i in
+ * slice i mod C (gi_indirect.h). With cycle=whole, Algorithm 1 runs over
+ * the whole set every frame, so an update costs C times a plain frame's
+ * (ratio x C x --vpls rays, C x photons paths, kNN over all of them) and
+ * still replaces only Mmax VPLs. With cycle=chains (the default) the set is
+ * C independent chains of I_c = --vpls VPLs, chain c in slice c (its slot
+ * j at c + j C), each the paper's algorithm with a budget of I_c and
+ * random streams of its own: iteration keys from a seed of its own, VPL
+ * ids c + C n (so the radiosity seeds differ), and photons from the c-th
+ * run of photons x I_c indices of the Halton sequence. An update iterates
+ * only the chain of the slice the frame shades (gi_vpl_inputs.slice), so a
+ * frame costs a plain frame's update; the chains not shaded keep their
+ * VPLs and intensities, except that VPLs on moved triangles go at once; a
+ * light change reaches a chain at its next iteration, before it is shaded.
+ * A chain's set is an estimate of the whole light on its own, so its
+ * intensities are divided by C: the history's average over the C slices is
+ * the mean of C independent SMC estimates. A chain is made (line 1 and
+ * chain_warmup iterations, not warmup's 100: on the scenes measured
+ * the warm-up changes the error by under 1% of it, docs/smc.md) when the
+ * frame may first shade it or draw its maps (gi_vpl_inputs.live: all at
+ * the first frame, or one after the other in the progressive warm-up);
+ * until then its slots are empty (dark, id GI__SMC_NONE). */
 #include <assert.h>
 #include <math.h>
 #include <stdio.h>
@@ -132,6 +160,9 @@
 #include "gi_vpl.h"
 
 #define GI__SMC_NONE 0xffffffffu
+/* chain_warmup's default: each chain's iterations before its first frame
+ * (see "VPL cycling"; measured in docs/smc.md) */
+#define GI__SMC_CHAIN_WARMUP 8u
 
 /* A live VPL of Y. */
 typedef struct gi__smc_vpl {
@@ -254,11 +285,19 @@ typedef struct gi__smc_photon {
 
 typedef struct gi__smc_params {
     uint32_t m_max, v, vis_iters, points, ratio, spp, bounces, warmup, k, independent, area, area_window, flux,
-        photons;
+        photons, cycle, chain_warmup;
 } gi__smc_params;
+
+/* cycle=: what VPL cycling (gi_vpl_inputs.cycle) gets (see "VPL cycling") */
+typedef enum gi__smc_cycle { GI__SMC_CYCLE_CHAINS = 0, GI__SMC_CYCLE_WHOLE } gi__smc_cycle;
 
 typedef struct gi__smc_state {
     gi__smc_params prm;
+    /* the chain's random streams (see "VPL cycling"): iteration keys from
+     * seed, VPL ids id_base + id_stride n (n = 0, 1, ...: next_id), photon
+     * paths from Halton index halton0 + 1; 0x5eed, 0, 1, 0 for one chain */
+    uint64_t seed;
+    uint32_t id_base, id_stride, halton0;
     uint32_t I;               /* the budget the state was built for (0: not yet) */
     uint32_t next_id, iter, updates, light_epoch;
     int warmed;
@@ -307,6 +346,27 @@ typedef struct gi__smc_state {
     double t_mark;            /* gi__smc_part: when the running part began */
 } gi__smc_state;
 
+/* The method's state: one chain, or with VPL cycling and cycle=chains one
+ * per slice (see "VPL cycling"). */
+typedef struct gi__smc {
+    gi__smc_params prm;
+    gi__smc_state *chain;     /* `chains` of them */
+    uint32_t chains;          /* 1, or the cycle C */
+    uint32_t I;               /* chains: the whole set's budget the slots were laid out for (0: not yet) */
+    uint32_t last;            /* the chain the last update iterated (the view's) */
+    gi_vpl_set all;           /* chains: the whole set as output last */
+    gi_vpl_set one;           /* chains: one chain's output (scratch) */
+    pf_stage_times parts;     /* the last update's, all chains it ran together */
+} gi__smc;
+
+/* Chain c of n: its parameters and random streams (see "VPL cycling"). */
+static void gi__smc_chain_init(gi__smc_state *s, const gi__smc_params *p, uint32_t c, uint32_t n)
+{
+    s->prm = *p;
+    s->seed = c ? gi_radiosity_hash(0x5eed, ((uint64_t)1 << 32) | c) : 0x5eed;
+    s->id_base = c, s->id_stride = n;
+    s->halton0 = 0; /* set with the budget (gi__smc_update_chain) */
+}
 
 static float gi__rand(uint64_t key, uint32_t a, uint32_t b, uint32_t c) { return gi_radiosity_random(key, a, b, c); }
 
@@ -333,12 +393,13 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
 {
     static const char *const known[] = {"Mmax",    "V",      "vis_iters", "points", "ratio", "spp",
                                         "bounces", "warmup", "k",         "independent", "area", "area_window",
-                                        "flux",    "photons", NULL};
+                                        "flux",    "photons", "cycle", "chain_warmup", NULL};
     static const char *const areas[] = {"voronoi", "knn", NULL};
     static const char *const fluxes[] = {"photons", "point", NULL};
+    static const char *const cycles[] = {"chains", "whole", NULL};
     *state = NULL;
     gi__smc_params p = {16, 16, 2, 1024, 16, 16, 0, 100, 0, 1, GI__SMC_AREA_VORONOI, 32,
-                        GI__SMC_FLUX_PHOTONS, 16};
+                        GI__SMC_FLUX_PHOTONS, 16, GI__SMC_CYCLE_CHAINS, GI__SMC_CHAIN_WARMUP};
     pf_result r = gi_params_check(params, "smc", known, err);
     if (r == PF_OK) r = gi_param_u32(params, "Mmax", 1, 1u << 20, &p.m_max, err);
     if (r == PF_OK) r = gi_param_u32(params, "V", 0, 1024, &p.v, err);
@@ -354,12 +415,21 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
     if (r == PF_OK) r = gi_param_u32(params, "area_window", 1, 1u << 20, &p.area_window, err);
     if (r == PF_OK) r = gi_param_choice(params, "flux", fluxes, &p.flux, err);
     if (r == PF_OK) r = gi_param_u32(params, "photons", 1, 256, &p.photons, err);
+    if (r == PF_OK) r = gi_param_choice(params, "cycle", cycles, &p.cycle, err);
+    if (r == PF_OK) r = gi_param_u32(params, "chain_warmup", 1, 100000, &p.chain_warmup, err);
     if (r == PF_OK && p.area == GI__SMC_AREA_KNN) p.flux = GI__SMC_FLUX_POINT; /* the paper, all of it */
     if (r != PF_OK) return r;
+    gi__smc *w = calloc(1, sizeof *w);
     gi__smc_state *s = calloc(1, sizeof *s);
-    if (!s) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
-    s->prm = p;
-    *state = s;
+    if (!w || !s) {
+        free(w), free(s);
+        return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "out of memory");
+    }
+    gi__smc_chain_init(s, &p, 0, 1);
+    w->prm = p;
+    w->chain = s;
+    w->chains = 1;
+    *state = w;
     return PF_OK;
 }
 
@@ -382,12 +452,22 @@ static void gi__smc_free_buffers(gi__smc_state *s)
     s->list = s->list2 = NULL, s->knn_pts = NULL, s->knn_slot = NULL, s->nearest = NULL, s->lights = NULL;
 }
 
+static void gi__smc_free_chains(gi__smc *w)
+{
+    for (uint32_t c = 0; c < w->chains; c++) gi__smc_free_buffers(&w->chain[c]);
+    free(w->chain);
+    w->chain = NULL;
+    w->chains = 0;
+}
+
 static void gi__smc_destroy(void *state)
 {
-    gi__smc_state *s = state;
-    if (!s) return;
-    gi__smc_free_buffers(s);
-    free(s);
+    gi__smc *w = state;
+    if (!w) return;
+    gi__smc_free_chains(w);
+    gi_vpl_set_free(&w->all);
+    gi_vpl_set_free(&w->one);
+    free(w);
 }
 
 /* All buffers for a budget of I VPLs, once (or again when I changes). */
@@ -797,7 +877,8 @@ static pf_result gi__smc_paths_prepare(gi__smc_state *s, const gi_vpl_inputs *in
         s->rad_scratch = p, s->rad_scratch_cap = scratch;
     }
     size_t cache = (size_t)s->I * 2 * nv;
-    if (cache * sizeof(gi_radiosity_vertex) > GI__SMC_PATHS_MAX) cache = 0; /* too large: no cache */
+    if (cache * sizeof(gi_radiosity_vertex) > GI__SMC_PATHS_MAX / s->id_stride)
+        cache = 0; /* too large (chains share the cap, id_stride of them): no cache */
     if (cache > s->paths_cap) {
         free(s->paths);
         s->paths = malloc(cache * sizeof *s->paths);
@@ -1078,7 +1159,8 @@ static void gi__smc_photon_job(void *ctx, uint32_t chunk, uint32_t worker)
     uint32_t i0 = chunk * GI__SMC_PHOTON_CHUNK, m = paths - i0 < GI__SMC_PHOTON_CHUNK ? paths - i0 : GI__SMC_PHOTON_CHUNK;
     gi_vpl hits[GI__SMC_PHOTON_CHUNK * GI_RADIOSITY_MAX_BOUNCES];
     uint32_t got[GI__SMC_PHOTON_CHUNK];
-    gi_lightpath_trace_halton_batch(lights, s->in->rt, i0 + 1, m, B, hits, got); /* path i is Halton index i + 1 */
+    gi_lightpath_trace_halton_batch(lights, s->in->rt, s->halton0 + i0 + 1, m, B, hits,
+                                    got); /* path i is Halton index halton0 + i + 1 */
     for (uint32_t i = 0; i < m; i++)
         for (uint32_t k = 0; k < B; k++) {
             gi__smc_photon *P = &s->phot[(size_t)(i0 + i) * B + k];
@@ -1268,7 +1350,7 @@ static void gi__smc_take_strongest(gi__smc_state *s)
         memset(v, 0, sizeof *v);
         v->pos = C->pos, v->ng = C->ng, v->ns = C->ns, v->albedo = C->albedo;
         v->prim = C->prim;
-        v->id = s->next_id++;
+        v->id = s->id_base + s->id_stride * s->next_id++;
         /* its own radiosity seed, independent of the candidate's: the
          * candidate won on its noisy estimate, so reusing that estimate
          * would keep the winners' upward noise (line 18 re-estimates) */
@@ -1291,7 +1373,7 @@ static void gi__smc_take_strongest(gi__smc_state *s)
  * taken (Sec. 3.2: "identically to how we generate candidate VPLs"). */
 static pf_result gi__smc_initialize_vpls(gi__smc_state *s, const gi_vpl_inputs *in, pf_error *err)
 {
-    uint64_t key = gi_radiosity_hash(0x5eed, s->iter++);
+    uint64_t key = gi_radiosity_hash(s->seed, s->iter++);
     for (uint32_t i = 0; i < s->I; i++) s->y[i].alive = 0;
     gi__smc_raycast_from_camera(s, in, key);
     gi__smc_raycast_from_points(s, in, key);
@@ -1309,7 +1391,7 @@ static pf_result gi__smc_initialize_vpls(gi__smc_state *s, const gi_vpl_inputs *
 /* Lines 3-19: one iteration. */
 static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_error *err)
 {
-    uint64_t key = gi_radiosity_hash(0x5eed, s->iter++);
+    uint64_t key = gi_radiosity_hash(s->seed, s->iter++);
     gi__smc_raycast_from_camera(s, in, key);                      /* 3 */
     gi__smc_part(s, GI__SMC_T_CAND);
     gi__smc_indirectly_visible_vpls(s, in, key);                  /* 4 */
@@ -1336,14 +1418,15 @@ static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     return r;
 }
 
-/* Line 20's input: every slot as a gi_vpl (see "Units" above). */
-static pf_result gi__smc_output(gi__smc_state *s, gi_vpl_set *out, pf_error *err)
+/* Line 20's input: every slot as a gi_vpl (see "Units" above), up to the
+ * last live one, or with `all` every slot. */
+static pf_result gi__smc_output(gi__smc_state *s, int all, gi_vpl_set *out, pf_error *err)
 {
     out->count = 0;
     pf_result r = gi_vpl_set_reserve(out, s->I, err);
     if (r != PF_OK) return r;
-    uint32_t last = 0;
-    for (uint32_t i = 0; i < s->I; i++)
+    uint32_t last = all ? s->I : 0;
+    for (uint32_t i = 0; i < s->I && !all; i++)
         if (s->y[i].alive) last = i + 1;
     for (uint32_t i = 0; i < last; i++) {
         const gi__smc_vpl *v = &s->y[i];
@@ -1371,19 +1454,18 @@ static pf_result gi__smc_output(gi__smc_state *s, gi_vpl_set *out, pf_error *err
     return PF_OK;
 }
 
-static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+/* One update of one chain with a budget of I: on its first, line 1 and
+ * `warmup` iterations, then one; `out` gets its set (every slot with
+ * `all`). */
+static pf_result gi__smc_update_chain(gi__smc_state *s, const gi_vpl_inputs *in, uint32_t I, uint32_t warmup, int all,
+                                      gi_vpl_set *out, pf_error *err)
 {
-    gi__smc_state *s = state;
-    out->count = 0;
-    if (!in->gbuf || !in->gbuf->prim || in->gbuf->width != in->width || in->gbuf->height != in->height ||
-        !in->width || !in->height)
-        return pf_error_set(err, PF_ERR_ARGUMENT, "--method smc needs the frame's G-buffer (directly visible points)");
-    if (!in->budget) return pf_error_set(err, PF_ERR_ARGUMENT, "--method smc: a VPL budget of 0");
     pf_result r = PF_OK;
-    if (s->I != in->budget) r = gi__smc_alloc(s, in->budget, err);
+    if (s->I != I) r = gi__smc_alloc(s, I, err);
     if (r == PF_OK) r = gi__smc_track_lights(s, in->scene, err);
     if (r != PF_OK) return r;
     if (s->warmed) gi__smc_motion(s, in->motion);
+    s->halton0 = s->id_base * s->prm.photons * I; /* chain c's photons: the c-th run of the sequence */
     s->in = in;
     s->rad.scene = in->scene;
     s->rad.rt = in->rt;
@@ -1400,7 +1482,7 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
         s->raw_tree_wanted = 0;
         r = gi__smc_initialize_vpls(s, in, err); /* line 1 */
         gi__smc_part(s, GI__SMC_T_CAND);
-        iters = s->prm.warmup;                   /* Sec. 3.2: 100 iterations before the first frame */
+        iters = warmup;                          /* Sec. 3.2: 100 iterations before the first frame */
         s->warmed = 1;
     }
     for (uint32_t k = 0; k < iters && r == PF_OK; k++) {
@@ -1412,13 +1494,103 @@ static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set
         r = gi__smc_photons(s, in, err);
         gi__smc_part(s, GI__SMC_T_PHOTONS);
     }
-    if (r == PF_OK) r = gi__smc_output(s, out, err);
+    if (r == PF_OK) r = gi__smc_output(s, all, out, err);
     gi__smc_part(s, GI__SMC_T_CAND); /* line 20 (replacing into the output set) */
     s->updates++;
     return r;
 }
 
-static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc_state *)state)->parts; }
+/* w->parts += the parts of the chain's last update */
+static void gi__smc_add_parts(gi__smc *w, const gi__smc_state *s)
+{
+    for (uint32_t i = 0; i < s->parts.count; i++) pf_stage_add(&w->parts, s->parts.name[i], s->parts.ms[i]);
+}
+
+/* n chains (chain c: gi__smc_chain_init(c, n)); kept while n stays. */
+static pf_result gi__smc_chains(gi__smc *w, uint32_t n, pf_error *err)
+{
+    if (w->chains == n && w->chain) return PF_OK;
+    gi__smc_free_chains(w);
+    w->chain = calloc(n, sizeof *w->chain);
+    if (!w->chain) return pf_error_set(err, PF_ERR_OUT_OF_MEMORY, "smc: out of memory for %u chains", n);
+    for (uint32_t c = 0; c < n; c++) gi__smc_chain_init(&w->chain[c], &w->prm, c, n);
+    w->chains = n;
+    w->I = 0;
+    return PF_OK;
+}
+
+/* An empty slot of the whole set (as gi__smc_output writes one). */
+static gi_vpl gi__smc_dark(void)
+{
+    gi_vpl o;
+    memset(&o, 0, sizeof o);
+    o.nrm = pf_v3(0, 1, 0);
+    o.id = GI__SMC_NONE;
+    return o;
+}
+
+/* VPL cycling with cycle=chains: the update of the chains (see "VPL
+ * cycling"), `out` the whole set of I = C x I_c slots, chain c's slot j at
+ * c + j C. */
+static pf_result gi__smc_update_chains(gi__smc *w, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+{
+    const uint32_t C = w->chains, N = in->budget, I = N / C;
+    const uint32_t live = in->live && in->live < C ? in->live : C, slice = in->slice < C ? in->slice : 0u;
+    pf_result r = gi_vpl_set_reserve(&w->all, N, err);
+    if (r != PF_OK) return r;
+    if (w->I != N) { /* a new layout: every chain starts again, its slots empty until it is made */
+        for (uint32_t i = 0; i < N; i++) w->all.v[i] = gi__smc_dark();
+        for (uint32_t c = 0; c < C; c++) w->chain[c].warmed = 0;
+        w->all.count = w->I = N;
+    }
+    for (uint32_t i = 0; i < N; i++) w->all.v[i].moved = 0;
+    for (uint32_t c = 0; c < C && r == PF_OK; c++) {
+        gi__smc_state *s = &w->chain[c];
+        if (c == slice || (c < live && !s->warmed)) { /* the frame's chain, or one first needed now */
+            r = gi__smc_update_chain(s, in, I, w->prm.chain_warmup, 1, &w->one, err);
+            gi__smc_add_parts(w, s);
+        } else if (s->warmed && gi_motion_any(in->motion)) { /* its VPLs on moved triangles go now */
+            gi__smc_motion(s, in->motion);
+            r = gi__smc_output(s, 1, &w->one, err);
+        } else {
+            continue; /* its slots as they were */
+        }
+        for (uint32_t j = 0; j < I && r == PF_OK; j++) {
+            gi_vpl v = w->one.v[j];
+            v.intensity = pf_v3_scale(v.intensity, 1.0f / (float)C); /* one of C estimates */
+            w->all.v[c + j * C] = v;
+        }
+    }
+    w->last = slice;
+    if (r == PF_OK) r = gi_vpl_set_reserve(out, N, err);
+    if (r != PF_OK) return r;
+    memcpy(out->v, w->all.v, sizeof *out->v * N);
+    out->count = N;
+    return PF_OK;
+}
+
+static pf_result gi__smc_update(void *state, const gi_vpl_inputs *in, gi_vpl_set *out, pf_error *err)
+{
+    gi__smc *w = state;
+    out->count = 0;
+    if (!in->gbuf || !in->gbuf->prim || in->gbuf->width != in->width || in->gbuf->height != in->height ||
+        !in->width || !in->height)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--method smc needs the frame's G-buffer (directly visible points)");
+    if (!in->budget) return pf_error_set(err, PF_ERR_ARGUMENT, "--method smc: a VPL budget of 0");
+    const uint32_t C = in->cycle > 1 && w->prm.cycle == GI__SMC_CYCLE_CHAINS ? in->cycle : 1u;
+    if (in->budget % C)
+        return pf_error_set(err, PF_ERR_ARGUMENT, "--method smc: %u VPLs do not split into %u chains", in->budget, C);
+    pf_result r = gi__smc_chains(w, C, err);
+    if (r != PF_OK) return r;
+    w->parts.count = 0;
+    if (C > 1) return gi__smc_update_chains(w, in, out, err);
+    w->last = 0;
+    r = gi__smc_update_chain(&w->chain[0], in, in->budget, w->prm.warmup, 0, out, err);
+    gi__smc_add_parts(w, &w->chain[0]);
+    return r;
+}
+
+static const pf_stage_times *gi__smc_parts(const void *state) { return &((const gi__smc *)state)->parts; }
 
 /* ---------------------------------------------------------------- the view */
 
@@ -1447,7 +1619,8 @@ static void gi__smc_view_circle(const gi_vpl_view_ctx *c, uint8_t *rgb, pf_vec3 
  * update, red when the visibility test of line 4 failed, grey otherwise. */
 static int gi__smc_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rgb)
 {
-    const gi__smc_state *s = state;
+    const gi__smc *w = state;
+    const gi__smc_state *s = w && w->chain && w->last < w->chains ? &w->chain[w->last] : NULL;
     if (!s || !s->I || !s->y) return 0;
     static const uint8_t grey[3] = {150, 150, 150}, cyan[3] = {40, 220, 230}, green[3] = {60, 240, 60},
                          red[3] = {240, 60, 60}, white[3] = {255, 255, 255};
@@ -1490,7 +1663,11 @@ static int gi__smc_view(const void *state, const gi_vpl_view_ctx *c, uint8_t *rg
     snprintf(text, sizeof text, "X: %u points (grey), %u candidates (cyan, %u seen), Y: %u VPLs, %u new, %u invalid",
              s->x_count, s->cand_count, cand_seen, alive, fresh, invalid);
     c->text(c, rgb, 4, 2, text, white);
-    snprintf(text, sizeof text, "circles: kNN radius r_k, k = %u (Eq. 7)", k);
+    if (w->chains > 1)
+        snprintf(text, sizeof text, "chain %u of %u (VPL cycling); circles: kNN radius r_k, k = %u (Eq. 7)", w->last,
+                 w->chains, k);
+    else
+        snprintf(text, sizeof text, "circles: kNN radius r_k, k = %u (Eq. 7)", k);
     c->text(c, rgb, 4, 12, text, white);
     c->legend(c, rgb, "Eq. 6 intensity L / p", lo, hi, 1);
     return 1;

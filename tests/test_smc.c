@@ -816,7 +816,7 @@ static void test_bad_input(void **state)
     const gi_vpl_method *m = gi_vpl_method_find("smc");
     assert_non_null(m);
     const char *bad[] = {"Mmax=0", "V=x",         "spp=0",          "spp=100000", "ratio=-1",
-                         "k=65",   "warmup=0",    "chain_warmup=0", "cycle=some", "nope=1"};
+                         "k=65",   "warmup=0",    "chain_warmup=0", "cycle=some", "nope=1", "chain_warmup=1001"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         gi_params p;
         memset(&p, 0, sizeof p);

@@ -123,7 +123,7 @@
  *   cycle=chains   with VPL cycling (--vpl-cycle C): chains (beyond the
  *                  paper, below) or whole (one chain over the whole set)
  *   chain_warmup=8 with cycle=chains: each chain's iterations before its
- *                  first frame (below)
+ *                  first frame (below; at most 1000)
  *
  * VPL cycling (gi_vpl_inputs.cycle = C >= 2, beyond the paper). The frame
  * keeps C x --vpls VPLs and shades one slice of --vpls a frame, slot i in
@@ -163,6 +163,8 @@
 /* chain_warmup's default: each chain's iterations before its first frame
  * (see "VPL cycling"; measured in docs/smc.md) */
 #define GI__SMC_CHAIN_WARMUP 8u
+/* its largest value: up to 64 chains are made in one frame (1..1000) */
+#define GI__SMC_MAX_CHAIN_WARMUP 1000u
 
 /* A live VPL of Y. */
 typedef struct gi__smc_vpl {
@@ -416,7 +418,7 @@ static pf_result gi__smc_create(void **state, const gi_params *params, pf_error 
     if (r == PF_OK) r = gi_param_choice(params, "flux", fluxes, &p.flux, err);
     if (r == PF_OK) r = gi_param_u32(params, "photons", 1, 256, &p.photons, err);
     if (r == PF_OK) r = gi_param_choice(params, "cycle", cycles, &p.cycle, err);
-    if (r == PF_OK) r = gi_param_u32(params, "chain_warmup", 1, 100000, &p.chain_warmup, err);
+    if (r == PF_OK) r = gi_param_u32(params, "chain_warmup", 1, GI__SMC_MAX_CHAIN_WARMUP, &p.chain_warmup, err);
     if (r == PF_OK && p.area == GI__SMC_AREA_KNN) p.flux = GI__SMC_FLUX_POINT; /* the paper, all of it */
     if (r != PF_OK) return r;
     gi__smc *w = calloc(1, sizeof *w);

@@ -354,6 +354,10 @@ void gi_stage_vpl_update_end(gi_frame *f)
  * the start, slice k mod C, shaded k / C times before; during the
  * progressive warm-up (gi_indirect.h), the slices in the rotation in turn,
  * chosen once per frame (cycle_key). */
+/* The progressive warm-up is on: cycle_maps given and maps to draw (with
+ * ray-traced visibility every slice is in the rotation from the start). */
+static int gi__warming(const gi_indirect *ind) { return ind->opt.cycle_maps && !ind->opt.visibility_raytrace; }
+
 static void gi__cycle_schedule(gi_indirect *ind)
 {
     const uint32_t C = ind->cycle, k = ind->temporal_frames;
@@ -361,7 +365,7 @@ static void gi__cycle_schedule(gi_indirect *ind)
         ind->slice = ind->cycle_base = 0;
         return;
     }
-    if (!ind->opt.cycle_maps || ind->opt.visibility_raytrace) {
+    if (!gi__warming(ind)) {
         ind->slice = k % C, ind->cycle_base = k / C;
         return;
     }
@@ -390,7 +394,7 @@ static void gi__cycle_inputs(gi_indirect *ind, int ahead, gi_vpl_inputs *in)
     in->slice = in->live = 0;
     if (C <= 1) return;
     gi__cycle_schedule(ind);
-    if (!ind->opt.cycle_maps || ind->opt.visibility_raytrace) {
+    if (!gi__warming(ind)) {
         in->slice = ahead ? (ind->temporal_frames + 1u) % C : ind->slice;
         in->live = C;
         return;
@@ -419,7 +423,7 @@ static uint32_t gi__maps_ahead(gi_indirect *ind, pf_vec3 *map_pos, pf_vec3 *map_
                                uint32_t todo)
 {
     const uint32_t C = ind->cycle, N = ind->vpls.count, L = ind->cycle_live;
-    if (!ind->opt.cycle_maps || L >= C || ind->ahead_hold) return todo;
+    if (!gi__warming(ind) || L >= C || ind->ahead_hold) return todo;
     for (uint32_t i = L; i < N && ind->maps_ahead < ind->opt.cycle_maps; i += C) {
         if (ind->map_ok[i]) continue;
         gi__list_map(ind, i, map_pos, map_nrm, map_slot, &todo);
@@ -433,7 +437,7 @@ static uint32_t gi__maps_ahead(gi_indirect *ind, pf_vec3 *map_pos, pf_vec3 *map_
 static void gi__cycle_admit(gi_indirect *ind)
 {
     const uint32_t C = ind->cycle, N = ind->vpls.count, L = ind->cycle_live;
-    if (!ind->opt.cycle_maps || L >= C) return;
+    if (!gi__warming(ind) || L >= C) return;
     for (uint32_t i = L; i < N; i += C)
         if (!ind->map_ok[i]) return;
     ind->cycle_live = L + 1u;

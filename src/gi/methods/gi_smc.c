@@ -1420,6 +1420,17 @@ static pf_result gi__smc_iterate(gi__smc_state *s, const gi_vpl_inputs *in, pf_e
     return r;
 }
 
+/* An empty slot: a dark VPL that keeps the others' indices (gi__smc_output,
+ * and the chains' slots until their chain is made). */
+static gi_vpl gi__smc_dark(void)
+{
+    gi_vpl o;
+    memset(&o, 0, sizeof o);
+    o.nrm = pf_v3(0, 1, 0);
+    o.id = GI__SMC_NONE;
+    return o;
+}
+
 /* Line 20's input: every slot as a gi_vpl (see "Units" above), up to the
  * last live one, or with `all` every slot. */
 static pf_result gi__smc_output(gi__smc_state *s, int all, gi_vpl_set *out, pf_error *err)
@@ -1443,11 +1454,8 @@ static pf_result gi__smc_output(gi__smc_state *s, int all, gi_vpl_set *out, pf_e
             o->intensity = s->prm.flux == GI__SMC_FLUX_PHOTONS ? v->phot
                                                                : pf_v3_scale(pf_v3_mul(v->albedo, v->E), PF_INV_PI * A);
             o->id = v->id;
-        } else { /* an empty slot: a dark VPL keeps the others' indices */
-            o->pos = pf_v3(0, 0, 0);
-            o->nrm = pf_v3(0, 1, 0);
-            o->intensity = pf_v3(0, 0, 0);
-            o->id = GI__SMC_NONE;
+        } else {
+            *o = gi__smc_dark();
         }
         o->moved = s->prev_id[i] != o->id;
         s->prev_id[i] = o->id;
@@ -1519,16 +1527,6 @@ static pf_result gi__smc_chains(gi__smc *w, uint32_t n, pf_error *err)
     w->chains = n;
     w->I = 0;
     return PF_OK;
-}
-
-/* An empty slot of the whole set (as gi__smc_output writes one). */
-static gi_vpl gi__smc_dark(void)
-{
-    gi_vpl o;
-    memset(&o, 0, sizeof o);
-    o.nrm = pf_v3(0, 1, 0);
-    o.id = GI__SMC_NONE;
-    return o;
 }
 
 /* VPL cycling with cycle=chains: the update of the chains (see "VPL
